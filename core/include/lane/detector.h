@@ -1,0 +1,146 @@
+// The whole detector: frame in, lane splines out.
+//
+//   frame (BGR) -> channel -> IPM -> filter -> threshold -> column-sum Hough
+//   -> RANSAC lines -> RANSAC splines -> post-processing -> image splines
+#ifndef LANE_DETECTOR_H_
+#define LANE_DETECTOR_H_
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "absl/status/statusor.h"
+#include "lane/bezier.h"
+#include "lane/camera.h"
+#include "lane/filter.h"
+#include "lane/ipm.h"
+#include "lane/line_detection.h"
+#include "lane/line_fit.h"
+#include "lane/postprocess.h"
+#include "lane/spline_fit.h"
+#include "lane/threshold.h"
+
+namespace lane {
+
+// kAll: every visible boundary. kTwo: the ego lane's left and right boundary.
+enum class Mode { kAll, kTwo };
+const char* ModeName(Mode mode);
+std::optional<Mode> ParseMode(const std::string& name);
+
+// Which channel of a BGR frame feeds the detector. The paper uses red: it
+// shows white and yellow paint brighter against asphalt than grey does.
+enum class Channel { kRed, kGreen, kBlue, kGray };
+const char* ChannelName(Channel channel);
+std::optional<Channel> ParseChannel(const std::string& name);
+
+struct TwoLaneOptions {
+  // Only columns within this lateral distance of the camera are searched for
+  // the ego lane's boundaries, metres (reference: IPM columns 59..100 of 160).
+  double search_half_width_m = 2.4;
+  // Expected ego-lane width and tolerance (Gaussian sigma), metres
+  // (reference: 30 and 10 IPM px at 8.9 px/m).
+  double lane_width_m = 3.4;
+  double lane_width_sigma_m = 1.1;
+  // A pair is accepted when its width score exp(-d^2/2s^2) reaches this;
+  // otherwise only the strongest line is kept.
+  double min_pair_score = 0.3;
+
+  absl::Status Validate() const;
+};
+
+struct DetectorOptions {
+  Mode mode = Mode::kAll;
+  Channel channel = Channel::kRed;
+  FilterOptions filter;
+  ThresholdOptions threshold;
+  HoughOptions hough;
+  LineRansacOptions line_ransac;
+  SplineRansacOptions spline_ransac;
+  PostprocessOptions postprocess;
+  TwoLaneOptions two_lanes;
+  // Seed of the RANSAC sampler. The same frame, options and seed always give
+  // the same lanes.
+  uint64_t seed = 1;
+  // Keep the intermediate images and candidates in Detection::debug.
+  bool keep_intermediates = false;
+
+  // The reference defaults for a mode (2-lanes uses narrower windows, a
+  // higher quantile and more spline iterations).
+  static DetectorOptions ForMode(Mode mode);
+  absl::Status Validate() const;
+};
+
+// Room for later work: lane identity across frames and marking type.
+enum class LaneType { kUnknown, kSolidWhite, kDashedWhite, kSolidYellow, kDashedYellow, kDouble };
+
+struct Lane {
+  // Cubic Bezier control points of the same boundary in three frames:
+  std::array<Eigen::Vector2d, 4> image;   // image pixels
+  std::array<Eigen::Vector2d, 4> ipm;     // IPM pixels (may lie outside the view after extension)
+  std::array<Eigen::Vector2d, 4> ground;  // metres: x lateral (right +), y ahead
+  double score = 0;                       // spline score in the top view
+  int id = -1;                            // reserved: tracking id
+  LaneType type = LaneType::kUnknown;     // reserved: marking type
+};
+
+// Wall time of each stage, milliseconds.
+struct StageTimings {
+  double ipm_ms = 0;
+  double filter_ms = 0;
+  double threshold_ms = 0;
+  double lines_ms = 0;  // column-sum Hough and RANSAC lines
+  double splines_ms = 0;
+  double postprocess_ms = 0;
+  double total_ms = 0;
+};
+
+struct Intermediates {
+  cv::Mat ipm;          // CV_32F top view, mean removed
+  cv::Mat filtered;     // CV_32F filter response
+  cv::Mat thresholded;  // CV_32F after the quantile threshold
+  float threshold = 0;
+  std::vector<ColumnPeak> peaks;
+  std::vector<IpmLine> lines;
+  std::vector<Bezier> ipm_splines;  // after RANSAC, before post-processing
+};
+
+struct Detection {
+  std::vector<Lane> lanes;  // sorted left to right at the bottom of the image
+  StageTimings timings;
+  std::optional<Intermediates> debug;
+};
+
+// Immutable after Create; Detect is const and safe to call from many threads.
+class Detector {
+ public:
+  static absl::StatusOr<Detector> Create(const CameraModel& camera, const IpmOptions& ipm,
+                                         const DetectorOptions& options);
+
+  // `frame` must be CV_8UC3 (BGR) or CV_8UC1 of the camera's size.
+  // INVALID_ARGUMENT otherwise.
+  absl::StatusOr<Detection> Detect(const cv::Mat& frame) const;
+
+  const IpmMapping& ipm() const { return ipm_; }
+  const DetectorOptions& options() const { return options_; }
+  const FilterKernels& kernels() const { return kernels_; }
+
+  // The single channel the detector reads from a frame (no copy for gray).
+  cv::Mat ExtractChannel(const cv::Mat& frame) const;
+
+ private:
+  Detector(IpmMapping ipm, DetectorOptions options, FilterKernels kernels)
+      : ipm_(std::move(ipm)), options_(std::move(options)), kernels_(std::move(kernels)) {}
+
+  IpmMapping ipm_;
+  DetectorOptions options_;
+  FilterKernels kernels_;
+};
+
+}  // namespace lane
+
+#endif  // LANE_DETECTOR_H_

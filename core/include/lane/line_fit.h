@@ -1,0 +1,82 @@
+// Stage 5: RANSAC line fitting around each column peak (paper section II-C).
+#ifndef LANE_LINE_FIT_H_
+#define LANE_LINE_FIT_H_
+
+#include <optional>
+#include <random>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "absl/status/status.h"
+
+namespace lane {
+
+struct LineRansacOptions {
+  // Half width of the window around each Hough line, metres across the road
+  // (reference: 15 IPM px all-lanes, 8 px 2-lanes, at 8.9 px/m).
+  double window_half_width_m = 1.7;
+  int iterations = 40;
+  // Distance from the line within which a pixel is an inlier, IPM pixels.
+  // The reference uses 0.2 px; on a pixel grid that only keeps pixels whose
+  // centres the line crosses, so we use 0.5 px (one pixel-wide band).
+  double inlier_distance_px = 0.5;
+  // Fewer inliers than this and the window yields no line.
+  int min_inliers = 10;
+  // Lines further than this from vertical in the top view are dropped, deg.
+  double max_angle_from_vertical_deg = 20.0;
+
+  absl::Status Validate() const;
+};
+
+// A line in the top view through two points; `top` lies on row 0 and
+// `bottom` on the last row of the IPM.
+struct IpmLine {
+  Eigen::Vector2d top;
+  Eigen::Vector2d bottom;
+  double score = 0;  // sum of inlier responses
+  // Unit direction (top - bottom normalised) and distance of a point from it.
+  double Distance(const Eigen::Vector2d& p) const;
+  // x of the line at row y.
+  double XAt(double y) const;
+};
+
+// Non-zero pixels of a CV_32F image within |x - center(y)| <= half_width,
+// with their values as weights. center_at maps a row to a column.
+struct WeightedPoints {
+  std::vector<Eigen::Vector2d> points;
+  std::vector<double> weights;
+};
+template <typename CenterFn>
+WeightedPoints CollectWindow(const cv::Mat& image, CenterFn center_at, double half_width) {
+  WeightedPoints out;
+  for (int y = 0; y < image.rows; ++y) {
+    const float* row = image.ptr<float>(y);
+    const double c = center_at(static_cast<double>(y));
+    const int x0 = std::max(0, static_cast<int>(std::ceil(c - half_width)));
+    const int x1 = std::min(image.cols - 1, static_cast<int>(std::floor(c + half_width)));
+    for (int x = x0; x <= x1; ++x) {
+      if (row[x] > 0) {
+        out.points.emplace_back(x, y);
+        out.weights.push_back(row[x]);
+      }
+    }
+  }
+  return out;
+}
+
+// Weighted total-least-squares line through points (weights may be empty =
+// all 1). Returns (centroid, unit direction), or nullopt if degenerate.
+std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> FitLineTls(
+    const std::vector<Eigen::Vector2d>& points, const std::vector<double>& weights);
+
+// RANSAC line in the window around column `x_center`. nullopt when the window
+// has too few inliers or the line is too far from vertical.
+std::optional<IpmLine> FitLineInWindow(const cv::Mat& thresholded, double x_center,
+                                       double half_width_px, const LineRansacOptions& options,
+                                       std::mt19937_64& rng);
+
+}  // namespace lane
+
+#endif  // LANE_LINE_FIT_H_

@@ -1,0 +1,107 @@
+// Stage 7: post-processing (paper section II-E): localisation along normals,
+// extension along the tangent, geometric checks with fallback to the RANSAC
+// line. Done in the top view and again in the image.
+#ifndef LANE_POSTPROCESS_H_
+#define LANE_POSTPROCESS_H_
+
+#include <optional>
+
+#include <opencv2/core.hpp>
+
+#include "absl/status/status.h"
+#include "lane/bezier.h"
+
+namespace lane {
+
+struct PostprocessOptions {
+  // --- checks in the top view ---
+  // Splines whose mean direction is further than this from vertical are
+  // dropped (reference: closer than 70 deg to horizontal), degrees.
+  double ipm_max_angle_from_vertical_deg = 20.0;
+  // Splines whose control polygon is less straight than this (mean cosine of
+  // its angles, 1 = straight) fall back to the RANSAC line.
+  double min_straightness = 0.85;
+  // Splines shorter than this fraction of the top view's height fall back to
+  // the RANSAC line.
+  double min_length_fraction = 0.25;
+  // Extension in the top view: tangent step and normal half-search, IPM px.
+  double ipm_extend_step_px = 5.0;
+  double ipm_normal_search_px = 10.0;
+
+  // --- in the image (values for a 640 px wide image; scaled by width/640) ---
+  // Samples of the top-view spline mapped back to refit it in the image.
+  int backproject_samples = 11;
+  // Localisation: points sampled on the spline and half length of the normal
+  // segment searched for the brightest (Gaussian-smoothed) profile peak.
+  int localize_points = 21;
+  double localize_search_px = 20.0;
+  double profile_sigma_px = 2.0;
+  // A localised point is rejected when the direction to it from the previous
+  // point turns by more than acos(localize_min_cos) from the spline's.
+  double localize_min_cos = 0.9;
+  // Extension: tangent step and normal half-search, pixels.
+  double extend_step_px = 10.0;
+  double extend_search_px = 20.0;
+  // Stop when the profile contrast falls below this fraction of the mean
+  // contrast of the localised points.
+  double continuation_threshold = 0.35;
+  // Stop when the direction turns by more than acos(cos) from the spline's
+  // direction: looser going up (far, curves look sharper) than down.
+  double extend_min_cos_up = 0.86;
+  double extend_min_cos_down = 0.95;
+  // Extension stays between these image rows. Negative = derived from the
+  // camera: top = horizon + 0.15 * (ROI bottom - horizon), bottom = ROI bottom
+  // + 0.2 * (ROI bottom - horizon) (reference: rows 200..380 of the Caltech
+  // camera, whose horizon is at row 171 and ROI bottom at 350).
+  double extend_min_row = -1;
+  double extend_max_row = -1;
+  // A final image spline shorter than this (pixels at 640 width) is replaced
+  // by the line.
+  double min_image_length_px = 40.0;
+  // Turn extension/localisation in the image on or off.
+  bool localize_in_image = true;
+  bool extend_in_image = true;
+  bool extend_in_ipm = true;
+
+  absl::Status Validate() const;
+};
+
+// Samples of a 1-channel image along the segment center +- half * normal, one
+// per pixel step, bilinear; positions outside the image read as 0.
+std::vector<float> SampleProfile(const cv::Mat& image, const Eigen::Vector2d& center,
+                                 const Eigen::Vector2d& normal, double half);
+
+// Offset (along the normal, pixels) of the strongest peak of the smoothed
+// profile and its contrast over the profile's median. nullopt if flat.
+struct ProfilePeak {
+  double offset = 0;
+  double contrast = 0;
+};
+std::optional<ProfilePeak> FindProfilePeak(const std::vector<float>& profile, double sigma_px);
+
+// Localisation: moves `n` samples of the spline to the profile peak along
+// their normals, rejects points that turn too sharply, and refits. nullopt if
+// fewer than 4 points survive. `mean_contrast` receives the points' mean
+// contrast when not null.
+std::optional<Bezier> LocalizeSpline(const Bezier& spline, const cv::Mat& image, int n,
+                                     double search_px, double sigma_px, double min_cos,
+                                     double* mean_contrast);
+
+struct ExtendOptions {
+  double step_px = 10;
+  double search_px = 20;
+  double sigma_px = 2;
+  double min_contrast = 0;  // absolute contrast to continue
+  double min_cos_start = 0.95;  // going towards t=0
+  double min_cos_end = 0.86;    // going towards t=1
+  double min_row = 0;           // stay within these rows
+  double max_row = 1e9;
+  int max_steps = 60;
+};
+// Extension at both ends along the tangent, then a refit through the old
+// samples and the new points. Returns the input when nothing was added.
+Bezier ExtendSpline(const Bezier& spline, const cv::Mat& image, const ExtendOptions& options);
+
+}  // namespace lane
+
+#endif  // LANE_POSTPROCESS_H_

@@ -1,0 +1,115 @@
+#include "lane/bezier.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Dense>
+
+namespace lane {
+namespace {
+
+// The paper's basis matrix M: Q(t) = [t^3 t^2 t 1] M P.
+const Eigen::Matrix4d& BasisMatrix() {
+  static const Eigen::Matrix4d m = (Eigen::Matrix4d() << -1, 3, -3, 1,  //
+                                    3, -6, 3, 0,                        //
+                                    -3, 3, 0, 0,                        //
+                                    1, 0, 0, 0)
+                                       .finished();
+  return m;
+}
+
+}  // namespace
+
+Eigen::Vector2d Bezier::Eval(double t) const {
+  const double s = 1.0 - t;
+  return s * s * s * p[0] + 3 * s * s * t * p[1] + 3 * s * t * t * p[2] + t * t * t * p[3];
+}
+
+Eigen::Vector2d Bezier::Derivative(double t) const {
+  const double s = 1.0 - t;
+  return 3 * s * s * (p[1] - p[0]) + 6 * s * t * (p[2] - p[1]) + 3 * t * t * (p[3] - p[2]);
+}
+
+std::vector<Eigen::Vector2d> Bezier::Sample(int n) const {
+  n = std::max(n, 2);
+  std::vector<Eigen::Vector2d> out(n);
+  for (int i = 0; i < n; ++i) out[i] = Eval(static_cast<double>(i) / (n - 1));
+  return out;
+}
+
+double Bezier::Length(int n) const {
+  const auto pts = Sample(n);
+  double len = 0;
+  for (size_t i = 1; i < pts.size(); ++i) len += (pts[i] - pts[i - 1]).norm();
+  return len;
+}
+
+double Bezier::Straightness() const {
+  // Mean cosine of the angles between legs P0P1/P1P2 and P1P2/P2P3. A leg of
+  // zero length has no direction and does not bend the spline.
+  double sum = 0;
+  for (int i = 0; i < 2; ++i) {
+    const Eigen::Vector2d a = p[i + 1] - p[i];
+    const Eigen::Vector2d b = p[i + 2] - p[i + 1];
+    const double na = a.norm();
+    const double nb = b.norm();
+    sum += (na < 1e-9 || nb < 1e-9) ? 1.0 : a.dot(b) / (na * nb);
+  }
+  return sum / 2.0;
+}
+
+Bezier Bezier::Line(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return Bezier{{a, a + (b - a) / 3.0, a + 2.0 * (b - a) / 3.0, b}};
+}
+
+std::optional<std::vector<double>> ChordLengthParams(const std::vector<Eigen::Vector2d>& pts) {
+  if (pts.empty()) return std::nullopt;
+  std::vector<double> t(pts.size(), 0.0);
+  for (size_t i = 1; i < pts.size(); ++i) t[i] = t[i - 1] + (pts[i] - pts[i - 1]).norm();
+  const double total = t.back();
+  if (!(total > 1e-12)) return std::nullopt;
+  for (double& v : t) v /= total;
+  return t;
+}
+
+std::optional<Bezier> FitBezier(const std::vector<Eigen::Vector2d>& pts) {
+  if (pts.size() < 4) return std::nullopt;
+  const auto t = ChordLengthParams(pts);
+  if (!t) return std::nullopt;
+  const int n = static_cast<int>(pts.size());
+  Eigen::MatrixXd tm(n, 4);
+  Eigen::MatrixXd q(n, 2);
+  for (int i = 0; i < n; ++i) {
+    const double ti = (*t)[i];
+    tm.row(i) << ti * ti * ti, ti * ti, ti, 1.0;
+    q.row(i) << pts[i].x(), pts[i].y();
+  }
+  // P = (T M)^+ Q, the least-squares control points (paper, section II-D).
+  const Eigen::MatrixXd a = tm * BasisMatrix();
+  const Eigen::MatrixXd cp = a.completeOrthogonalDecomposition().pseudoInverse() * q;
+  Bezier b;
+  for (int i = 0; i < 4; ++i) {
+    b.p[i] = Eigen::Vector2d(cp(i, 0), cp(i, 1));
+    if (!b.p[i].allFinite()) return std::nullopt;
+  }
+  return b;
+}
+
+double CurveDistance(const Bezier& a, const Bezier& b, int n) {
+  const auto pa = a.Sample(n);
+  const auto pb = b.Sample(n);
+  auto directed = [](const std::vector<Eigen::Vector2d>& from,
+                     const std::vector<Eigen::Vector2d>& to) {
+    double worst = 0;
+    for (const auto& p : from) {
+      double best = std::numeric_limits<double>::infinity();
+      for (const auto& q : to) best = std::min(best, (p - q).squaredNorm());
+      worst = std::max(worst, best);
+    }
+    return std::sqrt(worst);
+  };
+  return std::max(directed(pa, pb), directed(pb, pa));
+}
+
+}  // namespace lane
