@@ -1,1 +1,94 @@
-// placeholder
+#include "lane/filter.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <opencv2/imgproc.hpp>
+
+#include "absl/strings/str_cat.h"
+
+namespace lane {
+
+absl::Status FilterOptions::Validate() const {
+  if (!(marking_width_m > 0 && marking_width_m < 2)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("filter.marking_width_m must lie in (0, 2) metres, got ", marking_width_m));
+  }
+  if (!(segment_length_m > 0 && segment_length_m < 50)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "filter.segment_length_m must lie in (0, 50) metres, got ", segment_length_m));
+  }
+  if (!(min_sigma_x_px > 0 && min_sigma_y_px > 0 && min_sigma_x_px < 50 && min_sigma_y_px < 50)) {
+    return absl::InvalidArgumentError("filter.min_sigma_*_px must lie in (0, 50)");
+  }
+  if (!(kernel_extent_sigmas >= 1 && kernel_extent_sigmas <= 6)) {
+    return absl::InvalidArgumentError("filter.kernel_extent_sigmas must lie in [1, 6]");
+  }
+  if (zero_border_x_px < 0 || zero_border_bottom_px < 0) {
+    return absl::InvalidArgumentError("filter.zero_border_*_px must be >= 0");
+  }
+  return absl::OkStatus();
+}
+
+FilterKernels MakeFilterKernels(const FilterOptions& options, double metres_per_px_x,
+                                double metres_per_px_y) {
+  FilterKernels k;
+  k.sigma_x_px = std::max(options.min_sigma_x_px, options.marking_width_m / metres_per_px_x);
+  k.sigma_y_px = std::max(options.min_sigma_y_px, options.segment_length_m / metres_per_px_y);
+  // Kernels longer than ~4x the IPM would only replicate the border; cap them.
+  const int hx = std::min(64, std::max(1, static_cast<int>(
+                                              std::ceil(options.kernel_extent_sigmas * k.sigma_x_px))));
+  const int hy = std::min(128, std::max(1, static_cast<int>(
+                                               std::ceil(options.kernel_extent_sigmas * k.sigma_y_px))));
+
+  // Across the lane: f(x) = 1/s^2 exp(-x^2 / 2s^2) (1 - x^2/s^2), the negated
+  // second derivative of a Gaussian (paper, section II-B). Truncation leaves a
+  // small DC component, removed so flat regions respond with exactly 0; then
+  // scaled so the positive lobe sums to 1 (a wide bright bar of contrast C
+  // responds with about C).
+  k.kx.create(2 * hx + 1, 1, CV_32F);
+  const double sx2 = k.sigma_x_px * k.sigma_x_px;
+  double sum = 0;
+  std::vector<double> fx(2 * hx + 1);
+  for (int i = -hx; i <= hx; ++i) {
+    const double x2 = static_cast<double>(i) * i;
+    fx[i + hx] = (1.0 / sx2) * std::exp(-x2 / (2 * sx2)) * (1.0 - x2 / sx2);
+    sum += fx[i + hx];
+  }
+  const double dc = sum / fx.size();
+  double positive = 0;
+  for (double& v : fx) {
+    v -= dc;
+    if (v > 0) positive += v;
+  }
+  for (int i = 0; i < 2 * hx + 1; ++i) k.kx.at<float>(i) = static_cast<float>(fx[i] / positive);
+
+  // Along the lane: f(y) = exp(-y^2 / 2s^2), normalised to sum 1.
+  k.ky.create(2 * hy + 1, 1, CV_32F);
+  const double sy2 = k.sigma_y_px * k.sigma_y_px;
+  sum = 0;
+  for (int i = -hy; i <= hy; ++i) sum += std::exp(-static_cast<double>(i) * i / (2 * sy2));
+  for (int i = -hy; i <= hy; ++i) {
+    k.ky.at<float>(i + hy) = static_cast<float>(std::exp(-static_cast<double>(i) * i / (2 * sy2)) / sum);
+  }
+  return k;
+}
+
+cv::Mat FilterTopView(const cv::Mat& ipm, const FilterKernels& kernels,
+                      const FilterOptions& options) {
+  CV_Assert(ipm.type() == CV_32FC1);
+  cv::Mat out;
+  // Correlation with replicated borders; both kernels are symmetric.
+  cv::sepFilter2D(ipm, out, CV_32F, kernels.kx, kernels.ky, cv::Point(-1, -1), 0.0,
+                  cv::BORDER_REPLICATE);
+  const int bx = std::min(options.zero_border_x_px, out.cols / 2);
+  const int by = std::min(options.zero_border_bottom_px, out.rows);
+  if (bx > 0) {
+    out.colRange(0, bx).setTo(0);
+    out.colRange(out.cols - bx, out.cols).setTo(0);
+  }
+  if (by > 0) out.rowRange(out.rows - by, out.rows).setTo(0);
+  return out;
+}
+
+}  // namespace lane

@@ -1,1 +1,151 @@
-// placeholder
+#include "lane/line_fit.h"
+
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+
+#include "absl/strings/str_cat.h"
+#include "lane/ransac.h"
+
+namespace lane {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+// A line through `point` with unit `dir`, clipped to rows 0 and rows-1.
+std::optional<IpmLine> MakeIpmLine(const Eigen::Vector2d& point, const Eigen::Vector2d& dir,
+                                   int rows) {
+  if (std::abs(dir.y()) < 1e-9) return std::nullopt;  // horizontal
+  const double dxdy = dir.x() / dir.y();
+  IpmLine line;
+  line.top = {point.x() + (0 - point.y()) * dxdy, 0.0};
+  line.bottom = {point.x() + (rows - 1 - point.y()) * dxdy, rows - 1.0};
+  return line;
+}
+
+double AngleFromVerticalDeg(const IpmLine& line) {
+  const Eigen::Vector2d d = line.bottom - line.top;
+  return std::atan2(std::abs(d.x()), std::abs(d.y())) * kRadToDeg;
+}
+
+// RANSAC estimator: 4 weighted samples, total least squares, scored by the
+// sum of the responses of the pixels within the inlier distance.
+class LineEstimator {
+ public:
+  using Model = IpmLine;
+  static constexpr int kSampleSize = 4;
+
+  LineEstimator(const WeightedPoints& pts, int rows, const LineRansacOptions& options)
+      : pts_(pts), rows_(rows), options_(options) {}
+
+  std::optional<IpmLine> Estimate(const std::vector<Eigen::Vector2d>& sample) const {
+    const auto fit = FitLineTls(sample, {});
+    if (!fit) return std::nullopt;
+    auto line = MakeIpmLine(fit->first, fit->second, rows_);
+    if (!line || AngleFromVerticalDeg(*line) > options_.max_angle_from_vertical_deg) {
+      return std::nullopt;
+    }
+    return line;
+  }
+
+  double Score(const IpmLine& line) const {
+    double score = 0;
+    for (size_t i = 0; i < pts_.points.size(); ++i) {
+      if (line.Distance(pts_.points[i]) <= options_.inlier_distance_px) score += pts_.weights[i];
+    }
+    return score;
+  }
+
+ private:
+  const WeightedPoints& pts_;
+  int rows_;
+  const LineRansacOptions& options_;
+};
+
+}  // namespace
+
+absl::Status LineRansacOptions::Validate() const {
+  if (!(window_half_width_m > 0 && window_half_width_m < 20)) {
+    return absl::InvalidArgumentError("line_ransac.window_half_width_m must lie in (0, 20) metres");
+  }
+  if (iterations < 1 || iterations > 10000) {
+    return absl::InvalidArgumentError("line_ransac.iterations must lie in 1..10000");
+  }
+  if (!(inlier_distance_px > 0 && inlier_distance_px < 20)) {
+    return absl::InvalidArgumentError("line_ransac.inlier_distance_px must lie in (0, 20)");
+  }
+  if (min_inliers < 2) return absl::InvalidArgumentError("line_ransac.min_inliers must be >= 2");
+  if (!(max_angle_from_vertical_deg > 0 && max_angle_from_vertical_deg <= 90)) {
+    return absl::InvalidArgumentError(
+        "line_ransac.max_angle_from_vertical_deg must lie in (0, 90]");
+  }
+  return absl::OkStatus();
+}
+
+double IpmLine::Distance(const Eigen::Vector2d& p) const {
+  const Eigen::Vector2d d = (bottom - top).normalized();
+  const Eigen::Vector2d v = p - top;
+  return std::abs(v.x() * d.y() - v.y() * d.x());
+}
+
+double IpmLine::XAt(double y) const {
+  const double dy = bottom.y() - top.y();
+  if (std::abs(dy) < 1e-12) return top.x();
+  return top.x() + (y - top.y()) * (bottom.x() - top.x()) / dy;
+}
+
+std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> FitLineTls(
+    const std::vector<Eigen::Vector2d>& points, const std::vector<double>& weights) {
+  if (points.size() < 2) return std::nullopt;
+  double wsum = 0;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < points.size(); ++i) {
+    const double w = weights.empty() ? 1.0 : weights[i];
+    mean += w * points[i];
+    wsum += w;
+  }
+  if (!(wsum > 0)) return std::nullopt;
+  mean /= wsum;
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (size_t i = 0; i < points.size(); ++i) {
+    const double w = weights.empty() ? 1.0 : weights[i];
+    const Eigen::Vector2d d = points[i] - mean;
+    cov += w * d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+  // Direction of largest spread; degenerate if the points are all equal.
+  if (!(eig.eigenvalues()(1) > 1e-12)) return std::nullopt;
+  Eigen::Vector2d dir = eig.eigenvectors().col(1);
+  if (dir.y() < 0) dir = -dir;
+  return std::make_pair(mean, dir);
+}
+
+std::optional<IpmLine> FitLineInWindow(const cv::Mat& thresholded, double x_center,
+                                       double half_width_px, const LineRansacOptions& options,
+                                       std::mt19937_64& rng) {
+  const WeightedPoints pts =
+      CollectWindow(thresholded, [x_center](double) { return x_center; }, half_width_px);
+  if (static_cast<int>(pts.points.size()) < options.min_inliers) return std::nullopt;
+  const LineEstimator estimator(pts, thresholded.rows, options);
+  const auto report = Ransac(estimator, pts.points, pts.weights, options.iterations, rng);
+  if (!report.model) return std::nullopt;
+
+  // Refit on the inliers, weighted by their response.
+  WeightedPoints inliers;
+  for (size_t i = 0; i < pts.points.size(); ++i) {
+    if (report.model->Distance(pts.points[i]) <= options.inlier_distance_px) {
+      inliers.points.push_back(pts.points[i]);
+      inliers.weights.push_back(pts.weights[i]);
+    }
+  }
+  if (static_cast<int>(inliers.points.size()) < options.min_inliers) return std::nullopt;
+  IpmLine line = *report.model;
+  if (const auto fit = FitLineTls(inliers.points, inliers.weights)) {
+    if (auto refined = MakeIpmLine(fit->first, fit->second, thresholded.rows)) line = *refined;
+  }
+  if (AngleFromVerticalDeg(line) > options.max_angle_from_vertical_deg) return std::nullopt;
+  line.score = estimator.Score(line);
+  return line;
+}
+
+}  // namespace lane

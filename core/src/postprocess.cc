@@ -1,1 +1,186 @@
-// placeholder
+#include "lane/postprocess.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "absl/strings/str_cat.h"
+
+namespace lane {
+namespace {
+
+float PixelAt(const cv::Mat& image, int x, int y) {
+  if (image.type() == CV_8UC1) return image.at<uint8_t>(y, x);
+  return image.at<float>(y, x);
+}
+
+float Bilinear(const cv::Mat& image, double x, double y) {
+  if (!(x >= 0 && y >= 0 && x <= image.cols - 1 && y <= image.rows - 1)) return 0.f;
+  const int x0 = std::min(static_cast<int>(x), image.cols - 2 < 0 ? 0 : image.cols - 2);
+  const int y0 = std::min(static_cast<int>(y), image.rows - 2 < 0 ? 0 : image.rows - 2);
+  const int x1 = std::min(x0 + 1, image.cols - 1);
+  const int y1 = std::min(y0 + 1, image.rows - 1);
+  const double fx = x - x0, fy = y - y0;
+  return static_cast<float>((1 - fy) * ((1 - fx) * PixelAt(image, x0, y0) + fx * PixelAt(image, x1, y0)) +
+                            fy * ((1 - fx) * PixelAt(image, x0, y1) + fx * PixelAt(image, x1, y1)));
+}
+
+Eigen::Vector2d Normal(const Eigen::Vector2d& tangent) {
+  return Eigen::Vector2d(-tangent.y(), tangent.x());
+}
+
+bool InBounds(const Eigen::Vector2d& p, const cv::Mat& image) {
+  return p.x() >= 0 && p.y() >= 0 && p.x() <= image.cols - 1 && p.y() <= image.rows - 1;
+}
+
+}  // namespace
+
+absl::Status PostprocessOptions::Validate() const {
+  auto bad = [](const char* name, double v, double lo, double hi) -> absl::Status {
+    if (!(v >= lo && v <= hi)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("postprocess.", name, " must lie in [", lo, ", ", hi, "], got ", v));
+    }
+    return absl::OkStatus();
+  };
+  const struct {
+    const char* name;
+    double v, lo, hi;
+  } checks[] = {
+      {"ipm_max_angle_from_vertical_deg", ipm_max_angle_from_vertical_deg, 0, 90},
+      {"min_straightness", min_straightness, -1, 1},
+      {"min_length_fraction", min_length_fraction, 0, 10},
+      {"ipm_extend_step_px", ipm_extend_step_px, 0.5, 100},
+      {"ipm_normal_search_px", ipm_normal_search_px, 0, 100},
+      {"backproject_samples", static_cast<double>(backproject_samples), 4, 1000},
+      {"localize_points", static_cast<double>(localize_points), 4, 1000},
+      {"localize_search_px", localize_search_px, 0, 500},
+      {"profile_sigma_px", profile_sigma_px, 0, 50},
+      {"localize_min_cos", localize_min_cos, -1, 1},
+      {"extend_step_px", extend_step_px, 0.5, 500},
+      {"extend_search_px", extend_search_px, 0, 500},
+      {"continuation_threshold", continuation_threshold, 0, 10},
+      {"extend_min_cos_up", extend_min_cos_up, -1, 1},
+      {"extend_min_cos_down", extend_min_cos_down, -1, 1},
+      {"min_image_length_px", min_image_length_px, 0, 1e5},
+  };
+  for (const auto& c : checks) {
+    if (auto s = bad(c.name, c.v, c.lo, c.hi); !s.ok()) return s;
+  }
+  if (!std::isfinite(extend_min_row) || !std::isfinite(extend_max_row)) {
+    return absl::InvalidArgumentError("postprocess.extend_*_row must be finite");
+  }
+  return absl::OkStatus();
+}
+
+std::vector<float> SampleProfile(const cv::Mat& image, const Eigen::Vector2d& center,
+                                 const Eigen::Vector2d& normal, double half) {
+  const int h = std::max(0, static_cast<int>(std::lround(half)));
+  std::vector<float> out(2 * h + 1);
+  for (int i = -h; i <= h; ++i) {
+    const Eigen::Vector2d p = center + i * normal;
+    out[i + h] = Bilinear(image, p.x(), p.y());
+  }
+  return out;
+}
+
+std::optional<ProfilePeak> FindProfilePeak(const std::vector<float>& profile, double sigma_px) {
+  const int n = static_cast<int>(profile.size());
+  if (n < 3) return std::nullopt;
+  std::vector<double> s(n);
+  if (sigma_px > 0) {
+    const int h = std::max(1, static_cast<int>(std::ceil(2.5 * sigma_px)));
+    for (int i = 0; i < n; ++i) {
+      double acc = 0, ws = 0;
+      for (int j = -h; j <= h; ++j) {
+        const int k = i + j;
+        if (k < 0 || k >= n) continue;
+        const double w = std::exp(-0.5 * j * j / (sigma_px * sigma_px));
+        acc += w * profile[k];
+        ws += w;
+      }
+      s[i] = acc / ws;
+    }
+  } else {
+    for (int i = 0; i < n; ++i) s[i] = profile[i];
+  }
+  const int best = static_cast<int>(std::max_element(s.begin(), s.end()) - s.begin());
+  std::vector<double> sorted = s;
+  std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
+  const double median = sorted[n / 2];
+  const double contrast = s[best] - median;
+  if (!(contrast > 0)) return std::nullopt;
+  double offset = best;
+  if (best > 0 && best < n - 1) {
+    const double l = s[best - 1], c = s[best], r = s[best + 1];
+    const double denom = l - 2 * c + r;
+    if (denom < 0) offset += std::clamp(0.5 * (l - r) / denom, -0.5, 0.5);
+  }
+  return ProfilePeak{offset - (n - 1) / 2.0, contrast};
+}
+
+std::optional<Bezier> LocalizeSpline(const Bezier& spline, const cv::Mat& image, int n,
+                                     double search_px, double sigma_px, double min_cos,
+                                     double* mean_contrast) {
+  std::vector<Eigen::Vector2d> pts;
+  double contrast_sum = 0;
+  for (int i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) / (n - 1);
+    const Eigen::Vector2d p = spline.Eval(t);
+    Eigen::Vector2d tangent = spline.Derivative(t);
+    if (tangent.norm() < 1e-9 || !InBounds(p, image)) continue;
+    tangent.normalize();
+    const Eigen::Vector2d normal = Normal(tangent);
+    const auto peak = FindProfilePeak(SampleProfile(image, p, normal, search_px), sigma_px);
+    if (!peak) continue;
+    const Eigen::Vector2d q = p + peak->offset * normal;
+    if (!pts.empty()) {
+      // Reject a point that makes the localised curve turn away from the
+      // spline's own direction.
+      const Eigen::Vector2d step = q - pts.back();
+      if (step.norm() < 1e-9 || step.normalized().dot(tangent) < min_cos) continue;
+    }
+    pts.push_back(q);
+    contrast_sum += peak->contrast;
+  }
+  if (pts.size() < 4) return std::nullopt;
+  if (mean_contrast) *mean_contrast = contrast_sum / pts.size();
+  return FitBezier(pts);
+}
+
+Bezier ExtendSpline(const Bezier& spline, const cv::Mat& image, const ExtendOptions& options) {
+  auto walk = [&](const Eigen::Vector2d& start, Eigen::Vector2d dir, double min_cos) {
+    std::vector<Eigen::Vector2d> added;
+    if (dir.norm() < 1e-9) return added;
+    dir.normalize();
+    const Eigen::Vector2d main_dir = dir;
+    Eigen::Vector2d cur = start;
+    for (int step = 0; step < options.max_steps; ++step) {
+      const Eigen::Vector2d guess = cur + options.step_px * dir;
+      if (!InBounds(guess, image) || guess.y() < options.min_row || guess.y() > options.max_row) {
+        break;
+      }
+      const Eigen::Vector2d normal = Normal(dir);
+      const auto peak =
+          FindProfilePeak(SampleProfile(image, guess, normal, options.search_px), options.sigma_px);
+      if (!peak || peak->contrast < options.min_contrast) break;
+      const Eigen::Vector2d q = guess + peak->offset * normal;
+      const Eigen::Vector2d d = (q - cur).normalized();
+      if (d.dot(main_dir) < min_cos) break;
+      if (!InBounds(q, image) || q.y() < options.min_row || q.y() > options.max_row) break;
+      added.push_back(q);
+      cur = q;
+      dir = d;
+    }
+    return added;
+  };
+  const auto before = walk(spline.p[0], -spline.Derivative(0), options.min_cos_start);
+  const auto after = walk(spline.p[3], spline.Derivative(1), options.min_cos_end);
+  if (before.empty() && after.empty()) return spline;
+  std::vector<Eigen::Vector2d> pts(before.rbegin(), before.rend());
+  for (const auto& p : spline.Sample(20)) pts.push_back(p);
+  pts.insert(pts.end(), after.begin(), after.end());
+  if (auto fit = FitBezier(pts)) return *fit;
+  return spline;
+}
+
+}  // namespace lane
