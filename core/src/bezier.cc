@@ -77,17 +77,19 @@ std::optional<Bezier> FitBezier(const std::vector<Eigen::Vector2d>& pts) {
   if (pts.size() < 4) return std::nullopt;
   const auto t = ChordLengthParams(pts);
   if (!t) return std::nullopt;
-  const int n = static_cast<int>(pts.size());
-  Eigen::MatrixXd tm(n, 4);
-  Eigen::MatrixXd q(n, 2);
-  for (int i = 0; i < n; ++i) {
-    const double ti = (*t)[i];
-    tm.row(i) << ti * ti * ti, ti * ti, ti, 1.0;
-    q.row(i) << pts[i].x(), pts[i].y();
-  }
   // P = (T M)^+ Q, the least-squares control points (paper, section II-D).
-  const Eigen::MatrixXd a = tm * BasisMatrix();
-  const Eigen::MatrixXd cp = a.completeOrthogonalDecomposition().pseudoInverse() * q;
+  // Computed through the 4x4 normal matrix: pinv(A) Q = pinv(A^T A) A^T Q,
+  // which keeps every matrix fixed-size (no heap) for the RANSAC inner loop.
+  Eigen::Matrix4d ata = Eigen::Matrix4d::Zero();
+  Eigen::Matrix<double, 4, 2> atq = Eigen::Matrix<double, 4, 2>::Zero();
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const double ti = (*t)[i];
+    const Eigen::RowVector4d a =
+        Eigen::RowVector4d(ti * ti * ti, ti * ti, ti, 1.0) * BasisMatrix();
+    ata.noalias() += a.transpose() * a;
+    atq.noalias() += a.transpose() * pts[i].transpose();
+  }
+  const Eigen::Matrix<double, 4, 2> cp = ata.completeOrthogonalDecomposition().pseudoInverse() * atq;
   Bezier b;
   for (int i = 0; i < 4; ++i) {
     b.p[i] = Eigen::Vector2d(cp(i, 0), cp(i, 1));

@@ -175,6 +175,21 @@ cv::Mat Detector::ExtractChannel(const cv::Mat& frame) const {
   return out;
 }
 
+ChannelView Detector::ViewChannel(const cv::Mat& frame) const {
+  if (frame.channels() == 1) return ChannelView(frame);
+  switch (options_.channel) {
+    case Channel::kRed:
+      return ChannelView(frame, 2);
+    case Channel::kGreen:
+      return ChannelView(frame, 1);
+    case Channel::kBlue:
+      return ChannelView(frame, 0);
+    case Channel::kGray:
+      break;
+  }
+  return ChannelView(ExtractChannel(frame));
+}
+
 absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
   const CameraModel& cam = ipm_.camera();
   if (frame.empty()) return absl::InvalidArgumentError("empty frame");
@@ -196,8 +211,8 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
 
   // 1. Channel and top view, mean removed.
   auto t = Clock::now();
-  const cv::Mat channel = ExtractChannel(frame);
-  cv::Mat ipm = ipm_.Apply(channel);
+  const ChannelView channel = ViewChannel(frame);
+  cv::Mat ipm = ipm_.Apply(channel.image, channel.channel);
   ipm -= cv::mean(ipm)[0];
   det.timings.ipm_ms = MsSince(t);
 

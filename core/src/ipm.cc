@@ -103,13 +103,14 @@ absl::StatusOr<IpmMapping> IpmMapping::Create(const CameraModel& camera,
   return m;
 }
 
-cv::Mat IpmMapping::Apply(const cv::Mat& channel) const {
-  CV_Assert(channel.type() == CV_8UC1 && channel.cols == camera_.image_width &&
-            channel.rows == camera_.image_height);
+cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel) const {
+  CV_Assert(image.depth() == CV_8U && image.cols == camera_.image_width &&
+            image.rows == camera_.image_height && channel >= 0 && channel < image.channels());
   cv::Mat ipm8;
   const int interp =
       options_.interpolation == Interpolation::kBilinear ? cv::INTER_LINEAR : cv::INTER_NEAREST;
-  cv::remap(channel, ipm8, map1_, map2_, interp, cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::remap(image, ipm8, map1_, map2_, interp, cv::BORDER_CONSTANT, cv::Scalar::all(0));
+  if (ipm8.channels() > 1) cv::extractChannel(ipm8, ipm8, channel);
   cv::Mat out;
   ipm8.convertTo(out, CV_32F, 1.0 / 255.0);
   const double mean = cv::mean(out, valid_)[0];

@@ -8,28 +8,23 @@
 namespace lane {
 namespace {
 
-float PixelAt(const cv::Mat& image, int x, int y) {
-  if (image.type() == CV_8UC1) return image.at<uint8_t>(y, x);
-  return image.at<float>(y, x);
-}
-
-float Bilinear(const cv::Mat& image, double x, double y) {
-  if (!(x >= 0 && y >= 0 && x <= image.cols - 1 && y <= image.rows - 1)) return 0.f;
-  const int x0 = std::min(static_cast<int>(x), image.cols - 2 < 0 ? 0 : image.cols - 2);
-  const int y0 = std::min(static_cast<int>(y), image.rows - 2 < 0 ? 0 : image.rows - 2);
-  const int x1 = std::min(x0 + 1, image.cols - 1);
-  const int y1 = std::min(y0 + 1, image.rows - 1);
+float Bilinear(const ChannelView& image, double x, double y) {
+  if (!(x >= 0 && y >= 0 && x <= image.cols() - 1 && y <= image.rows() - 1)) return 0.f;
+  const int x0 = std::min(static_cast<int>(x), std::max(0, image.cols() - 2));
+  const int y0 = std::min(static_cast<int>(y), std::max(0, image.rows() - 2));
+  const int x1 = std::min(x0 + 1, image.cols() - 1);
+  const int y1 = std::min(y0 + 1, image.rows() - 1);
   const double fx = x - x0, fy = y - y0;
-  return static_cast<float>((1 - fy) * ((1 - fx) * PixelAt(image, x0, y0) + fx * PixelAt(image, x1, y0)) +
-                            fy * ((1 - fx) * PixelAt(image, x0, y1) + fx * PixelAt(image, x1, y1)));
+  return static_cast<float>((1 - fy) * ((1 - fx) * image.At(x0, y0) + fx * image.At(x1, y0)) +
+                            fy * ((1 - fx) * image.At(x0, y1) + fx * image.At(x1, y1)));
 }
 
 Eigen::Vector2d Normal(const Eigen::Vector2d& tangent) {
   return Eigen::Vector2d(-tangent.y(), tangent.x());
 }
 
-bool InBounds(const Eigen::Vector2d& p, const cv::Mat& image) {
-  return p.x() >= 0 && p.y() >= 0 && p.x() <= image.cols - 1 && p.y() <= image.rows - 1;
+bool InBounds(const Eigen::Vector2d& p, const ChannelView& image) {
+  return p.x() >= 0 && p.y() >= 0 && p.x() <= image.cols() - 1 && p.y() <= image.rows() - 1;
 }
 
 }  // namespace
@@ -72,7 +67,7 @@ absl::Status PostprocessOptions::Validate() const {
   return absl::OkStatus();
 }
 
-std::vector<float> SampleProfile(const cv::Mat& image, const Eigen::Vector2d& center,
+std::vector<float> SampleProfile(const ChannelView& image, const Eigen::Vector2d& center,
                                  const Eigen::Vector2d& normal, double half) {
   const int h = std::max(0, static_cast<int>(std::lround(half)));
   std::vector<float> out(2 * h + 1);
@@ -89,14 +84,14 @@ std::optional<ProfilePeak> FindProfilePeak(const std::vector<float>& profile, do
   std::vector<double> s(n);
   if (sigma_px > 0) {
     const int h = std::max(1, static_cast<int>(std::ceil(2.5 * sigma_px)));
+    thread_local std::vector<double> kernel;
+    kernel.resize(2 * h + 1);
+    for (int j = -h; j <= h; ++j) kernel[j + h] = std::exp(-0.5 * j * j / (sigma_px * sigma_px));
     for (int i = 0; i < n; ++i) {
       double acc = 0, ws = 0;
-      for (int j = -h; j <= h; ++j) {
-        const int k = i + j;
-        if (k < 0 || k >= n) continue;
-        const double w = std::exp(-0.5 * j * j / (sigma_px * sigma_px));
-        acc += w * profile[k];
-        ws += w;
+      for (int j = std::max(-h, -i); j <= h && i + j < n; ++j) {
+        acc += kernel[j + h] * profile[i + j];
+        ws += kernel[j + h];
       }
       s[i] = acc / ws;
     }
@@ -118,7 +113,7 @@ std::optional<ProfilePeak> FindProfilePeak(const std::vector<float>& profile, do
   return ProfilePeak{offset - (n - 1) / 2.0, contrast};
 }
 
-std::optional<Bezier> LocalizeSpline(const Bezier& spline, const cv::Mat& image, int n,
+std::optional<Bezier> LocalizeSpline(const Bezier& spline, const ChannelView& image, int n,
                                      double search_px, double sigma_px, double min_cos,
                                      double* mean_contrast) {
   std::vector<Eigen::Vector2d> pts;
@@ -147,7 +142,7 @@ std::optional<Bezier> LocalizeSpline(const Bezier& spline, const cv::Mat& image,
   return FitBezier(pts);
 }
 
-Bezier ExtendSpline(const Bezier& spline, const cv::Mat& image, const ExtendOptions& options) {
+Bezier ExtendSpline(const Bezier& spline, const ChannelView& image, const ExtendOptions& options) {
   auto walk = [&](const Eigen::Vector2d& start, Eigen::Vector2d dir, double min_cos) {
     std::vector<Eigen::Vector2d> added;
     if (dir.norm() < 1e-9) return added;

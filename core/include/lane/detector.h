@@ -129,8 +129,10 @@ class Detector {
   const DetectorOptions& options() const { return options_; }
   const FilterKernels& kernels() const { return kernels_; }
 
-  // The single channel the detector reads from a frame (no copy for gray).
+  // The single channel the detector reads from a frame, as a copy.
   cv::Mat ExtractChannel(const cv::Mat& frame) const;
+  // The same channel as a view: no copy except for kGray on a colour frame.
+  ChannelView ViewChannel(const cv::Mat& frame) const;
 
  private:
   Detector(IpmMapping ipm, DetectorOptions options, FilterKernels kernels)

@@ -47,10 +47,12 @@ class IpmMapping {
   // part inside the image and below the horizon.
   static absl::StatusOr<IpmMapping> Create(const CameraModel& camera, const IpmOptions& options);
 
-  // Top view of a single-channel 8-bit image of the camera's size, as CV_32F
-  // with values in [0, 1]. Pixels whose source falls outside the ROI are set
-  // to the mean of the others (as in the reference implementation).
-  cv::Mat Apply(const cv::Mat& channel) const;
+  // Top view of channel `channel` of an 8-bit image (1 or 3 channels) of the
+  // camera's size, as CV_32F with values in [0, 1]. Only the top view's
+  // pixels are read, so no full-frame channel copy is made. Pixels whose
+  // source falls outside the ROI are set to the mean of the others (as in the
+  // reference implementation).
+  cv::Mat Apply(const cv::Mat& image, int channel = 0) const;
 
   // Conversions between IPM pixels, image pixels and ground metres.
   Eigen::Vector2d IpmToGround(const Eigen::Vector2d& ipm) const;

@@ -66,9 +66,23 @@ struct PostprocessOptions {
   absl::Status Validate() const;
 };
 
-// Samples of a 1-channel image along the segment center +- half * normal, one
-// per pixel step, bilinear; positions outside the image read as 0.
-std::vector<float> SampleProfile(const cv::Mat& image, const Eigen::Vector2d& center,
+// One channel of an image without copying it out: a CV_8UC1 or CV_32FC1
+// image (channel 0), or channel `channel` of a CV_8UC3 image.
+struct ChannelView {
+  ChannelView(const cv::Mat& m, int c = 0) : image(m), channel(c) {}  // NOLINT: implicit
+  cv::Mat image;
+  int channel = 0;
+  int cols() const { return image.cols; }
+  int rows() const { return image.rows; }
+  float At(int x, int y) const {
+    if (image.depth() == CV_32F) return image.ptr<float>(y)[x];
+    return image.ptr<uint8_t>(y)[x * image.channels() + channel];
+  }
+};
+
+// Samples of one channel along the segment center +- half * normal, one per
+// pixel step, bilinear; positions outside the image read as 0.
+std::vector<float> SampleProfile(const ChannelView& image, const Eigen::Vector2d& center,
                                  const Eigen::Vector2d& normal, double half);
 
 // Offset (along the normal, pixels) of the strongest peak of the smoothed
@@ -83,7 +97,7 @@ std::optional<ProfilePeak> FindProfilePeak(const std::vector<float>& profile, do
 // their normals, rejects points that turn too sharply, and refits. nullopt if
 // fewer than 4 points survive. `mean_contrast` receives the points' mean
 // contrast when not null.
-std::optional<Bezier> LocalizeSpline(const Bezier& spline, const cv::Mat& image, int n,
+std::optional<Bezier> LocalizeSpline(const Bezier& spline, const ChannelView& image, int n,
                                      double search_px, double sigma_px, double min_cos,
                                      double* mean_contrast);
 
@@ -100,7 +114,7 @@ struct ExtendOptions {
 };
 // Extension at both ends along the tangent, then a refit through the old
 // samples and the new points. Returns the input when nothing was added.
-Bezier ExtendSpline(const Bezier& spline, const cv::Mat& image, const ExtendOptions& options);
+Bezier ExtendSpline(const Bezier& spline, const ChannelView& image, const ExtendOptions& options);
 
 }  // namespace lane
 

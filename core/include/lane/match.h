@@ -1,0 +1,29 @@
+// The paper's rule for deciding that a detected boundary and a labelled one
+// are the same (Aly 2008, section III-A).
+#ifndef LANE_MATCH_H_
+#define LANE_MATCH_H_
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "lane/bezier.h"
+
+namespace lane {
+
+struct MatchDistances {
+  double median = 0;  // d^ = min of the two directed median distances, pixels
+  double mean = 0;    // d- = min of the two directed mean distances, pixels
+};
+
+// Nearest-point distances between two sampled curves in both directions.
+MatchDistances CurveMatchDistances(const std::vector<Eigen::Vector2d>& a,
+                                   const std::vector<Eigen::Vector2d>& b);
+
+// Samples both splines at t = 0, 0.01, ..., 1 and applies the paper's rule:
+// d^ <= 20 px AND d- <= 15 px, thresholds scaled by image_width / 640.
+bool PaperMatch(const Bezier& detected, const Bezier& label, int image_width);
+
+}  // namespace lane
+
+#endif  // LANE_MATCH_H_

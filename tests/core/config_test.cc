@@ -1,0 +1,311 @@
+#include "lane/config.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "absl/strings/string_view.h"
+
+namespace lane {
+namespace {
+
+// `text` contains `part` (gmock's HasSubstr without linking gmock).
+::testing::AssertionResult Contains(absl::string_view text, absl::string_view part) {
+  if (text.find(part) != absl::string_view::npos) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "\"" << text << "\" does not contain \"" << part << "\"";
+}
+
+std::string ConfigPath(const std::string& name) {
+  return std::string(LANE_SOURCE_DIR) + "/configs/" + name;
+}
+
+// A config where (nearly) every section differs from the defaults, with
+// values that still validate.
+Config NonDefaultConfig() {
+  Config c;
+  c.camera.fu = 500.5;
+  c.camera.fv = 510.25;
+  c.camera.cu = 401.125;
+  c.camera.cv = 290.0625;
+  c.camera.pitch_deg = 10.5;
+  c.camera.yaw_deg = -2.25;
+  c.camera.height_m = 1.55;
+  c.camera.image_width = 800;
+  c.camera.image_height = 600;
+  c.ipm.width = 200;
+  c.ipm.height = 100;
+  c.ipm.roi = {120.5, 640.0, 340.0, 520.0};
+  c.ipm.horizon_margin_px = 15.0;
+  c.ipm.interpolation = Interpolation::kNearest;
+  c.detector = DetectorOptions::ForMode(Mode::kTwo);
+  c.detector.channel = Channel::kGreen;
+  c.detector.seed = 18446744073709551615ull;  // needs all 64 bits
+  c.detector.filter.marking_width_m = 0.1;
+  c.detector.filter.zero_border_x_px = 7;
+  c.detector.threshold.quantile = 0.98;
+  c.detector.hough.min_peak = 0.0051;
+  c.detector.line_ransac.iterations = 55;
+  c.detector.line_ransac.inlier_distance_px = 0.7;
+  c.detector.spline_ransac.k1 = 1.7;
+  c.detector.spline_ransac.jitter_px = 3;
+  c.detector.postprocess.localize_in_image = false;
+  c.detector.postprocess.extend_min_row = 210.5;
+  c.detector.postprocess.extend_max_row = 470.25;
+  c.detector.postprocess.min_straightness = 0.8;
+  c.detector.two_lanes.lane_width_m = 3.7;
+  c.detector.two_lanes.min_pair_score = 0.25;
+  return c;
+}
+
+TEST(ConfigTest, EmptyDocumentGivesTheDefaults) {
+  const absl::StatusOr<Config> parsed = ParseConfig("{}");
+  ASSERT_TRUE(parsed.ok()) << parsed.status();
+  EXPECT_EQ(ConfigToJson(*parsed), ConfigToJson(Config()));
+  EXPECT_EQ(parsed->camera.fu, CameraModel().fu);
+  EXPECT_EQ(parsed->ipm.width, 160);
+  EXPECT_EQ(parsed->detector.mode, Mode::kAll);
+}
+
+TEST(ConfigTest, DefaultsRoundTrip) {
+  const std::string json = ConfigToJson(Config());
+  const absl::StatusOr<Config> parsed = ParseConfig(json);
+  ASSERT_TRUE(parsed.ok()) << parsed.status();
+  EXPECT_EQ(ConfigToJson(*parsed), json);
+}
+
+TEST(ConfigTest, RoundTripKeepsEveryValue) {
+  const Config original = NonDefaultConfig();
+  ASSERT_TRUE(original.Validate().ok()) << original.Validate();
+  const std::string json = ConfigToJson(original);
+  const absl::StatusOr<Config> parsed = ParseConfig(json);
+  ASSERT_TRUE(parsed.ok()) << parsed.status() << "\n" << json;
+  // Every key is written, so equal documents mean equal configs.
+  EXPECT_EQ(ConfigToJson(*parsed), json);
+
+  EXPECT_EQ(parsed->camera.fu, 500.5);
+  EXPECT_EQ(parsed->camera.yaw_deg, -2.25);
+  EXPECT_EQ(parsed->camera.image_width, 800);
+  EXPECT_EQ(parsed->ipm.roi.left, 120.5);
+  EXPECT_EQ(parsed->ipm.interpolation, Interpolation::kNearest);
+  EXPECT_EQ(parsed->detector.mode, Mode::kTwo);
+  EXPECT_EQ(parsed->detector.channel, Channel::kGreen);
+  EXPECT_EQ(parsed->detector.seed, 18446744073709551615ull);
+  EXPECT_EQ(parsed->detector.threshold.quantile, 0.98);
+  EXPECT_EQ(parsed->detector.hough.min_peak, 0.0051);
+  EXPECT_EQ(parsed->detector.line_ransac.iterations, 55);
+  EXPECT_EQ(parsed->detector.spline_ransac.jitter_px, 3);
+  EXPECT_FALSE(parsed->detector.postprocess.localize_in_image);
+  EXPECT_EQ(parsed->detector.postprocess.extend_max_row, 470.25);
+  EXPECT_EQ(parsed->detector.two_lanes.min_pair_score, 0.25);
+}
+
+TEST(ConfigTest, WritesEveryKeyPretty) {
+  const std::string json = ConfigToJson(Config());
+  for (const char* key :
+       {"\"camera\"", "\"image_height\"", "\"roi\"", "\"interpolation\": \"bilinear\"",
+        "\"mode\": \"all\"", "\"channel\": \"red\"", "\"seed\"", "\"filter\"",
+        "\"zero_border_bottom_px\"", "\"threshold\"", "\"quantile\"", "\"hough\"", "\"min_peak\"",
+        "\"line_ransac\"", "\"spline_ransac\"", "\"merge_distance_px\"", "\"postprocess\"",
+        "\"extend_in_ipm\"", "\"two_lanes\"", "\"min_pair_score\""}) {
+    EXPECT_TRUE(Contains(json, key));
+  }
+  EXPECT_TRUE(Contains(json, "\n  \"camera\": {\n    \"fu\": "));  // 2-space indent
+}
+
+TEST(ConfigTest, UnknownKeyIsRejectedWithItsPath) {
+  absl::StatusOr<Config> parsed = ParseConfig(R"({"detector": {"hough": {"min_peek": 0.1}}})");
+  ASSERT_FALSE(parsed.ok());
+  EXPECT_EQ(parsed.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_TRUE(Contains(parsed.status().message(), "unknown key \"detector.hough.min_peek\""));
+
+  parsed = ParseConfig(R"({"camera": {"fu": 300}, "cmaera": {}})");
+  ASSERT_FALSE(parsed.ok());
+  EXPECT_TRUE(Contains(parsed.status().message(), "unknown key \"cmaera\""));
+
+  parsed = ParseConfig(R"({"ipm": {"roi": {"left": 100, "rigth": 400}}})");
+  ASSERT_FALSE(parsed.ok());
+  EXPECT_TRUE(Contains(parsed.status().message(), "\"ipm.roi.rigth\""));
+
+  // The API-only switch is not a config key.
+  parsed = ParseConfig(R"({"detector": {"keep_intermediates": true}})");
+  ASSERT_FALSE(parsed.ok());
+  EXPECT_TRUE(Contains(parsed.status().message(), "\"detector.keep_intermediates\""));
+}
+
+TEST(ConfigTest, WrongTypeIsRejectedWithTheKey) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"({"camera": {"fu": "300"}})", "\"camera.fu\" must be a number"},
+      {R"({"camera": {"image_width": 640.5}})", "\"camera.image_width\" must be an integer"},
+      {R"({"camera": {"image_width": 10000000000}})", "\"camera.image_width\""},
+      {R"({"ipm": {"roi": [100, 460, 220, 350]}})", "\"ipm.roi\" must be a JSON object"},
+      {R"({"ipm": {"interpolation": "cubic"}})", "\"ipm.interpolation\""},
+      {R"({"ipm": 160})", "\"ipm\" must be a JSON object"},
+      {R"({"detector": {"mode": "three"}})", "\"detector.mode\""},
+      {R"({"detector": {"mode": 2}})", "\"detector.mode\""},
+      {R"({"detector": {"channel": "purple"}})", "\"detector.channel\""},
+      {R"({"detector": {"seed": -1}})", "\"detector.seed\" must be a non-negative integer"},
+      {R"({"detector": {"seed": 1.5}})", "\"detector.seed\""},
+      {R"({"detector": {"postprocess": {"extend_in_ipm": 1}}})",
+       "\"detector.postprocess.extend_in_ipm\" must be true or false"},
+      {R"({"detector": {"line_ransac": {"iterations": null}}})",
+       "\"detector.line_ransac.iterations\""},
+      {R"([1, 2])", "must be a JSON object"},
+  };
+  for (const auto& [json, expected] : cases) {
+    const absl::StatusOr<Config> parsed = ParseConfig(json);
+    ASSERT_FALSE(parsed.ok()) << json;
+    EXPECT_EQ(parsed.status().code(), absl::StatusCode::kInvalidArgument) << json;
+    EXPECT_TRUE(Contains(parsed.status().message(), expected)) << json;
+  }
+}
+
+TEST(ConfigTest, MalformedJsonReportsThePosition) {
+  const absl::StatusOr<Config> parsed = ParseConfig("{\n  \"camera\": {\"fu\": }\n}");
+  ASSERT_FALSE(parsed.ok());
+  EXPECT_EQ(parsed.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_TRUE(Contains(parsed.status().message(), "line 2"));
+  EXPECT_FALSE(ParseConfig("").ok());
+}
+
+TEST(ConfigTest, CommentsAreAllowed) {
+  const absl::StatusOr<Config> parsed =
+      ParseConfig("{\n  // the Caltech camera\n  \"camera\": {\"fu\": 300 /* px */}\n}");
+  ASSERT_TRUE(parsed.ok()) << parsed.status();
+  EXPECT_EQ(parsed->camera.fu, 300.0);
+}
+
+TEST(ConfigTest, ModeTwoPicksItsDefaults) {
+  const DetectorOptions two = DetectorOptions::ForMode(Mode::kTwo);
+  Config expected;
+  expected.detector = two;
+  absl::StatusOr<Config> parsed = ParseConfig(R"({"detector": {"mode": "two"}})");
+  ASSERT_TRUE(parsed.ok()) << parsed.status();
+  EXPECT_EQ(parsed->detector.mode, Mode::kTwo);
+  EXPECT_EQ(ConfigToJson(*parsed), ConfigToJson(expected));
+}
+
+TEST(ConfigTest, ExplicitKeysOverrideTheModeDefaultsWhateverTheOrder) {
+  const DetectorOptions two = DetectorOptions::ForMode(Mode::kTwo);
+  // `mode` comes last in the document but is applied first.
+  const absl::StatusOr<Config> parsed = ParseConfig(
+      R"({"detector": {"threshold": {"quantile": 0.9}, "spline_ransac": {"iterations": 7},
+                       "mode": "two"}})");
+  ASSERT_TRUE(parsed.ok()) << parsed.status();
+  EXPECT_EQ(parsed->detector.mode, Mode::kTwo);
+  EXPECT_EQ(parsed->detector.threshold.quantile, 0.9);
+  EXPECT_EQ(parsed->detector.spline_ransac.iterations, 7);
+  // The keys not given keep the 2-lanes defaults.
+  EXPECT_EQ(parsed->detector.line_ransac.window_half_width_m,
+            two.line_ransac.window_half_width_m);
+  EXPECT_EQ(parsed->detector.spline_ransac.window_half_width_m,
+            two.spline_ransac.window_half_width_m);
+  EXPECT_EQ(parsed->detector.spline_ransac.k1, two.spline_ransac.k1);
+}
+
+TEST(ConfigTest, NonsenseCalibrationIsRejected) {
+  absl::StatusOr<Config> parsed = ParseConfig(R"({"camera": {"fu": -1}})");
+  ASSERT_FALSE(parsed.ok());
+  EXPECT_EQ(parsed.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_TRUE(Contains(parsed.status().message(), "fu"));
+
+  parsed = ParseConfig(R"({"camera": {"pitch_deg": 95}})");
+  ASSERT_FALSE(parsed.ok());
+  EXPECT_EQ(parsed.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_TRUE(Contains(parsed.status().message(), "pitch"));
+
+  parsed = ParseConfig(R"({"camera": {"height_m": 0}})");
+  EXPECT_FALSE(parsed.ok());
+  parsed = ParseConfig(R"({"ipm": {"width": 0}})");
+  EXPECT_FALSE(parsed.ok());
+}
+
+TEST(ConfigTest, ConfigValidateChecksEverySection) {
+  Config c;
+  EXPECT_TRUE(c.Validate().ok());
+  c.camera.fv = 0;
+  EXPECT_FALSE(c.Validate().ok());
+  c = Config();
+  c.ipm.height = -5;
+  EXPECT_FALSE(c.Validate().ok());
+  c = Config();
+  c.detector.threshold.quantile = 1.5;
+  EXPECT_FALSE(c.Validate().ok());
+}
+
+TEST(ConfigTest, ShippedConfigsParse) {
+  const absl::StatusOr<Config> caltech = LoadConfigFile(ConfigPath("caltech.json"));
+  ASSERT_TRUE(caltech.ok()) << caltech.status();
+  EXPECT_EQ(caltech->detector.mode, Mode::kAll);
+  EXPECT_EQ(caltech->ipm.roi.left, 100);
+  EXPECT_EQ(caltech->ipm.roi.bottom, 350);
+  EXPECT_EQ(caltech->camera.image_width, 640);
+
+  const absl::StatusOr<Config> two = LoadConfigFile(ConfigPath("caltech-2lanes.json"));
+  ASSERT_TRUE(two.ok()) << two.status();
+  EXPECT_EQ(two->detector.mode, Mode::kTwo);
+  EXPECT_EQ(two->ipm.roi.left, 140);
+  EXPECT_EQ(two->ipm.roi.bottom, 360);
+  EXPECT_EQ(two->detector.threshold.quantile,
+            DetectorOptions::ForMode(Mode::kTwo).threshold.quantile);
+
+  const absl::StatusOr<Config> culane = LoadConfigFile(ConfigPath("culane-driver161.json"));
+  ASSERT_TRUE(culane.ok()) << culane.status();
+  EXPECT_EQ(culane->camera.image_width, 1640);
+  EXPECT_EQ(culane->camera.image_height, 590);
+  EXPECT_EQ(culane->camera.pitch_deg, -4.858);
+  EXPECT_EQ(culane->ipm.roi.right, 1240);
+
+  const absl::StatusOr<Config> synthetic = LoadConfigFile(ConfigPath("synthetic.json"));
+  ASSERT_TRUE(synthetic.ok()) << synthetic.status();
+  EXPECT_EQ(ConfigToJson(*synthetic), ConfigToJson(*caltech));
+
+  // Whatever else ships in configs/ must parse too.
+  int count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(ConfigPath(""))) {
+    if (entry.path().extension() != ".json") continue;
+    ++count;
+    const absl::StatusOr<Config> c = LoadConfigFile(entry.path().string());
+    EXPECT_TRUE(c.ok()) << entry.path() << ": " << c.status();
+  }
+  EXPECT_GE(count, 4);
+}
+
+TEST(ConfigTest, LoadConfigFileErrors) {
+  const std::string dir = ::testing::TempDir();
+  absl::StatusOr<Config> missing = LoadConfigFile(dir + "/no-such-config.json");
+  ASSERT_FALSE(missing.ok());
+  EXPECT_EQ(missing.status().code(), absl::StatusCode::kNotFound);
+  EXPECT_TRUE(Contains(missing.status().message(), "no-such-config.json"));
+
+  EXPECT_FALSE(LoadConfigFile(dir).ok());  // a directory
+
+  const std::string bad = dir + "/lane_config_test_malformed.json";
+  {
+    std::ofstream out(bad);
+    out << "{\n  \"camera\": {\n    \"fu\": 1,,\n  }\n}\n";
+  }
+  const absl::StatusOr<Config> malformed = LoadConfigFile(bad);
+  ASSERT_FALSE(malformed.ok());
+  EXPECT_EQ(malformed.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_TRUE(Contains(malformed.status().message(), "lane_config_test_malformed.json"));
+  EXPECT_TRUE(Contains(malformed.status().message(), "line 3"));
+
+  const std::string typo = dir + "/lane_config_test_typo.json";
+  {
+    std::ofstream out(typo);
+    out << R"({"ipm": {"widht": 100}})";
+  }
+  const absl::StatusOr<Config> unknown = LoadConfigFile(typo);
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_TRUE(Contains(unknown.status().message(), "lane_config_test_typo.json"));
+  EXPECT_TRUE(Contains(unknown.status().message(), "\"ipm.widht\""));
+  std::filesystem::remove(bad);
+  std::filesystem::remove(typo);
+}
+
+}  // namespace
+}  // namespace lane

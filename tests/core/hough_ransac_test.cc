@@ -1,0 +1,152 @@
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "lane/bezier.h"
+#include "lane/line_detection.h"
+#include "lane/line_fit.h"
+#include "lane/match.h"
+#include "lane/spline_fit.h"
+
+namespace lane {
+namespace {
+
+void DrawLine(cv::Mat& img, double x_top, double x_bottom, float value, int gap_every = 0) {
+  for (int y = 0; y < img.rows; ++y) {
+    if (gap_every > 0 && (y / gap_every) % 2 == 1) continue;
+    const double x = x_top + (x_bottom - x_top) * y / (img.rows - 1.0);
+    const int xi = static_cast<int>(std::lround(x));
+    if (xi >= 0 && xi < img.cols) img.at<float>(y, xi) = value;
+  }
+}
+
+TEST(HoughTest, FindsOnePeakPerVerticalLineWithSubpixelPosition) {
+  cv::Mat img(120, 160, CV_32F, cv::Scalar(0));
+  DrawLine(img, 30, 30, 1.f);
+  DrawLine(img, 70, 70, 0.6f, 10);  // dashed
+  img.col(71).setTo(0.1f);           // pulls the centre slightly right
+  DrawLine(img, 120, 120, 0.8f);
+  img.at<float>(5, 100) = 0.5f;  // clutter below the peak threshold
+  const auto profile = ColumnProfile(img, 1.0);
+  const auto peaks = FindColumnPeaks(profile, 0.05, 10);
+  ASSERT_EQ(peaks.size(), 3u);
+  EXPECT_NEAR(peaks[0].x, 30, 0.2);
+  EXPECT_GT(peaks[1].x, 70.0);
+  EXPECT_LT(peaks[1].x, 70.5);
+  EXPECT_NEAR(peaks[2].x, 120, 0.2);
+  EXPECT_GT(peaks[0].value, peaks[2].value);
+}
+
+TEST(HoughTest, GroupsNearbyPeaksKeepingTheStronger) {
+  std::vector<double> profile(100, 0.0);
+  profile[40] = 1.0;
+  profile[46] = 0.7;  // within 10 px of the stronger one
+  profile[80] = 0.5;
+  const auto peaks = FindColumnPeaks(profile, 0.1, 10);
+  ASSERT_EQ(peaks.size(), 2u);
+  EXPECT_DOUBLE_EQ(peaks[0].x, 40);
+  EXPECT_DOUBLE_EQ(peaks[1].x, 80);
+  EXPECT_TRUE(FindColumnPeaks(std::vector<double>(50, 0.0), 0.1, 10).empty());
+}
+
+TEST(LineFitTest, RecoversALineWithHalfTheWindowOutliers) {
+  std::mt19937_64 rng(7);
+  for (int trial = 0; trial < 20; ++trial) {
+    cv::Mat img(120, 160, CV_32F, cv::Scalar(0));
+    const double x_top = 70 + trial % 5, x_bottom = 80 - trial % 7;
+    DrawLine(img, x_top, x_bottom, 1.f);
+    // As many outlier pixels as line pixels, in the same window.
+    std::uniform_int_distribution<int> ux(60, 90), uy(0, 119);
+    for (int i = 0; i < 120; ++i) img.at<float>(uy(rng), ux(rng)) = 1.f;
+    LineRansacOptions o;
+    const auto line = FitLineInWindow(img, 75, 15, o, rng);
+    ASSERT_TRUE(line.has_value()) << "trial " << trial;
+    ASSERT_NEAR(line->XAt(0), x_top, 1.0) << "trial " << trial;
+    ASSERT_NEAR(line->XAt(119), x_bottom, 1.0) << "trial " << trial;
+  }
+}
+
+TEST(LineFitTest, EmptyWindowGivesNoLine) {
+  cv::Mat img(120, 160, CV_32F, cv::Scalar(0));
+  std::mt19937_64 rng(1);
+  EXPECT_FALSE(FitLineInWindow(img, 80, 15, LineRansacOptions{}, rng).has_value());
+}
+
+TEST(BezierTest, FitRecoversAKnownCurve) {
+  const Bezier truth{{Eigen::Vector2d(40, 0), Eigen::Vector2d(55, 40), Eigen::Vector2d(60, 80),
+                      Eigen::Vector2d(58, 119)}};
+  // Points along the curve, unevenly spaced in t, with a little noise.
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> noise(0, 0.1);
+  std::vector<Eigen::Vector2d> pts;
+  for (int i = 0; i <= 40; ++i) {
+    const double t = std::pow(i / 40.0, 1.3);
+    pts.push_back(truth.Eval(t) + Eigen::Vector2d(noise(rng), noise(rng)));
+  }
+  const auto fit = FitBezier(pts);
+  ASSERT_TRUE(fit.has_value());
+  // Compare curves, not control points.
+  EXPECT_LT(CurveDistance(*fit, truth, 1001), 0.5);  // dense: sample spacing << 0.5 px
+  EXPECT_FALSE(FitBezier({Eigen::Vector2d(1, 1), Eigen::Vector2d(1, 1), Eigen::Vector2d(1, 1),
+                          Eigen::Vector2d(1, 1)})
+                   .has_value());
+}
+
+TEST(BezierTest, ExactThroughFourPoints) {
+  const std::vector<Eigen::Vector2d> pts = {{10, 0}, {14, 30}, {15, 60}, {13, 100}};
+  const auto fit = FitBezier(pts);
+  ASSERT_TRUE(fit.has_value());
+  const auto t = ChordLengthParams(pts);
+  for (size_t i = 0; i < pts.size(); ++i) EXPECT_LT((fit->Eval((*t)[i]) - pts[i]).norm(), 1e-6);
+}
+
+TEST(SplineScoreTest, PrefersLongerAndStraighterCurves) {
+  cv::Mat img(120, 160, CV_32F, cv::Scalar(1.f));  // uniform: raw score ~ pixel count
+  SplineRansacOptions o;
+  const Bezier long_straight = Bezier::Line({80, 0}, {80, 119});
+  const Bezier short_straight = Bezier::Line({80, 60}, {80, 119});
+  const Bezier curved{{Eigen::Vector2d(80, 0), Eigen::Vector2d(120, 40), Eigen::Vector2d(40, 80),
+                       Eigen::Vector2d(80, 119)}};
+  EXPECT_GT(SplineScore(long_straight, img, o), SplineScore(short_straight, img, o));
+  EXPECT_GT(SplineScore(long_straight, img, o), SplineScore(curved, img, o));
+  // The curvature term is what penalises the curve: without it (k2 = 0) the
+  // longer curved spline scores at least as high.
+  SplineRansacOptions no_k2 = o;
+  no_k2.k2 = 0;
+  EXPECT_GE(SplineScore(curved, img, no_k2), SplineScore(long_straight, img, no_k2) * 0.99);
+  // A control point outside the image disqualifies the spline.
+  const Bezier outside{{Eigen::Vector2d(80, 0), Eigen::Vector2d(200, 40), Eigen::Vector2d(80, 80),
+                        Eigen::Vector2d(80, 119)}};
+  EXPECT_EQ(SplineScore(outside, img, o), 0.0);
+}
+
+TEST(SplineFitTest, RansacFollowsACurvedMarkingAwayFromItsLine) {
+  cv::Mat img(120, 160, CV_32F, cv::Scalar(0));
+  const Bezier truth{{Eigen::Vector2d(70, 0), Eigen::Vector2d(76, 40), Eigen::Vector2d(80, 80),
+                      Eigen::Vector2d(81, 119)}};
+  for (const auto& p : truth.Sample(400)) {
+    img.at<float>(static_cast<int>(std::lround(p.y())), static_cast<int>(std::lround(p.x()))) = 1.f;
+  }
+  std::mt19937_64 rng(3);
+  IpmLine line;
+  line.top = {72, 0};
+  line.bottom = {82, 119};
+  const auto fit = FitSplineAroundLine(img, line, 10, SplineRansacOptions{}, rng);
+  ASSERT_TRUE(fit.has_value());
+  const MatchDistances d = CurveMatchDistances(fit->spline.Sample(101), truth.Sample(101));
+  EXPECT_LT(d.mean, 1.0);
+  EXPECT_LT(CurveMatchDistances(Bezier::Line(line.top, line.bottom).Sample(101), truth.Sample(101)).mean,
+            10.0);
+}
+
+TEST(MatchTest, PaperRuleAndWidthScaling) {
+  const Bezier a = Bezier::Line({100, 300}, {50, 479});
+  EXPECT_TRUE(PaperMatch(a, a, 640));
+  const Bezier shifted = Bezier::Line({130, 300}, {80, 479});  // 30 px to the right
+  EXPECT_FALSE(PaperMatch(shifted, a, 640));
+  EXPECT_TRUE(PaperMatch(shifted, a, 1640));  // thresholds scale with width
+}
+
+}  // namespace
+}  // namespace lane
