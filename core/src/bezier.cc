@@ -1,10 +1,9 @@
 #include "lane/bezier.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include <Eigen/Dense>
 
 namespace lane {
 namespace {
@@ -84,12 +83,12 @@ std::optional<Bezier> FitBezier(const std::vector<Eigen::Vector2d>& pts) {
   Eigen::Matrix<double, 4, 2> atq = Eigen::Matrix<double, 4, 2>::Zero();
   for (size_t i = 0; i < pts.size(); ++i) {
     const double ti = (*t)[i];
-    const Eigen::RowVector4d a =
-        Eigen::RowVector4d(ti * ti * ti, ti * ti, ti, 1.0) * BasisMatrix();
+    const Eigen::RowVector4d a = Eigen::RowVector4d(ti * ti * ti, ti * ti, ti, 1.0) * BasisMatrix();
     ata.noalias() += a.transpose() * a;
     atq.noalias() += a.transpose() * pts[i].transpose();
   }
-  const Eigen::Matrix<double, 4, 2> cp = ata.completeOrthogonalDecomposition().pseudoInverse() * atq;
+  const Eigen::Matrix<double, 4, 2> cp =
+      ata.completeOrthogonalDecomposition().pseudoInverse() * atq;
   Bezier b;
   for (int i = 0; i < 4; ++i) {
     b.p[i] = Eigen::Vector2d(cp(i, 0), cp(i, 1));

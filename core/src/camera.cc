@@ -1,8 +1,7 @@
 #include "lane/camera.h"
 
-#include <cmath>
-
 #include <Eigen/Dense>
+#include <cmath>
 
 #include "absl/strings/str_cat.h"
 
@@ -84,9 +83,7 @@ Eigen::Vector2d CameraModel::ImageToGround(const Eigen::Vector2d& image) const {
   return {x / w, y / w};
 }
 
-double CameraModel::HorizonRow() const {
-  return cv - fv * std::tan(pitch_deg * kDegToRad);
-}
+double CameraModel::HorizonRow() const { return cv - fv * std::tan(pitch_deg * kDegToRad); }
 
 Eigen::Vector2d CameraModel::VanishingPoint() const {
   const double a = pitch_deg * kDegToRad;

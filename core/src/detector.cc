@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
@@ -194,14 +193,14 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
   const CameraModel& cam = ipm_.camera();
   if (frame.empty()) return absl::InvalidArgumentError("empty frame");
   if (frame.depth() != CV_8U || (frame.channels() != 3 && frame.channels() != 1)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "frame must be 8-bit BGR or grey, got ", frame.channels(), " channel(s) of depth code ",
-        frame.depth()));
+    return absl::InvalidArgumentError(absl::StrCat("frame must be 8-bit BGR or grey, got ",
+                                                   frame.channels(), " channel(s) of depth code ",
+                                                   frame.depth()));
   }
   if (frame.cols != cam.image_width || frame.rows != cam.image_height) {
     return absl::InvalidArgumentError(absl::StrCat("frame is ", frame.cols, "x", frame.rows,
-                                                   " but the calibration is for ",
-                                                   cam.image_width, "x", cam.image_height));
+                                                   " but the calibration is for ", cam.image_width,
+                                                   "x", cam.image_height));
   }
   const DetectorOptions& opt = options_;
   const PostprocessOptions& pp = opt.postprocess;
@@ -231,7 +230,8 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
     // Only the band around the camera can hold the ego lane's boundaries.
     const double half = opt.two_lanes.search_half_width_m / ipm_.metres_per_px_x();
     const int c0 = std::clamp(static_cast<int>(std::ceil(cam_col - half)), 0, thresholded.cols);
-    const int c1 = std::clamp(static_cast<int>(std::floor(cam_col + half)) + 1, 0, thresholded.cols);
+    const int c1 =
+        std::clamp(static_cast<int>(std::floor(cam_col + half)) + 1, 0, thresholded.cols);
     if (c0 > 0) thresholded.colRange(0, c0).setTo(0);
     if (c1 < thresholded.cols) thresholded.colRange(c1, thresholded.cols).setTo(0);
   }
@@ -262,17 +262,17 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
       }
     }
     if (chosen.empty()) {
-      chosen = {*std::max_element(peaks.begin(), peaks.end(),
-                                  [](const ColumnPeak& a, const ColumnPeak& b) {
-                                    return a.value < b.value;
-                                  })};
+      chosen = {*std::max_element(
+          peaks.begin(), peaks.end(),
+          [](const ColumnPeak& a, const ColumnPeak& b) { return a.value < b.value; })};
     }
     peaks = chosen;
   }
   std::vector<IpmLine> lines;
   for (const auto& peak : peaks) {
-    if (auto line = FitLineInWindow(thresholded, peak.x, opt.line_ransac.window_half_width_m / mpp_x,
-                                    opt.line_ransac, rng)) {
+    if (auto line =
+            FitLineInWindow(thresholded, peak.x, opt.line_ransac.window_half_width_m / mpp_x,
+                            opt.line_ransac, rng)) {
       lines.push_back(*line);
     }
   }
@@ -317,8 +317,8 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
     const Bezier ipm_line = Bezier::Line(c.line.top, c.line.bottom);
     // Top view: localise, check, extend, check.
     double contrast = 0;
-    if (auto loc = LocalizeSpline(c.ipm, filtered, pp.localize_points, pp.ipm_normal_search_px,
-                                  0.0, pp.localize_min_cos, &contrast)) {
+    if (auto loc = LocalizeSpline(c.ipm, filtered, pp.localize_points, pp.ipm_normal_search_px, 0.0,
+                                  pp.localize_min_cos, &contrast)) {
       c.ipm = TopDown(*loc);
     }
     if (!PassesShapeChecks(c.ipm, ipm_min_len, pp.min_straightness)) c.ipm = ipm_line;
@@ -334,6 +334,10 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
       if (!PassesShapeChecks(c.ipm, ipm_min_len, pp.min_straightness)) c.ipm = ipm_line;
     }
     if (AngleFromVerticalDeg(c.ipm) > pp.ipm_max_angle_from_vertical_deg) continue;
+    if (pp.min_side_contrast > 0 &&
+        BarContrast(c.ipm, ipm, pp.side_offset_m / mpp_x) < pp.min_side_contrast) {
+      continue;  // a step (curb, road edge), not a bright marking
+    }
 
     // Image: back-project, localise, check, extend, check.
     auto to_image = [this](const Eigen::Vector2d& p) { return ipm_.IpmToImage(p); };
@@ -345,9 +349,9 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
     const double min_len = pp.min_image_length_px * scale;
     contrast = 0;
     if (pp.localize_in_image) {
-      if (auto loc = LocalizeSpline(c.image, channel, pp.localize_points,
-                                    pp.localize_search_px * scale, pp.profile_sigma_px * scale,
-                                    pp.localize_min_cos, &contrast)) {
+      if (auto loc =
+              LocalizeSpline(c.image, channel, pp.localize_points, pp.localize_search_px * scale,
+                             pp.profile_sigma_px * scale, pp.localize_min_cos, &contrast)) {
         c.image = TopDown(*loc);
       }
       if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
@@ -367,8 +371,8 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
     }
     bool dup = false;
     for (const auto& d : done) {
-      dup = dup || MeanNearestDistance(c.image, d.image) < opt.spline_ransac.merge_distance_px *
-                                                                 scale * 2.5;
+      dup = dup || MeanNearestDistance(c.image, d.image) <
+                       opt.spline_ransac.merge_distance_px * scale * 2.5;
     }
     if (!dup) done.push_back(c);
   }
@@ -379,18 +383,16 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
     lane.image = c.image.p;
     const auto ipm_fit =
         MapSpline(c.image, 21, [this](const Eigen::Vector2d& p) { return ipm_.ImageToIpm(p); });
-    const auto ground_fit = MapSpline(c.image, 21, [&cam](const Eigen::Vector2d& p) {
-      return cam.ImageToGround(p);
-    });
+    const auto ground_fit =
+        MapSpline(c.image, 21, [&cam](const Eigen::Vector2d& p) { return cam.ImageToGround(p); });
     if (!ipm_fit || !ground_fit) continue;
     lane.ipm = ipm_fit->p;
     lane.ground = ground_fit->p;
     lane.score = c.score;
     det.lanes.push_back(lane);
   }
-  std::sort(det.lanes.begin(), det.lanes.end(), [](const Lane& a, const Lane& b) {
-    return a.ground[3].x() < b.ground[3].x();
-  });
+  std::sort(det.lanes.begin(), det.lanes.end(),
+            [](const Lane& a, const Lane& b) { return a.ground[3].x() < b.ground[3].x(); });
   det.timings.postprocess_ms = MsSince(t);
   det.timings.total_ms = MsSince(t_start);
 

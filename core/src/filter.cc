@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
@@ -15,8 +14,8 @@ absl::Status FilterOptions::Validate() const {
         absl::StrCat("filter.marking_width_m must lie in (0, 2) metres, got ", marking_width_m));
   }
   if (!(segment_length_m > 0 && segment_length_m < 50)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "filter.segment_length_m must lie in (0, 50) metres, got ", segment_length_m));
+    return absl::InvalidArgumentError(
+        absl::StrCat("filter.segment_length_m must lie in (0, 50) metres, got ", segment_length_m));
   }
   if (!(min_sigma_x_px > 0 && min_sigma_y_px > 0 && min_sigma_x_px < 50 && min_sigma_y_px < 50)) {
     return absl::InvalidArgumentError("filter.min_sigma_*_px must lie in (0, 50)");
@@ -36,10 +35,10 @@ FilterKernels MakeFilterKernels(const FilterOptions& options, double metres_per_
   k.sigma_x_px = std::max(options.min_sigma_x_px, options.marking_width_m / metres_per_px_x);
   k.sigma_y_px = std::max(options.min_sigma_y_px, options.segment_length_m / metres_per_px_y);
   // Kernels longer than ~4x the IPM would only replicate the border; cap them.
-  const int hx = std::min(64, std::max(1, static_cast<int>(
-                                              std::ceil(options.kernel_extent_sigmas * k.sigma_x_px))));
-  const int hy = std::min(128, std::max(1, static_cast<int>(
-                                               std::ceil(options.kernel_extent_sigmas * k.sigma_y_px))));
+  const int hx = std::min(
+      64, std::max(1, static_cast<int>(std::ceil(options.kernel_extent_sigmas * k.sigma_x_px))));
+  const int hy = std::min(
+      128, std::max(1, static_cast<int>(std::ceil(options.kernel_extent_sigmas * k.sigma_y_px))));
 
   // Across the lane: f(x) = 1/s^2 exp(-x^2 / 2s^2) (1 - x^2/s^2), the negated
   // second derivative of a Gaussian (paper, section II-B). Truncation leaves a
@@ -69,7 +68,8 @@ FilterKernels MakeFilterKernels(const FilterOptions& options, double metres_per_
   sum = 0;
   for (int i = -hy; i <= hy; ++i) sum += std::exp(-static_cast<double>(i) * i / (2 * sy2));
   for (int i = -hy; i <= hy; ++i) {
-    k.ky.at<float>(i + hy) = static_cast<float>(std::exp(-static_cast<double>(i) * i / (2 * sy2)) / sum);
+    k.ky.at<float>(i + hy) =
+        static_cast<float>(std::exp(-static_cast<double>(i) * i / (2 * sy2)) / sum);
   }
   return k;
 }

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
@@ -20,9 +19,9 @@ absl::Status IpmOptions::Validate() const {
     if (!std::isfinite(x)) return absl::InvalidArgumentError("ipm.roi values must be finite");
   }
   if (roi.right <= roi.left || roi.bottom <= roi.top) {
-    return absl::InvalidArgumentError(absl::StrCat("ipm.roi must have right > left and bottom > top, got left=",
-                                                   roi.left, " right=", roi.right, " top=", roi.top,
-                                                   " bottom=", roi.bottom));
+    return absl::InvalidArgumentError(
+        absl::StrCat("ipm.roi must have right > left and bottom > top, got left=", roi.left,
+                     " right=", roi.right, " top=", roi.top, " bottom=", roi.bottom));
   }
   if (horizon_margin_px < 0) {
     return absl::InvalidArgumentError("ipm.horizon_margin_px must be >= 0");
@@ -49,8 +48,8 @@ absl::StatusOr<IpmMapping> IpmMapping::Create(const CameraModel& camera,
   if (roi.right - roi.left < 2 || roi.bottom - roi.top < 2) {
     return absl::InvalidArgumentError(absl::StrCat(
         "ipm.roi (left=", options.roi.left, " right=", options.roi.right, " top=", options.roi.top,
-        " bottom=", options.roi.bottom, ") has no usable part inside the ", camera.image_width,
-        "x", camera.image_height, " image below the horizon (row ", horizon, " + margin ",
+        " bottom=", options.roi.bottom, ") has no usable part inside the ", camera.image_width, "x",
+        camera.image_height, " image below the horizon (row ", horizon, " + margin ",
         options.horizon_margin_px, ")"));
   }
   m.roi_ = roi;
@@ -58,8 +57,8 @@ absl::StatusOr<IpmMapping> IpmMapping::Create(const CameraModel& camera,
   // Ground footprint of the ROI: its corners and the vanishing point's column
   // on its top and bottom rows.
   const double vp_u = std::clamp(camera.VanishingPoint().x(), roi.left, roi.right);
-  const Eigen::Vector2d corners[] = {{roi.left, roi.top},    {roi.right, roi.top},
-                                     {vp_u, roi.top},        {roi.left, roi.bottom},
+  const Eigen::Vector2d corners[] = {{roi.left, roi.top},     {roi.right, roi.top},
+                                     {vp_u, roi.top},         {roi.left, roi.bottom},
                                      {roi.right, roi.bottom}, {vp_u, roi.bottom}};
   m.x_min_ = m.y_min_ = std::numeric_limits<double>::infinity();
   m.x_max_ = m.y_max_ = -std::numeric_limits<double>::infinity();

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/core.hpp>
 
 #include "absl/strings/str_cat.h"
@@ -62,8 +61,10 @@ std::vector<ColumnPeak> FindColumnPeaks(const std::vector<double>& profile, doub
     }
   }
   if (peaks.empty() && n > 0) {
-    const int i = static_cast<int>(std::max_element(profile.begin(), profile.end()) - profile.begin());
-    if (profile[i] >= min_peak && profile[i] > 0) peaks.push_back({static_cast<double>(i), profile[i]});
+    const int i =
+        static_cast<int>(std::max_element(profile.begin(), profile.end()) - profile.begin());
+    if (profile[i] >= min_peak && profile[i] > 0)
+      peaks.push_back({static_cast<double>(i), profile[i]});
   }
   // Grouping: strongest first; a peak within group_px of a kept one is merged
   // into it.

@@ -1,8 +1,7 @@
 #include "lane/line_fit.h"
 
-#include <cmath>
-
 #include <Eigen/Eigenvalues>
+#include <cmath>
 
 #include "absl/strings/str_cat.h"
 #include "lane/ransac.h"
@@ -123,8 +122,8 @@ std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> FitLineTls(
 std::optional<IpmLine> FitLineInWindow(const cv::Mat& thresholded, double x_center,
                                        double half_width_px, const LineRansacOptions& options,
                                        std::mt19937_64& rng) {
-  const WeightedPoints pts =
-      CollectWindow(thresholded, [x_center](double) { return x_center; }, half_width_px);
+  const WeightedPoints pts = CollectWindow(
+      thresholded, [x_center](double) { return x_center; }, half_width_px);
   if (static_cast<int>(pts.points.size()) < options.min_inliers) return std::nullopt;
   const LineEstimator estimator(pts, thresholded.rows, options);
   const auto report = Ransac(estimator, pts.points, pts.weights, options.iterations, rng);

@@ -57,6 +57,8 @@ absl::Status PostprocessOptions::Validate() const {
       {"extend_min_cos_up", extend_min_cos_up, -1, 1},
       {"extend_min_cos_down", extend_min_cos_down, -1, 1},
       {"min_image_length_px", min_image_length_px, 0, 1e5},
+      {"side_offset_m", side_offset_m, 0, 10},
+      {"min_side_contrast", min_side_contrast, 0, 1},
   };
   for (const auto& c : checks) {
     if (auto s = bad(c.name, c.v, c.lo, c.hi); !s.ok()) return s;
@@ -140,6 +142,30 @@ std::optional<Bezier> LocalizeSpline(const Bezier& spline, const ChannelView& im
   if (pts.size() < 4) return std::nullopt;
   if (mean_contrast) *mean_contrast = contrast_sum / pts.size();
   return FitBezier(pts);
+}
+
+double BarContrast(const Bezier& spline, const ChannelView& image, double side_offset_px,
+                   int samples) {
+  double sum = 0;
+  int n = 0;
+  for (int i = 0; i < samples; ++i) {
+    const double t = (i + 0.5) / samples;
+    const Eigen::Vector2d p = spline.Eval(t);
+    Eigen::Vector2d tangent = spline.Derivative(t);
+    if (tangent.norm() < 1e-9 || !InBounds(p, image)) continue;
+    const Eigen::Vector2d normal = Normal(tangent.normalized());
+    double centre = -1e30;
+    for (double o : {-1.0, 0.0, 1.0}) {
+      const Eigen::Vector2d q = p + o * normal;
+      centre = std::max(centre, static_cast<double>(Bilinear(image, q.x(), q.y())));
+    }
+    const Eigen::Vector2d l = p - side_offset_px * normal;
+    const Eigen::Vector2d r = p + side_offset_px * normal;
+    if (!InBounds(l, image) || !InBounds(r, image)) continue;
+    sum += std::min(centre - Bilinear(image, l.x(), l.y()), centre - Bilinear(image, r.x(), r.y()));
+    ++n;
+  }
+  return n > 0 ? sum / n : 0.0;
 }
 
 Bezier ExtendSpline(const Bezier& spline, const ChannelView& image, const ExtendOptions& options) {

@@ -58,8 +58,7 @@ absl::Status SplineRansacOptions::Validate() const {
   return absl::OkStatus();
 }
 
-double SplineScore(const Bezier& spline, const cv::Mat& image,
-                   const SplineRansacOptions& options) {
+double SplineScore(const Bezier& spline, const cv::Mat& image, const SplineRansacOptions& options) {
   for (const auto& p : spline.p) {
     if (!InsideImage(p, image)) return 0.0;
   }
@@ -86,7 +85,7 @@ double SplineScore(const Bezier& spline, const cv::Mat& image,
   }
   double length = 0;
   for (size_t i = 1; i < samples.size(); ++i) length += (samples[i] - samples[i - 1]).norm();
-  const double l_norm = length / image.rows - 1.0;          // paper's l'
+  const double l_norm = length / image.rows - 1.0;                // paper's l'
   const double theta_norm = (spline.Straightness() - 1.0) / 2.0;  // paper's theta'
   return raw * (1.0 + options.k1 * l_norm + options.k2 * theta_norm);
 }
@@ -95,8 +94,8 @@ std::optional<SplineFit> FitSplineAroundLine(const cv::Mat& thresholded, const I
                                              double half_width_px,
                                              const SplineRansacOptions& options,
                                              std::mt19937_64& rng) {
-  const WeightedPoints pts =
-      CollectWindow(thresholded, [&line](double y) { return line.XAt(y); }, half_width_px);
+  const WeightedPoints pts = CollectWindow(
+      thresholded, [&line](double y) { return line.XAt(y); }, half_width_px);
   // Only the window's pixels count towards the score.
   cv::Mat window = cv::Mat::zeros(thresholded.size(), CV_32F);
   for (size_t i = 0; i < pts.points.size(); ++i) {
@@ -105,8 +104,7 @@ std::optional<SplineFit> FitSplineAroundLine(const cv::Mat& thresholded, const I
   }
   const SplineEstimator estimator(window, options);
   const Bezier initial = Bezier::Line(line.top, line.bottom);
-  const auto report =
-      Ransac(estimator, pts.points, pts.weights, options.iterations, rng, initial);
+  const auto report = Ransac(estimator, pts.points, pts.weights, options.iterations, rng, initial);
   if (!report.model || !(report.score > 0)) return std::nullopt;
   return SplineFit{*report.model, report.score};
 }

@@ -1,8 +1,8 @@
 #include "lane/camera.h"
 
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 namespace lane {
 namespace {
@@ -61,8 +61,8 @@ TEST(CameraTest, FarPointsConvergeOnTheVanishingPoint) {
 TEST(CameraTest, GroundAxesPointRightAndAhead) {
   const CameraModel cam;
   const Eigen::Vector2d centre = cam.GroundToImage({0, 10});
-  EXPECT_GT(cam.GroundToImage({1, 10}).x(), centre.x());     // right is right
-  EXPECT_GT(cam.GroundToImage({0, 5}).y(), centre.y());      // nearer is lower
+  EXPECT_GT(cam.GroundToImage({1, 10}).x(), centre.x());  // right is right
+  EXPECT_GT(cam.GroundToImage({0, 5}).y(), centre.y());   // nearer is lower
   EXPECT_GT(centre.y(), cam.HorizonRow());
 }
 

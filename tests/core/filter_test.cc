@@ -1,11 +1,12 @@
 #include "lane/filter.h"
-#include "lane/threshold.h"
+
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <numeric>
 #include <random>
 
-#include <gtest/gtest.h>
+#include "lane/threshold.h"
 
 namespace lane {
 namespace {

@@ -1,7 +1,7 @@
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "lane/bezier.h"
 #include "lane/line_detection.h"
@@ -25,7 +25,7 @@ TEST(HoughTest, FindsOnePeakPerVerticalLineWithSubpixelPosition) {
   cv::Mat img(120, 160, CV_32F, cv::Scalar(0));
   DrawLine(img, 30, 30, 1.f);
   DrawLine(img, 70, 70, 0.6f, 10);  // dashed
-  img.col(71).setTo(0.1f);           // pulls the centre slightly right
+  img.col(71).setTo(0.1f);          // pulls the centre slightly right
   DrawLine(img, 120, 120, 0.8f);
   img.at<float>(5, 100) = 0.5f;  // clutter below the peak threshold
   const auto profile = ColumnProfile(img, 1.0);
@@ -136,8 +136,9 @@ TEST(SplineFitTest, RansacFollowsACurvedMarkingAwayFromItsLine) {
   ASSERT_TRUE(fit.has_value());
   const MatchDistances d = CurveMatchDistances(fit->spline.Sample(101), truth.Sample(101));
   EXPECT_LT(d.mean, 1.0);
-  EXPECT_LT(CurveMatchDistances(Bezier::Line(line.top, line.bottom).Sample(101), truth.Sample(101)).mean,
-            10.0);
+  EXPECT_LT(
+      CurveMatchDistances(Bezier::Line(line.top, line.bottom).Sample(101), truth.Sample(101)).mean,
+      10.0);
 }
 
 TEST(MatchTest, PaperRuleAndWidthScaling) {

@@ -2,11 +2,10 @@
 #ifndef LANE_BEZIER_H_
 #define LANE_BEZIER_H_
 
+#include <Eigen/Core>
 #include <array>
 #include <optional>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace lane {
 

@@ -5,14 +5,13 @@
 #ifndef LANE_DETECTOR_H_
 #define LANE_DETECTOR_H_
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 #include "absl/status/statusor.h"
 #include "lane/bezier.h"

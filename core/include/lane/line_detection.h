@@ -2,9 +2,8 @@
 #ifndef LANE_LINE_DETECTION_H_
 #define LANE_LINE_DETECTION_H_
 
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "absl/status/status.h"
 

@@ -2,12 +2,11 @@
 #ifndef LANE_LINE_FIT_H_
 #define LANE_LINE_FIT_H_
 
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <random>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 #include "absl/status/status.h"
 

@@ -3,9 +3,8 @@
 #ifndef LANE_MATCH_H_
 #define LANE_MATCH_H_
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "lane/bezier.h"
 

@@ -4,9 +4,8 @@
 #ifndef LANE_POSTPROCESS_H_
 #define LANE_POSTPROCESS_H_
 
-#include <optional>
-
 #include <opencv2/core.hpp>
+#include <optional>
 
 #include "absl/status/status.h"
 #include "lane/bezier.h"
@@ -24,6 +23,16 @@ struct PostprocessOptions {
   // Splines shorter than this fraction of the top view's height fall back to
   // the RANSAC line.
   double min_length_fraction = 0.25;
+  // Marking check (not in the paper): a painted marking is a bright bar, darker
+  // on BOTH sides, whereas a curb or the edge of the asphalt is a step that
+  // is dark on one side only, yet excites the second-derivative filter too.
+  // Along the top-view spline, the IPM intensity must exceed the intensity
+  // `side_offset_m` to the left and to the right by at least
+  // `min_side_contrast` (IPM intensity units, 1 = full scale) on average.
+  // 0 disables the check. The paper lists curbs as its main source of false
+  // positives (section IV).
+  double side_offset_m = 0.3;
+  double min_side_contrast = 0.015;
   // Extension in the top view: tangent step and normal half-search, IPM px.
   double ipm_extend_step_px = 5.0;
   double ipm_normal_search_px = 10.0;
@@ -101,11 +110,17 @@ std::optional<Bezier> LocalizeSpline(const Bezier& spline, const ChannelView& im
                                      double search_px, double sigma_px, double min_cos,
                                      double* mean_contrast);
 
+// Mean over samples of `spline` of min(I(p) - I(p - d n), I(p) - I(p + d n))
+// where n is the normal, d = side_offset_px and I(p) is the brightest value
+// within 1 px of p along n: how much brighter the curve is than both sides.
+double BarContrast(const Bezier& spline, const ChannelView& image, double side_offset_px,
+                   int samples = 20);
+
 struct ExtendOptions {
   double step_px = 10;
   double search_px = 20;
   double sigma_px = 2;
-  double min_contrast = 0;  // absolute contrast to continue
+  double min_contrast = 0;      // absolute contrast to continue
   double min_cos_start = 0.95;  // going towards t=0
   double min_cos_end = 0.86;    // going towards t=1
   double min_row = 0;           // stay within these rows

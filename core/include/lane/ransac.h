@@ -10,13 +10,12 @@
 #ifndef LANE_RANSAC_H_
 #define LANE_RANSAC_H_
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <random>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace lane {
 

@@ -2,10 +2,9 @@
 #ifndef LANE_SPLINE_FIT_H_
 #define LANE_SPLINE_FIT_H_
 
+#include <opencv2/core.hpp>
 #include <optional>
 #include <random>
-
-#include <opencv2/core.hpp>
 
 #include "absl/status/status.h"
 #include "lane/bezier.h"

@@ -4,13 +4,12 @@
 #ifndef LANE_SYNTHETIC_H_
 #define LANE_SYNTHETIC_H_
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 #include "absl/status/statusor.h"
 #include "lane/camera.h"
@@ -58,8 +57,7 @@ struct SyntheticFrame {
 
 // Deterministic for a given camera, options and seed.
 absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
-                                                    const SyntheticOptions& options,
-                                                    uint64_t seed);
+                                                    const SyntheticOptions& options, uint64_t seed);
 
 // Labels file: one JSON object per line,
 // {"frame":"000000.png","width":W,"height":H,"boundaries":[{"points":[[x,y]x4],

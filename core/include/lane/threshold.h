@@ -3,9 +3,8 @@
 #ifndef LANE_THRESHOLD_H_
 #define LANE_THRESHOLD_H_
 
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "absl/status/status.h"
 

@@ -1,0 +1,202 @@
+// End-to-end tests of the detector on synthetic frames with exact truth, and
+// its handling of bad input.
+#include "lane/detector.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "lane/match.h"
+#include "lane/synthetic.h"
+
+namespace lane {
+namespace {
+
+// A truth boundary is in the detector's view when most of its length inside
+// the ROI's rows also lies inside the ROI's columns; boundaries wholly outside
+// the region the detector maps cannot be found by it.
+bool InView(const Bezier& truth, const Roi& roi) {
+  int rows = 0, inside = 0;
+  for (const auto& p : truth.Sample(101)) {
+    if (p.y() < roi.top || p.y() > roi.bottom) continue;
+    ++rows;
+    inside += (p.x() >= roi.left && p.x() <= roi.right);
+  }
+  return rows >= 10 && inside >= 0.8 * rows;
+}
+
+struct Tally {
+  int frames = 0, truths = 0, found = 0, detections = 0, false_positives = 0;
+};
+
+// One-to-one matching under the paper's rule, best pairs first.
+void Score(const std::vector<Bezier>& dets, const std::vector<Bezier>& truths,
+           const std::vector<Bezier>& all_truths, int width, Tally& tally) {
+  std::vector<bool> used(dets.size(), false);
+  int matched = 0;
+  for (const auto& t : truths) {
+    int best = -1;
+    double best_mean = 1e9;
+    for (size_t i = 0; i < dets.size(); ++i) {
+      if (used[i] || !PaperMatch(dets[i], t, width)) continue;
+      const double m = CurveMatchDistances(dets[i].Sample(101), t.Sample(101)).mean;
+      if (m < best_mean) best_mean = m, best = static_cast<int>(i);
+    }
+    if (best >= 0) used[best] = true, ++matched;
+  }
+  tally.truths += static_cast<int>(truths.size());
+  tally.found += matched;
+  tally.detections += static_cast<int>(dets.size());
+  for (size_t i = 0; i < dets.size(); ++i) {
+    if (used[i]) continue;
+    // A detection that matches a boundary outside the view (or a second
+    // detection of one) is not a false positive of the detector's view; any
+    // other unmatched detection is.
+    bool on_some_truth = false;
+    for (const auto& t : all_truths) {
+      on_some_truth = on_some_truth || PaperMatch(dets[i], t, width);
+    }
+    tally.false_positives += on_some_truth ? 0 : 1;
+  }
+  ++tally.frames;
+}
+
+Tally RunSynthetic(Mode mode, int frames, uint64_t seed0) {
+  const CameraModel cam;  // the Caltech Lanes camera, 640x480
+  IpmOptions ipm;
+  if (mode == Mode::kTwo) ipm.roi = {140, 500, 220, 360};
+  auto det = Detector::Create(cam, ipm, DetectorOptions::ForMode(mode));
+  EXPECT_TRUE(det.ok()) << det.status();
+  Tally tally;
+  if (!det.ok()) return tally;
+  SyntheticOptions so;
+  for (int i = 0; i < frames; ++i) {
+    auto frame = RenderSyntheticFrame(cam, so, seed0 + i);
+    EXPECT_TRUE(frame.ok()) << frame.status();
+    if (!frame.ok()) continue;
+    std::vector<Bezier> truths, all_truths;
+    for (size_t b = 0; b < frame->boundaries.size(); ++b) {
+      const Bezier t{frame->boundaries[b].image};
+      all_truths.push_back(t);
+      if (mode == Mode::kTwo) {
+        if (static_cast<int>(b) == frame->ego_left || static_cast<int>(b) == frame->ego_right) {
+          truths.push_back(t);
+        }
+      } else if (InView(t, det->ipm().roi())) {
+        truths.push_back(t);
+      }
+    }
+    auto result = det->Detect(frame->bgr);
+    EXPECT_TRUE(result.ok()) << result.status();
+    if (!result.ok()) continue;
+    std::vector<Bezier> dets;
+    for (const auto& lane : result->lanes) dets.push_back(Bezier{lane.image});
+    Score(dets, truths, all_truths, cam.image_width, tally);
+  }
+  std::printf(
+      "[ synthetic %s ] frames %d boundaries %d found %d (%.1f%%) detections %d fp %d "
+      "(%.3f/frame)\n",
+      ModeName(mode), tally.frames, tally.truths, tally.found,
+      100.0 * tally.found / std::max(1, tally.truths), tally.detections, tally.false_positives,
+      static_cast<double>(tally.false_positives) / tally.frames);
+  return tally;
+}
+
+TEST(DetectorEndToEnd, FindsSyntheticBoundariesAllLanes) {
+  const Tally t = RunSynthetic(Mode::kAll, 60, 1000);
+  ASSERT_EQ(t.frames, 60);
+  ASSERT_GT(t.truths, 60);
+  EXPECT_GE(t.found, 0.95 * t.truths);
+  EXPECT_LE(t.false_positives, 0.2 * t.frames);
+}
+
+TEST(DetectorEndToEnd, FindsTheEgoLaneInTwoLanesMode) {
+  const Tally t = RunSynthetic(Mode::kTwo, 50, 5000);
+  ASSERT_EQ(t.frames, 50);
+  EXPECT_GE(t.found, 0.95 * t.truths);
+  EXPECT_LE(t.false_positives, 0.2 * t.frames);
+  EXPECT_LE(t.detections, 2 * t.frames);  // never more than two boundaries
+}
+
+TEST(DetectorTest, DeterministicForASeed) {
+  const CameraModel cam;
+  auto det = Detector::Create(cam, IpmOptions{}, DetectorOptions{});
+  ASSERT_TRUE(det.ok());
+  auto frame = RenderSyntheticFrame(cam, SyntheticOptions{}, 77);
+  ASSERT_TRUE(frame.ok());
+  auto a = det->Detect(frame->bgr);
+  auto b = det->Detect(frame->bgr);
+  ASSERT_TRUE(a.ok() && b.ok());
+  ASSERT_EQ(a->lanes.size(), b->lanes.size());
+  for (size_t i = 0; i < a->lanes.size(); ++i) {
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(a->lanes[i].image[k], b->lanes[i].image[k]);
+  }
+}
+
+TEST(DetectorTest, LanesAreConsistentAcrossTheThreeFrames) {
+  const CameraModel cam;
+  auto det = Detector::Create(cam, IpmOptions{}, DetectorOptions{});
+  ASSERT_TRUE(det.ok());
+  auto frame = RenderSyntheticFrame(cam, SyntheticOptions{}, 78);
+  ASSERT_TRUE(frame.ok());
+  auto r = det->Detect(frame->bgr);
+  ASSERT_TRUE(r.ok());
+  ASSERT_FALSE(r->lanes.empty());
+  for (const auto& lane : r->lanes) {
+    const Bezier img{lane.image}, ground{lane.ground}, ipm{lane.ipm};
+    for (double t : {0.0, 0.5, 1.0}) {
+      // Each frame's spline passes through the mapped points of the others.
+      const Eigen::Vector2d g = cam.ImageToGround(img.Eval(t));
+      double best = 1e9;
+      for (const auto& p : ground.Sample(201)) best = std::min(best, (p - g).norm());
+      EXPECT_LT(best, 0.15) << "metres";
+      const Eigen::Vector2d q = det->ipm().ImageToIpm(img.Eval(t));
+      best = 1e9;
+      for (const auto& p : ipm.Sample(201)) best = std::min(best, (p - q).norm());
+      EXPECT_LT(best, 1.0) << "IPM px";
+    }
+    EXPECT_GT(lane.ground[0].y(), 0);
+  }
+  // Sorted left to right.
+  for (size_t i = 1; i < r->lanes.size(); ++i) {
+    EXPECT_LT(r->lanes[i - 1].ground[3].x(), r->lanes[i].ground[3].x());
+  }
+}
+
+TEST(DetectorTest, BadInputIsAnErrorNotACrash) {
+  const CameraModel cam;
+  auto det = Detector::Create(cam, IpmOptions{}, DetectorOptions{});
+  ASSERT_TRUE(det.ok());
+  EXPECT_EQ(det->Detect(cv::Mat()).status().code(), absl::StatusCode::kInvalidArgument);
+  const auto wrong_size = det->Detect(cv::Mat(100, 100, CV_8UC3, cv::Scalar::all(0)));
+  EXPECT_EQ(wrong_size.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(wrong_size.status().message().find("640x480"), std::string::npos);
+  EXPECT_EQ(det->Detect(cv::Mat(480, 640, CV_8UC4, cv::Scalar::all(0))).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(det->Detect(cv::Mat(480, 640, CV_32FC3, cv::Scalar::all(0))).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  // Grey frames are fine; a blank frame has no lanes.
+  auto blank = det->Detect(cv::Mat(480, 640, CV_8UC1, cv::Scalar(90)));
+  ASSERT_TRUE(blank.ok()) << blank.status();
+  EXPECT_TRUE(blank->lanes.empty());
+  // Noise only: no crash, few lanes.
+  cv::Mat noise(480, 640, CV_8UC3);
+  cv::randu(noise, cv::Scalar::all(0), cv::Scalar::all(255));
+  EXPECT_TRUE(det->Detect(noise).ok());
+
+  CameraModel bad = cam;
+  bad.pitch_deg = 95;
+  EXPECT_EQ(Detector::Create(bad, IpmOptions{}, DetectorOptions{}).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  IpmOptions above;
+  above.roi = {100, 500, 0, 150};
+  EXPECT_EQ(Detector::Create(cam, above, DetectorOptions{}).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  DetectorOptions nonsense;
+  nonsense.threshold.quantile = 2;
+  EXPECT_EQ(Detector::Create(cam, IpmOptions{}, nonsense).status().code(),
+            absl::StatusCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace lane
