@@ -77,18 +77,37 @@ std::optional<Bezier> FitBezier(const std::vector<Eigen::Vector2d>& pts) {
   const auto t = ChordLengthParams(pts);
   if (!t) return std::nullopt;
   // P = (T M)^+ Q, the least-squares control points (paper, section II-D).
-  // Computed through the 4x4 normal matrix: pinv(A) Q = pinv(A^T A) A^T Q,
-  // which keeps every matrix fixed-size (no heap) for the RANSAC inner loop.
-  Eigen::Matrix4d ata = Eigen::Matrix4d::Zero();
-  Eigen::Matrix<double, 4, 2> atq = Eigen::Matrix<double, 4, 2>::Zero();
-  for (size_t i = 0; i < pts.size(); ++i) {
-    const double ti = (*t)[i];
-    const Eigen::RowVector4d a = Eigen::RowVector4d(ti * ti * ti, ti * ti, ti, 1.0) * BasisMatrix();
-    ata.noalias() += a.transpose() * a;
-    atq.noalias() += a.transpose() * pts[i].transpose();
+  Eigen::Matrix<double, 4, 2> cp;
+  if (pts.size() == 4) {
+    // The RANSAC case: T M is square, and when it is invertible its
+    // pseudo-inverse is its inverse (4x4 closed form, no decomposition).
+    Eigen::Matrix4d a;
+    Eigen::Matrix<double, 4, 2> q;
+    for (int i = 0; i < 4; ++i) {
+      const double ti = (*t)[i];
+      a.row(i) = Eigen::RowVector4d(ti * ti * ti, ti * ti, ti, 1.0) * BasisMatrix();
+      q.row(i) = pts[i].transpose();
+    }
+    Eigen::Matrix4d inv;
+    bool invertible = false;
+    a.computeInverseWithCheck(inv, invertible, 1e-12);
+    cp = invertible ? Eigen::Matrix<double, 4, 2>(inv * q)
+                    : Eigen::Matrix<double, 4, 2>(
+                          a.completeOrthogonalDecomposition().pseudoInverse() * q);
+  } else {
+    // Through the 4x4 normal matrix: pinv(A) Q = pinv(A^T A) A^T Q, which
+    // keeps every matrix fixed-size.
+    Eigen::Matrix4d ata = Eigen::Matrix4d::Zero();
+    Eigen::Matrix<double, 4, 2> atq = Eigen::Matrix<double, 4, 2>::Zero();
+    for (size_t i = 0; i < pts.size(); ++i) {
+      const double ti = (*t)[i];
+      const Eigen::RowVector4d a =
+          Eigen::RowVector4d(ti * ti * ti, ti * ti, ti, 1.0) * BasisMatrix();
+      ata.noalias() += a.transpose() * a;
+      atq.noalias() += a.transpose() * pts[i].transpose();
+    }
+    cp = ata.completeOrthogonalDecomposition().pseudoInverse() * atq;
   }
-  const Eigen::Matrix<double, 4, 2> cp =
-      ata.completeOrthogonalDecomposition().pseudoInverse() * atq;
   Bezier b;
   for (int i = 0; i < 4; ++i) {
     b.p[i] = Eigen::Vector2d(cp(i, 0), cp(i, 1));

@@ -6,13 +6,12 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
 #include <string>
 #include <type_traits>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "absl/strings/str_cat.h"
 
@@ -29,7 +28,7 @@ using Json = nlohmann::ordered_json;
 //   v.Field(name, member)    for numbers, booleans and enums;
 //   v.Section(name, member)  for nested structs (which have a list here too).
 // S is the struct or the const struct (the writer only reads).
-#define LANE_FIELDS(Type)    \
+#define LANE_FIELDS(Type)     \
   template <class S, class V> \
   std::enable_if_t<std::is_same_v<std::remove_const_t<S>, Type>> VisitFields(S& s, V& v)
 

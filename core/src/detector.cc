@@ -218,7 +218,7 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
   // 2. Filter.
   t = Clock::now();
   cv::Mat filtered = FilterTopView(ipm, kernels_, opt.filter);
-  filtered.setTo(0, ipm_.valid_mask() == 0);
+  filtered.setTo(0, ipm_.invalid_mask());
   det.timings.filter_ms = MsSince(t);
 
   // 3. Threshold.

@@ -48,9 +48,14 @@ class LineEstimator {
   }
 
   double Score(const IpmLine& line) const {
+    // Distance to the line through `top` with unit normal n: |n . (p - top)|.
+    const Eigen::Vector2d d = (line.bottom - line.top).normalized();
+    const Eigen::Vector2d n(d.y(), -d.x());
+    const double offset = n.dot(line.top);
+    const double tol = options_.inlier_distance_px;
     double score = 0;
     for (size_t i = 0; i < pts_.points.size(); ++i) {
-      if (line.Distance(pts_.points[i]) <= options_.inlier_distance_px) score += pts_.weights[i];
+      if (std::abs(n.dot(pts_.points[i]) - offset) <= tol) score += pts_.weights[i];
     }
     return score;
   }

@@ -20,8 +20,9 @@ class SplineEstimator {
   using Model = Bezier;
   static constexpr int kSampleSize = 4;
 
-  SplineEstimator(const cv::Mat& image, const SplineRansacOptions& options)
-      : image_(image), options_(options) {}
+  SplineEstimator(const cv::Mat& image, const SplineRansacOptions& options,
+                  std::pair<const IpmLine*, double> window)
+      : image_(image), options_(options), window_(window) {}
 
   std::optional<Bezier> Estimate(std::vector<Eigen::Vector2d> sample) const {
     std::sort(sample.begin(), sample.end(),
@@ -29,11 +30,14 @@ class SplineEstimator {
     return FitBezier(sample);
   }
 
-  double Score(const Bezier& spline) const { return SplineScore(spline, image_, options_); }
+  double Score(const Bezier& spline) const {
+    return SplineScore(spline, image_, options_, window_);
+  }
 
  private:
   const cv::Mat& image_;
   const SplineRansacOptions& options_;
+  std::pair<const IpmLine*, double> window_;
 };
 
 }  // namespace
@@ -58,33 +62,50 @@ absl::Status SplineRansacOptions::Validate() const {
   return absl::OkStatus();
 }
 
-double SplineScore(const Bezier& spline, const cv::Mat& image, const SplineRansacOptions& options) {
+double SplineScore(const Bezier& spline, const cv::Mat& image, const SplineRansacOptions& options,
+                   const std::pair<const IpmLine*, double>& window) {
   for (const auto& p : spline.p) {
     if (!InsideImage(p, image)) return 0.0;
   }
+  // The curve in power form, Q(t) = ((a t + b) t + c) t + d, for Horner
+  // evaluation in the hot loop (this runs once per RANSAC trial).
+  const Eigen::Vector2d a = -spline.p[0] + 3 * spline.p[1] - 3 * spline.p[2] + spline.p[3];
+  const Eigen::Vector2d b = 3 * spline.p[0] - 6 * spline.p[1] + 3 * spline.p[2];
+  const Eigen::Vector2d c = -3 * spline.p[0] + 3 * spline.p[1];
+  const Eigen::Vector2d d = spline.p[0];
+  // Window: columns within half of x = x0 + slope * y.
+  double w_x0 = 0, w_slope = 0, w_half = 1e9;
+  if (window.first) {
+    w_x0 = window.first->XAt(0);
+    w_slope = window.first->XAt(1) - w_x0;
+    w_half = window.second;
+  }
   // Raster the curve at dt = 0.01; each pixel counts once, with the jitter
-  // columns either side.
-  double raw = 0;
+  // columns either side. All control points are inside the image, so the
+  // curve (inside their convex hull) is too and coordinates are >= 0.
+  double raw = 0, length = 0;
   int last_x = -1, last_y = -1;
-  std::vector<Eigen::Vector2d> samples;
-  samples.reserve(101);
+  Eigen::Vector2d prev = d;
   for (int i = 0; i <= 100; ++i) {
-    const Eigen::Vector2d q = spline.Eval(i / 100.0);
-    samples.push_back(q);
-    const int x = static_cast<int>(std::lround(q.x()));
-    const int y = static_cast<int>(std::lround(q.y()));
-    if (x == last_x && y == last_y) continue;
+    const double t = i * 0.01;
+    const Eigen::Vector2d q = ((a * t + b) * t + c) * t + d;
+    length += (q - prev).norm();
+    prev = q;
+    const int x = static_cast<int>(q.x() + 0.5);
+    const int y = static_cast<int>(q.y() + 0.5);
+    if ((x == last_x && y == last_y) || y >= image.rows || x >= image.cols) continue;
     last_x = x;
     last_y = y;
-    if (y < 0 || y >= image.rows) continue;
     const float* row = image.ptr<float>(y);
-    for (int j = -options.jitter_px; j <= options.jitter_px; ++j) {
-      const int xx = x + j;
-      if (xx >= 0 && xx < image.cols) raw += row[xx];
+    int lo = std::max(0, x - options.jitter_px);
+    int hi = std::min(image.cols - 1, x + options.jitter_px);
+    if (window.first) {
+      const double wc = w_x0 + w_slope * y;
+      lo = std::max(lo, static_cast<int>(std::ceil(wc - w_half)));
+      hi = std::min(hi, static_cast<int>(std::floor(wc + w_half)));
     }
+    for (int xx = lo; xx <= hi; ++xx) raw += row[xx];
   }
-  double length = 0;
-  for (size_t i = 1; i < samples.size(); ++i) length += (samples[i] - samples[i - 1]).norm();
   const double l_norm = length / image.rows - 1.0;                // paper's l'
   const double theta_norm = (spline.Straightness() - 1.0) / 2.0;  // paper's theta'
   return raw * (1.0 + options.k1 * l_norm + options.k2 * theta_norm);
@@ -97,12 +118,7 @@ std::optional<SplineFit> FitSplineAroundLine(const cv::Mat& thresholded, const I
   const WeightedPoints pts = CollectWindow(
       thresholded, [&line](double y) { return line.XAt(y); }, half_width_px);
   // Only the window's pixels count towards the score.
-  cv::Mat window = cv::Mat::zeros(thresholded.size(), CV_32F);
-  for (size_t i = 0; i < pts.points.size(); ++i) {
-    window.at<float>(static_cast<int>(pts.points[i].y()), static_cast<int>(pts.points[i].x())) =
-        static_cast<float>(pts.weights[i]);
-  }
-  const SplineEstimator estimator(window, options);
+  const SplineEstimator estimator(thresholded, options, {&line, half_width_px});
   const Bezier initial = Bezier::Line(line.top, line.bottom);
   const auto report = Ransac(estimator, pts.points, pts.weights, options.iterations, rng, initial);
   if (!report.model || !(report.score > 0)) return std::nullopt;

@@ -1,12 +1,12 @@
 #include "lane/config.h"
 
+#include <gtest/gtest.h>
+
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "absl/strings/string_view.h"
 
@@ -105,12 +105,26 @@ TEST(ConfigTest, RoundTripKeepsEveryValue) {
 
 TEST(ConfigTest, WritesEveryKeyPretty) {
   const std::string json = ConfigToJson(Config());
-  for (const char* key :
-       {"\"camera\"", "\"image_height\"", "\"roi\"", "\"interpolation\": \"bilinear\"",
-        "\"mode\": \"all\"", "\"channel\": \"red\"", "\"seed\"", "\"filter\"",
-        "\"zero_border_bottom_px\"", "\"threshold\"", "\"quantile\"", "\"hough\"", "\"min_peak\"",
-        "\"line_ransac\"", "\"spline_ransac\"", "\"merge_distance_px\"", "\"postprocess\"",
-        "\"extend_in_ipm\"", "\"two_lanes\"", "\"min_pair_score\""}) {
+  for (const char* key : {"\"camera\"",
+                          "\"image_height\"",
+                          "\"roi\"",
+                          "\"interpolation\": \"bilinear\"",
+                          "\"mode\": \"all\"",
+                          "\"channel\": \"red\"",
+                          "\"seed\"",
+                          "\"filter\"",
+                          "\"zero_border_bottom_px\"",
+                          "\"threshold\"",
+                          "\"quantile\"",
+                          "\"hough\"",
+                          "\"min_peak\"",
+                          "\"line_ransac\"",
+                          "\"spline_ransac\"",
+                          "\"merge_distance_px\"",
+                          "\"postprocess\"",
+                          "\"extend_in_ipm\"",
+                          "\"two_lanes\"",
+                          "\"min_pair_score\""}) {
     EXPECT_TRUE(Contains(json, key));
   }
   EXPECT_TRUE(Contains(json, "\n  \"camera\": {\n    \"fu\": "));  // 2-space indent
@@ -199,8 +213,7 @@ TEST(ConfigTest, ExplicitKeysOverrideTheModeDefaultsWhateverTheOrder) {
   EXPECT_EQ(parsed->detector.threshold.quantile, 0.9);
   EXPECT_EQ(parsed->detector.spline_ransac.iterations, 7);
   // The keys not given keep the 2-lanes defaults.
-  EXPECT_EQ(parsed->detector.line_ransac.window_half_width_m,
-            two.line_ransac.window_half_width_m);
+  EXPECT_EQ(parsed->detector.line_ransac.window_half_width_m, two.line_ransac.window_half_width_m);
   EXPECT_EQ(parsed->detector.spline_ransac.window_half_width_m,
             two.spline_ransac.window_half_width_m);
   EXPECT_EQ(parsed->detector.spline_ransac.k1, two.spline_ransac.k1);

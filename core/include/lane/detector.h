@@ -39,8 +39,11 @@ std::optional<Channel> ParseChannel(const std::string& name);
 
 struct TwoLaneOptions {
   // Only columns within this lateral distance of the camera are searched for
-  // the ego lane's boundaries, metres (reference: IPM columns 59..100 of 160).
-  double search_half_width_m = 2.4;
+  // the ego lane's boundaries, metres. The reference keeps IPM columns 59..100
+  // of 160 (about +-2.3 m); we widen it so a car driving 0.7 m off its lane's
+  // centre still has both boundaries inside, while the next boundaries out
+  // (>= 4.3 m away) stay outside.
+  double search_half_width_m = 2.9;
   // Expected ego-lane width and tolerance (Gaussian sigma), metres
   // (reference: 30 and 10 IPM px at 8.9 px/m).
   double lane_width_m = 3.4;

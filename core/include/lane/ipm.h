@@ -76,6 +76,8 @@ class IpmMapping {
   int height() const { return options_.height; }
   // CV_8U, 255 where the IPM pixel's source lies inside the ROI.
   const cv::Mat& valid_mask() const { return valid_; }
+  // Its complement.
+  const cv::Mat& invalid_mask() const { return invalid_; }
 
  private:
   IpmMapping() = default;

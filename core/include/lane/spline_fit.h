@@ -32,9 +32,11 @@ struct SplineRansacOptions {
 };
 
 // The paper's spline score on a CV_32F thresholded top view. Returns 0 for a
-// spline with a control point outside the image.
+// spline with a control point outside the image. When `window` is given,
+// only pixels within window->second columns of the line window->first count.
 double SplineScore(const Bezier& spline, const cv::Mat& thresholded,
-                   const SplineRansacOptions& options);
+                   const SplineRansacOptions& options,
+                   const std::pair<const IpmLine*, double>& window = {nullptr, 0.0});
 
 struct SplineFit {
   Bezier spline;

@@ -1,0 +1,200 @@
+#include "inputs.h"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/core/utils/logger.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <system_error>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/str_cat.h"
+
+namespace lane_tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Lists may name lists; this stops a list that names itself.
+constexpr int kMaxListDepth = 8;
+
+double MillisecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+// " (path)" when the path differs from the name the frame is reported as.
+std::string PathNote(const std::string& path, const std::string& name) {
+  return path == name ? std::string() : absl::StrCat(" (", path, ")");
+}
+
+std::string MakeStem(const std::string& name) {
+  std::string stem = name;
+  // Drop the extension of the last component only.
+  const size_t slash = stem.find_last_of('/');
+  const size_t dot = stem.find_last_of('.');
+  if (dot != std::string::npos && (slash == std::string::npos || dot > slash) && dot > 0) {
+    stem.resize(dot);
+  }
+  for (char& c : stem) {
+    if (c == '/' || c == '\\' || c == '#' || c == ':' || c == ' ') c = '_';
+  }
+  while (!stem.empty() && (stem[0] == '.' || stem[0] == '_')) stem.erase(0, 1);
+  return stem.empty() ? std::string("frame") : stem;
+}
+
+}  // namespace
+
+std::string LowerExtension(const std::string& path) {
+  return absl::AsciiStrToLower(fs::path(path).extension().string());
+}
+
+bool IsImageExtension(const std::string& ext) {
+  return ext == ".jpg" || ext == ".jpeg" || ext == ".png";
+}
+
+bool IsVideoExtension(const std::string& ext) {
+  return ext == ".mp4" || ext == ".avi" || ext == ".mkv" || ext == ".mov";
+}
+
+FrameReader::FrameReader(const std::vector<std::string>& inputs) {
+  for (const std::string& input : inputs) Expand(input, input, /*top_level=*/true, 0);
+}
+
+FrameReader::~FrameReader() = default;
+
+void FrameReader::Expand(const std::string& path, const std::string& name, bool top_level,
+                         int depth) {
+  // Given directly, a file is reported by its file name; inside a list, by
+  // the list's line.
+  const std::string file_name = fs::path(path).filename().string();
+  const std::string reported = top_level && !file_name.empty() ? file_name : name;
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec || !fs::exists(status)) {
+    entries_.push_back({Entry::kError, path, reported,
+                        absl::StrCat("no such file or directory", PathNote(path, reported))});
+    return;
+  }
+  if (fs::is_directory(status)) {
+    std::vector<std::string> files;
+    for (fs::directory_iterator it(path, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string file = it->path().filename().string();
+      if (IsImageExtension(LowerExtension(file)) && !fs::is_directory(it->path())) {
+        files.push_back(file);
+      }
+    }
+    if (ec) {
+      entries_.push_back(
+          {Entry::kError, path, name,
+           absl::StrCat("cannot list directory", PathNote(path, name), ": ", ec.message())});
+      return;
+    }
+    if (files.empty()) {
+      std::fprintf(stderr, "warning: no .jpg/.jpeg/.png files in %s\n", path.c_str());
+    }
+    std::sort(files.begin(), files.end());
+    for (const std::string& file : files) {
+      const std::string entry_name =
+          top_level ? file
+                    : absl::StrCat(name, name.empty() || name.back() == '/' ? "" : "/", file);
+      entries_.push_back({Entry::kImage, (fs::path(path) / file).string(), entry_name, ""});
+    }
+    return;
+  }
+  const std::string ext = LowerExtension(path);
+  if (ext == ".txt") {
+    if (depth >= kMaxListDepth) {
+      entries_.push_back({Entry::kError, path, name,
+                          absl::StrCat("lists nested too deeply", PathNote(path, name))});
+      return;
+    }
+    std::ifstream in(path);
+    if (!in) {
+      entries_.push_back(
+          {Entry::kError, path, name, absl::StrCat("cannot read list", PathNote(path, name))});
+      return;
+    }
+    const fs::path folder = fs::path(path).parent_path();
+    std::string line;
+    while (std::getline(in, line)) {
+      const std::string entry = std::string(absl::StripAsciiWhitespace(line));
+      if (entry.empty() || entry[0] == '#') continue;
+      const fs::path entry_path(entry);
+      const std::string resolved =
+          entry_path.is_absolute() ? entry : (folder / entry_path).lexically_normal().string();
+      Expand(resolved, entry, /*top_level=*/false, depth + 1);
+    }
+    return;
+  }
+  entries_.push_back({IsVideoExtension(ext) ? Entry::kVideo : Entry::kImage, path, reported, ""});
+}
+
+bool FrameReader::Next(InputFrame* frame) {
+  while (next_ < entries_.size()) {
+    const Entry& entry = entries_[next_];
+    *frame = InputFrame();
+    frame->name = entry.name;
+    frame->stem = MakeStem(entry.name);
+    switch (entry.kind) {
+      case Entry::kError:
+        frame->error = entry.error;
+        ++next_;
+        return true;
+      case Entry::kImage: {
+        const auto start = std::chrono::steady_clock::now();
+        frame->bgr = cv::imread(entry.path, cv::IMREAD_COLOR);
+        frame->decode_ms = MillisecondsSince(start);
+        if (frame->bgr.empty()) {
+          frame->error = absl::StrCat("cannot decode image", PathNote(entry.path, entry.name));
+        }
+        ++next_;
+        return true;
+      }
+      case Entry::kVideo: {
+        if (!video_) {
+          video_ = std::make_unique<cv::VideoCapture>();
+          video_frame_ = 0;
+          // OpenCV logs each backend's failure at length; our message says it.
+          const auto level = cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
+          const bool opened = video_->open(entry.path) && video_->isOpened();
+          cv::utils::logging::setLogLevel(level);
+          if (!opened) {
+            video_.reset();
+            frame->error = absl::StrCat("cannot open video", PathNote(entry.path, entry.name));
+            ++next_;
+            return true;
+          }
+        }
+        const auto start = std::chrono::steady_clock::now();
+        cv::Mat image;
+        const bool ok = video_->read(image) && !image.empty();
+        if (ok) {
+          frame->decode_ms = MillisecondsSince(start);
+          char index[32];
+          std::snprintf(index, sizeof(index), "%06d", video_frame_);
+          frame->name = absl::StrCat(entry.name, "#", index);
+          frame->stem = absl::StrCat(MakeStem(entry.name), "_", index);
+          frame->bgr = image;
+          ++video_frame_;
+          return true;
+        }
+        const bool empty_video = video_frame_ == 0;
+        video_.reset();
+        ++next_;
+        if (empty_video) {
+          frame->error = absl::StrCat("no frame could be decoded from video",
+                                      PathNote(entry.path, entry.name));
+          return true;
+        }
+        continue;  // the video is done
+      }
+    }
+  }
+  return false;
+}
+
+}  // namespace lane_tools

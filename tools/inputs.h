@@ -1,0 +1,68 @@
+// Frames from the command line's INPUT arguments: image files, directories of
+// images, list files and videos.
+#ifndef LANE_TOOLS_INPUTS_H_
+#define LANE_TOOLS_INPUTS_H_
+
+#include <memory>
+#include <opencv2/core.hpp>
+#include <opencv2/videoio.hpp>
+#include <string>
+#include <vector>
+
+namespace lane_tools {
+
+struct InputFrame {
+  // The frame's name in results: the file name for a file given directly or
+  // found in a directory, the line for an entry of a list file, and
+  // "video.mp4#000123" (0-based frame index) for a frame of a video.
+  std::string name;
+  // `name` made into a file name stem: extension dropped, '/' and '#' -> '_'.
+  std::string stem;
+  cv::Mat bgr;        // CV_8UC3; empty when `error` is set
+  std::string error;  // why the frame could not be read, or empty
+  double decode_ms = 0;
+};
+
+// Expands the INPUT arguments:
+//  * an existing directory: its .jpg/.jpeg/.png files (not recursive), sorted
+//    by name;
+//  * a .txt file: a list, one path a line; relative paths are resolved
+//    against the list's folder; blank lines and lines starting with '#' are
+//    skipped; entries may themselves be images, videos, directories or lists;
+//  * .mp4/.avi/.mkv/.mov: a video, read frame by frame with cv::VideoCapture;
+//  * anything else: an image file decoded with cv::imread.
+// A missing path, an unreadable list or video, or an undecodable image
+// becomes an InputFrame with `error` set, so the caller reports it and goes
+// on. Frames are decoded one at a time.
+class FrameReader {
+ public:
+  explicit FrameReader(const std::vector<std::string>& inputs);
+  ~FrameReader();
+
+  // Fills `frame` with the next frame; false when all inputs are done.
+  bool Next(InputFrame* frame);
+
+ private:
+  struct Entry {
+    enum Kind { kImage, kVideo, kError } kind = kImage;
+    std::string path;   // to open
+    std::string name;   // to report
+    std::string error;  // kError
+  };
+  void Expand(const std::string& path, const std::string& name, bool top_level, int depth);
+
+  std::vector<Entry> entries_;
+  size_t next_ = 0;
+  // The video being read, and its next frame index.
+  std::unique_ptr<cv::VideoCapture> video_;
+  int video_frame_ = 0;
+};
+
+// Lower-case extension with the dot (".png"), or "".
+std::string LowerExtension(const std::string& path);
+bool IsImageExtension(const std::string& ext);
+bool IsVideoExtension(const std::string& ext);
+
+}  // namespace lane_tools
+
+#endif  // LANE_TOOLS_INPUTS_H_

@@ -1,0 +1,126 @@
+#include "overlay.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+#include "lane/bezier.h"
+
+namespace lane_tools {
+namespace {
+
+constexpr int kCurveSamples = 50;
+// Sub-pixel drawing: coordinates are passed to OpenCV times 2^kShift.
+constexpr int kShift = 4;
+constexpr double kOne = 1 << kShift;
+
+cv::Point Fixed(const Eigen::Vector2d& p) {
+  return cv::Point(static_cast<int>(std::lround(p.x() * kOne)),
+                   static_cast<int>(std::lround(p.y() * kOne)));
+}
+
+bool Finite(const Eigen::Vector2d& p) { return std::isfinite(p.x()) && std::isfinite(p.y()); }
+
+// A cubic Bezier mapped through `to_canvas`: a polyline of samples and small
+// circles on the control points.
+template <class ToCanvas>
+void DrawBezier(cv::Mat& canvas, const std::array<Eigen::Vector2d, 4>& control,
+                const cv::Scalar& colour, ToCanvas to_canvas) {
+  const lane::Bezier curve{control};
+  std::vector<cv::Point> polyline;
+  for (const Eigen::Vector2d& p : curve.Sample(kCurveSamples)) {
+    const Eigen::Vector2d q = to_canvas(p);
+    // Far outside points only make OpenCV's clipping overflow.
+    if (Finite(q) && q.cwiseAbs().maxCoeff() < 1e5) polyline.push_back(Fixed(q));
+  }
+  if (polyline.size() >= 2) {
+    cv::polylines(canvas, polyline, /*isClosed=*/false, colour, 2, cv::LINE_AA, kShift);
+  }
+  for (const Eigen::Vector2d& p : control) {
+    const Eigen::Vector2d q = to_canvas(p);
+    if (Finite(q) && q.cwiseAbs().maxCoeff() < 1e5) {
+      cv::circle(canvas, Fixed(q), 3 << kShift, colour, 1, cv::LINE_AA, kShift);
+    }
+  }
+}
+
+cv::Mat ToBgr(const cv::Mat& image) {
+  cv::Mat bgr;
+  if (image.channels() == 1) {
+    cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
+  } else if (image.channels() == 4) {
+    cv::cvtColor(image, bgr, cv::COLOR_BGRA2BGR);
+  } else {
+    bgr = image.clone();
+  }
+  return bgr;
+}
+
+}  // namespace
+
+cv::Scalar LaneColour(int i) {
+  static const cv::Scalar kPalette[] = {
+      {0, 255, 0},    // green
+      {255, 128, 0},  // azure
+      {0, 215, 255},  // gold
+      {255, 0, 255},  // magenta
+      {255, 255, 0},  // cyan
+      {0, 128, 255},  // orange
+      {128, 0, 255},  // pink
+      {255, 0, 128},  // violet
+  };
+  constexpr int n = sizeof(kPalette) / sizeof(kPalette[0]);
+  return kPalette[((i % n) + n) % n];
+}
+
+cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
+                         const lane::Detector& detector) {
+  cv::Mat canvas = ToBgr(frame);
+  if (canvas.empty()) return canvas;
+
+  // Horizon: thin grey dashes.
+  const double horizon = detector.ipm().camera().HorizonRow();
+  if (std::isfinite(horizon) && horizon >= 0 && horizon < canvas.rows) {
+    const int y = static_cast<int>(std::lround(horizon));
+    for (int x = 0; x < canvas.cols; x += 12) {
+      cv::line(canvas, {x, y}, {std::min(x + 6, canvas.cols - 1), y}, {160, 160, 160}, 1);
+    }
+  }
+  // The ROI actually mapped (after clipping): thin red.
+  const lane::Roi& roi = detector.ipm().roi();
+  cv::rectangle(canvas, Fixed({roi.left, roi.top}), Fixed({roi.right, roi.bottom}), {0, 0, 255}, 1,
+                cv::LINE_AA, kShift);
+
+  for (size_t i = 0; i < detection.lanes.size(); ++i) {
+    DrawBezier(canvas, detection.lanes[i].image, LaneColour(static_cast<int>(i)),
+               [](const Eigen::Vector2d& p) { return p; });
+  }
+  return canvas;
+}
+
+cv::Mat DrawIpmView(const cv::Mat& frame, const lane::Detection& detection,
+                    const lane::Detector& detector, int scale) {
+  scale = std::max(1, scale);
+  const cv::Mat top = detector.ipm().Apply(detector.ExtractChannel(frame));
+  if (top.empty()) return cv::Mat();
+  cv::Mat stretched;
+  cv::normalize(top, stretched, 0, 255, cv::NORM_MINMAX, CV_8U);
+  cv::Mat big;
+  cv::resize(stretched, big, cv::Size(), scale, scale, cv::INTER_NEAREST);
+  cv::Mat canvas = ToBgr(big);
+
+  // IPM pixel (col, row) covers [scale*col, scale*(col+1)) in the canvas;
+  // its centre is at scale*(col+0.5) - 0.5 in OpenCV's pixel coordinates.
+  const double s = scale;
+  for (size_t i = 0; i < detection.lanes.size(); ++i) {
+    DrawBezier(canvas, detection.lanes[i].ipm, LaneColour(static_cast<int>(i)),
+               [s](const Eigen::Vector2d& p) {
+                 return Eigen::Vector2d((p.x() + 0.5) * s - 0.5, (p.y() + 0.5) * s - 0.5);
+               });
+  }
+  return canvas;
+}
+
+}  // namespace lane_tools

@@ -1,0 +1,30 @@
+// Pictures of a detection for people: the frame with the lanes drawn on it,
+// and the detector's top view with the lanes drawn in it.
+#ifndef LANE_TOOLS_OVERLAY_H_
+#define LANE_TOOLS_OVERLAY_H_
+
+#include <opencv2/core.hpp>
+
+#include "lane/detector.h"
+
+namespace lane_tools {
+
+// Colour (BGR) of the i-th lane: a fixed palette of distinct colours.
+cv::Scalar LaneColour(int i);
+
+// A BGR copy of `frame` (CV_8UC3 or CV_8UC1) with: the mapped ROI as a thin
+// red rectangle, the horizon row as a thin grey dashed line, and each lane as
+// a 2 px polyline through 50 samples of its image Bezier with its control
+// points as small circles.
+cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
+                         const lane::Detector& detector);
+
+// The detector's top view of `frame` (its channel through the IPM),
+// stretched to 0..255, enlarged `scale` times (nearest neighbour), in BGR,
+// with each lane's IPM Bezier drawn in its colour.
+cv::Mat DrawIpmView(const cv::Mat& frame, const lane::Detection& detection,
+                    const lane::Detector& detector, int scale = 4);
+
+}  // namespace lane_tools
+
+#endif  // LANE_TOOLS_OVERLAY_H_

@@ -1,0 +1,76 @@
+#include "results_json.h"
+
+#include <array>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+namespace lane_tools {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+double Round(double v, double scale) {
+  const double r = std::round(v * scale) / scale;
+  return r == 0 ? 0.0 : r;  // no "-0.0"
+}
+
+Json Points(const std::array<Eigen::Vector2d, 4>& points, double scale) {
+  Json out = Json::array();
+  for (const Eigen::Vector2d& p : points) {
+    out.push_back(Json::array({Round(p.x(), scale), Round(p.y(), scale)}));
+  }
+  return out;
+}
+
+Json Header(const std::string& frame, int width, int height, lane::Mode mode) {
+  Json out = Json::object();
+  out["schema"] = kResultsSchema;
+  out["frame"] = frame;
+  if (width > 0 && height > 0) {
+    out["width"] = width;
+    out["height"] = height;
+  }
+  out["mode"] = lane::ModeName(mode);
+  return out;
+}
+
+// Invalid UTF-8 (file names) would make dump() throw: replace it.
+std::string Dump(const Json& j) { return j.dump(-1, ' ', false, Json::error_handler_t::replace); }
+
+}  // namespace
+
+std::string DetectionJsonLine(const std::string& frame, int width, int height, lane::Mode mode,
+                              const lane::Detection& detection, double decode_ms) {
+  Json out = Header(frame, width, height, mode);
+  Json lanes = Json::array();
+  for (const lane::Lane& lane : detection.lanes) {
+    Json l = Json::object();
+    l["image"] = Points(lane.image, 1e3);
+    l["ipm"] = Points(lane.ipm, 1e3);
+    l["ground"] = Points(lane.ground, 1e4);
+    l["score"] = Round(lane.score, 1e4);
+    lanes.push_back(std::move(l));
+  }
+  out["lanes"] = std::move(lanes);
+  const lane::StageTimings& t = detection.timings;
+  Json timing = Json::object();
+  timing["decode"] = Round(decode_ms, 1e3);
+  timing["ipm"] = Round(t.ipm_ms, 1e3);
+  timing["filter"] = Round(t.filter_ms, 1e3);
+  timing["threshold"] = Round(t.threshold_ms, 1e3);
+  timing["lines"] = Round(t.lines_ms, 1e3);
+  timing["splines"] = Round(t.splines_ms, 1e3);
+  timing["postprocess"] = Round(t.postprocess_ms, 1e3);
+  timing["total"] = Round(t.total_ms, 1e3);
+  out["timing_ms"] = std::move(timing);
+  return Dump(out);
+}
+
+std::string ErrorJsonLine(const std::string& frame, int width, int height, lane::Mode mode,
+                          const std::string& error) {
+  Json out = Header(frame, width, height, mode);
+  out["error"] = error;
+  return Dump(out);
+}
+
+}  // namespace lane_tools
