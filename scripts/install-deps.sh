@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package the project needs to build, test and run.
+# Idempotent: skips apt-get when everything is already installed.
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake ninja-build pkg-config git ca-certificates curl
+  libopencv-dev          # image decoding, IPM remap, filtering, drawing, video input
+  libeigen3-dev          # linear algebra: Bezier least squares, TLS line fits
+  libabsl-dev            # absl::Status/StatusOr, flags, strings
+  nlohmann-json3-dev     # config files and JSON Lines results
+  libgtest-dev libgmock-dev   # unit and integration tests
+  libbenchmark-dev       # benchmarks
+  libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler   # the service
+  prometheus-cpp-dev     # service metrics
+  prometheus             # scraped by the metrics integration test
+  libmatio-dev           # Caltech Lanes .ccvl label files (MAT v5)
+  clang-format
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+echo "install-deps: installing ${missing[*]}"
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
