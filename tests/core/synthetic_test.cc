@@ -1,0 +1,312 @@
+#include "lane/synthetic.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "lane/bezier.h"
+#include "lane/camera.h"
+
+namespace {
+
+using lane::Bezier;
+using lane::CameraModel;
+using lane::RenderSyntheticFrame;
+using lane::SyntheticFrame;
+using lane::SyntheticOptions;
+
+CameraModel CaltechCamera() { return CameraModel{}; }
+
+CameraModel CulaneCamera() {
+  CameraModel c;
+  c.fu = 1000;
+  c.fv = 1000;
+  c.cu = 820;
+  c.cv = 295;
+  c.pitch_deg = -4.858;
+  c.yaw_deg = 3.706;
+  c.height_m = 1.3;
+  c.image_width = 1640;
+  c.image_height = 590;
+  return c;
+}
+
+SyntheticFrame Render(const CameraModel& cam, const SyntheticOptions& opt, uint64_t seed) {
+  auto frame = RenderSyntheticFrame(cam, opt, seed);
+  EXPECT_TRUE(frame.ok()) << frame.status();
+  return frame.ok() ? *std::move(frame) : SyntheticFrame{};
+}
+
+bool SameTruth(const SyntheticFrame& a, const SyntheticFrame& b) {
+  if (a.boundaries.size() != b.boundaries.size()) return false;
+  if (a.ego_left != b.ego_left || a.ego_right != b.ego_right) return false;
+  for (size_t i = 0; i < a.boundaries.size(); ++i) {
+    const auto& x = a.boundaries[i];
+    const auto& y = b.boundaries[i];
+    if (x.dashed != y.dashed || x.yellow != y.yellow || x.lateral_offset_m != y.lateral_offset_m) {
+      return false;
+    }
+    for (int k = 0; k < 4; ++k) {
+      if (x.image[k] != y.image[k]) return false;
+    }
+  }
+  return true;
+}
+
+bool SameBytes(const cv::Mat& a, const cv::Mat& b) {
+  if (a.size() != b.size() || a.type() != b.type()) return false;
+  cv::Mat diff;
+  cv::absdiff(a, b, diff);
+  return cv::countNonZero(diff.reshape(1)) == 0;
+}
+
+// Red channel with bilinear interpolation; NaN outside the image.
+double Red(const cv::Mat& bgr, const Eigen::Vector2d& p) {
+  const double u = p.x(), v = p.y();
+  if (!(u >= 0 && v >= 0 && u <= bgr.cols - 1 && v <= bgr.rows - 1)) return std::nan("");
+  const int u0 = std::min(static_cast<int>(u), bgr.cols - 2 < 0 ? 0 : bgr.cols - 2);
+  const int v0 = std::min(static_cast<int>(v), bgr.rows - 2 < 0 ? 0 : bgr.rows - 2);
+  const double fu = u - u0, fv = v - v0;
+  auto at = [&](int r, int c) { return static_cast<double>(bgr.at<cv::Vec3b>(r, c)[2]); };
+  return (1 - fv) * ((1 - fu) * at(v0, u0) + fu * at(v0, u0 + 1)) +
+         fv * ((1 - fu) * at(v0 + 1, u0) + fu * at(v0 + 1, u0 + 1));
+}
+
+TEST(SyntheticTest, SameSeedIsDeterministic) {
+  const SyntheticOptions opt;
+  for (const CameraModel& cam : {CaltechCamera(), CulaneCamera()}) {
+    const SyntheticFrame a = Render(cam, opt, 1234);
+    const SyntheticFrame b = Render(cam, opt, 1234);
+    EXPECT_TRUE(SameBytes(a.bgr, b.bgr));
+    EXPECT_TRUE(SameTruth(a, b));
+    EXPECT_EQ(lane::SyntheticLabelsJson("x.png", a), lane::SyntheticLabelsJson("x.png", b));
+  }
+}
+
+TEST(SyntheticTest, DifferentSeedsGiveDifferentRoads) {
+  const SyntheticOptions opt;
+  const CameraModel cam = CaltechCamera();
+  const SyntheticFrame a = Render(cam, opt, 1);
+  const SyntheticFrame b = Render(cam, opt, 2);
+  EXPECT_FALSE(SameTruth(a, b));
+  cv::Mat diff;
+  cv::absdiff(a.bgr, b.bgr, diff);
+  const cv::Scalar mean = cv::mean(diff);
+  EXPECT_GT((mean[0] + mean[1] + mean[2]) / 3.0, 5.0);  // visibly different
+}
+
+TEST(SyntheticTest, TruthDoesNotDependOnDegradations) {
+  // The road is drawn from the seed before clutter, so clean and degraded
+  // renderings of one seed share their ground truth.
+  SyntheticOptions clean;
+  clean.max_vehicles = 0;
+  clean.max_shadows = 0;
+  clean.noise_sigma = 0;
+  clean.jpeg_quality = 0;
+  const SyntheticOptions dirty;
+  const CameraModel cam = CaltechCamera();
+  for (uint64_t seed : {3, 4, 5}) {
+    EXPECT_TRUE(SameTruth(Render(cam, clean, seed), Render(cam, dirty, seed))) << seed;
+  }
+}
+
+TEST(SyntheticTest, FrameHasCameraSizeAndType) {
+  for (const CameraModel& cam : {CaltechCamera(), CulaneCamera()}) {
+    const SyntheticFrame f = Render(cam, SyntheticOptions{}, 7);
+    EXPECT_EQ(f.bgr.cols, cam.image_width);
+    EXPECT_EQ(f.bgr.rows, cam.image_height);
+    EXPECT_EQ(f.bgr.type(), CV_8UC3);
+  }
+}
+
+TEST(SyntheticTest, TruthLiesInsideImageAndBelowHorizon) {
+  constexpr double kTol = 3.0;  // pixels: inner control points may leave the curve a little
+  for (const CameraModel& cam : {CaltechCamera(), CulaneCamera()}) {
+    const double horizon = cam.HorizonRow();
+    for (uint64_t seed = 0; seed < 12; ++seed) {
+      const SyntheticFrame f = Render(cam, SyntheticOptions{}, seed);
+      for (const auto& b : f.boundaries) {
+        for (const auto& p : b.image) {
+          EXPECT_GE(p.x(), -kTol) << "seed " << seed;
+          EXPECT_LE(p.x(), cam.image_width - 1 + kTol) << "seed " << seed;
+          EXPECT_GE(p.y(), -kTol) << "seed " << seed;
+          EXPECT_LE(p.y(), cam.image_height - 1 + kTol) << "seed " << seed;
+          EXPECT_GT(p.y(), horizon) << "seed " << seed;
+        }
+        // The visible part spans a useful number of rows.
+        EXPECT_GE(std::abs(b.image[3].y() - b.image[0].y()), 25.0) << "seed " << seed;
+      }
+    }
+  }
+}
+
+TEST(SyntheticTest, BoundariesAreOrderedAndEgoLaneContainsCar) {
+  for (const CameraModel& cam : {CaltechCamera(), CulaneCamera()}) {
+    for (uint64_t seed = 0; seed < 8; ++seed) {
+      const SyntheticFrame f = Render(cam, SyntheticOptions{}, seed);
+      for (size_t i = 1; i < f.boundaries.size(); ++i) {
+        EXPECT_LT(f.boundaries[i - 1].lateral_offset_m, f.boundaries[i].lateral_offset_m);
+      }
+      if (f.ego_left >= 0) {
+        EXPECT_LT(f.boundaries[f.ego_left].lateral_offset_m, 0.0);
+      }
+      if (f.ego_right >= 0) {
+        EXPECT_GT(f.boundaries[f.ego_right].lateral_offset_m, 0.0);
+      }
+      if (f.ego_left >= 0 && f.ego_right >= 0) {
+        EXPECT_EQ(f.ego_right, f.ego_left + 1);
+      }
+    }
+  }
+}
+
+TEST(SyntheticTest, SolidWhiteMarkingIsBrighterThanRoadBeside) {
+  SyntheticOptions opt;
+  opt.dashed_probability = 0;
+  opt.yellow_probability = 0;
+  opt.max_vehicles = 0;
+  opt.max_shadows = 0;
+  opt.noise_sigma = 0;
+  opt.jpeg_quality = 0;
+  for (const CameraModel& cam : {CaltechCamera(), CulaneCamera()}) {
+    for (uint64_t seed = 10; seed < 16; ++seed) {
+      const SyntheticFrame f = Render(cam, opt, seed);
+      ASSERT_FALSE(f.boundaries.empty());
+      for (int i = 0; i < static_cast<int>(f.boundaries.size()); ++i) {
+        const Bezier bz{f.boundaries[i].image};
+        double on = 0, left = 0, right = 0;
+        int n_on = 0, n_left = 0, n_right = 0;
+        for (const auto& p : bz.Sample(60)) {
+          const Eigen::Vector2d g = cam.ImageToGround(p);
+          const double r0 = Red(f.bgr, p);
+          const double rl = Red(f.bgr, cam.GroundToImage(g - Eigen::Vector2d(1.0, 0.0)));
+          const double rr = Red(f.bgr, cam.GroundToImage(g + Eigen::Vector2d(1.0, 0.0)));
+          if (std::isnan(r0)) continue;
+          on += r0;
+          ++n_on;
+          if (!std::isnan(rl)) {
+            left += rl;
+            ++n_left;
+          }
+          if (!std::isnan(rr)) {
+            right += rr;
+            ++n_right;
+          }
+        }
+        ASSERT_GT(n_on, 0);
+        on /= n_on;
+        // The ego lane's markings are near and wide in the image: strongly
+        // brighter. Far side boundaries are thin and seen at grazing angles.
+        const bool ego = i == f.ego_left || i == f.ego_right;
+        const double margin = ego ? 40.0 : 8.0;
+        const std::string where =
+            "seed " + std::to_string(seed) + " width " + std::to_string(cam.image_width);
+        if (n_left > 10) {
+          EXPECT_GT(on, left / n_left + margin) << where;
+        }
+        if (n_right > 10) {
+          EXPECT_GT(on, right / n_right + margin) << where;
+        }
+      }
+    }
+  }
+}
+
+TEST(SyntheticTest, ThreeLanesGiveAtLeastTwoBoundariesOnBothCameras) {
+  SyntheticOptions opt;
+  opt.num_lanes = 3;
+  for (const CameraModel& cam : {CaltechCamera(), CulaneCamera()}) {
+    for (uint64_t seed = 0; seed < 6; ++seed) {
+      const SyntheticFrame f = Render(cam, opt, seed);
+      EXPECT_GE(f.boundaries.size(), 2u) << "seed " << seed;
+      EXPECT_LE(f.boundaries.size(), 4u) << "seed " << seed;
+      EXPECT_GE(f.ego_left, 0) << "seed " << seed;
+      EXPECT_GE(f.ego_right, 0) << "seed " << seed;
+    }
+  }
+}
+
+TEST(SyntheticTest, InvalidCameraIsAnError) {
+  CameraModel cam;
+  cam.fu = -1;
+  const auto f = RenderSyntheticFrame(cam, SyntheticOptions{}, 1);
+  ASSERT_FALSE(f.ok());
+  EXPECT_EQ(f.status().code(), absl::StatusCode::kInvalidArgument);
+
+  CameraModel empty;
+  empty.image_width = 0;
+  EXPECT_FALSE(RenderSyntheticFrame(empty, SyntheticOptions{}, 1).ok());
+}
+
+TEST(SyntheticTest, InvalidOptionsAreAnError) {
+  const CameraModel cam;
+  std::vector<SyntheticOptions> bad(8);
+  bad[0].num_lanes = -1;
+  bad[1].lane_width_m = 0;
+  bad[2].min_radius_m = -5;
+  bad[3].yellow_probability = 1.5;
+  bad[4].min_marking_width_m = 0.2;  // > max
+  bad[5].jpeg_quality = 101;
+  bad[6].noise_sigma = -1;
+  bad[7].truth_far_m = -1;
+  for (size_t i = 0; i < bad.size(); ++i) {
+    const auto f = RenderSyntheticFrame(cam, bad[i], 1);
+    ASSERT_FALSE(f.ok()) << i;
+    EXPECT_EQ(f.status().code(), absl::StatusCode::kInvalidArgument) << i;
+  }
+}
+
+TEST(SyntheticTest, DegenerateViewsRenderWithoutTruth) {
+  // Looking at the sky: no ground visible.
+  CameraModel up;
+  up.pitch_deg = -60;
+  const SyntheticFrame sky = Render(up, SyntheticOptions{}, 1);
+  EXPECT_EQ(sky.bgr.size(), cv::Size(up.image_width, up.image_height));
+  EXPECT_TRUE(sky.boundaries.empty());
+  EXPECT_EQ(sky.ego_left, -1);
+  EXPECT_EQ(sky.ego_right, -1);
+  // A tiny frame: too small for any boundary to span 30 rows.
+  CameraModel tiny;
+  tiny.fu = tiny.fv = 30;
+  tiny.cu = 16;
+  tiny.cv = 12;
+  tiny.image_width = 32;
+  tiny.image_height = 24;
+  const SyntheticFrame small = Render(tiny, SyntheticOptions{}, 1);
+  EXPECT_EQ(small.bgr.size(), cv::Size(32, 24));
+  EXPECT_TRUE(small.boundaries.empty());
+}
+
+TEST(SyntheticTest, LabelsJsonIsOneLineInTheDocumentedForm) {
+  const SyntheticFrame f = Render(CaltechCamera(), SyntheticOptions{}, 21);
+  ASSERT_FALSE(f.boundaries.empty());
+  const std::string line = lane::SyntheticLabelsJson("000021.png", f);
+  EXPECT_EQ(line.find('\n'), std::string::npos);
+  EXPECT_EQ(
+      line.rfind("{\"frame\":\"000021.png\",\"width\":640,\"height\":480,\"boundaries\":[", 0), 0u)
+      << line;
+  const nlohmann::json j = nlohmann::json::parse(line);
+  ASSERT_EQ(j["boundaries"].size(), f.boundaries.size());
+  for (size_t i = 0; i < f.boundaries.size(); ++i) {
+    const auto& b = j["boundaries"][i];
+    ASSERT_EQ(b["points"].size(), 4u);
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_NEAR(b["points"][k][0].get<double>(), f.boundaries[i].image[k].x(), 0.01);
+      EXPECT_NEAR(b["points"][k][1].get<double>(), f.boundaries[i].image[k].y(), 0.01);
+    }
+    EXPECT_EQ(b["dashed"].get<bool>(), f.boundaries[i].dashed);
+    EXPECT_EQ(b["color"].get<std::string>(), f.boundaries[i].yellow ? "yellow" : "white");
+    const std::string ego = static_cast<int>(i) == f.ego_left    ? "left"
+                            : static_cast<int>(i) == f.ego_right ? "right"
+                                                                 : "none";
+    EXPECT_EQ(b["ego"].get<std::string>(), ego);
+  }
+}
+
+}  // namespace
