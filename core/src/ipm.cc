@@ -78,42 +78,69 @@ absl::StatusOr<IpmMapping> IpmMapping::Create(const CameraModel& camera,
     return absl::InvalidArgumentError("ipm.roi has an empty ground footprint");
   }
 
-  // The per-pixel source coordinates, computed once per calibration.
-  cv::Mat map_x(options.height, options.width, CV_32F);
-  cv::Mat map_y(options.height, options.width, CV_32F);
+  // The per-pixel source coordinates and weights, computed once per
+  // calibration.
+  const int n = options.width * options.height;
+  m.src_x_.assign(n, -1);
+  m.src_y_.assign(n, -1);
+  m.weights_.assign(n, {0.f, 0.f, 0.f, 0.f});
   m.valid_ = cv::Mat::zeros(options.height, options.width, CV_8U);
   m.valid_count_ = 0;
+  const bool bilinear = options.interpolation == Interpolation::kBilinear;
   for (int r = 0; r < options.height; ++r) {
     for (int c = 0; c < options.width; ++c) {
       const Eigen::Vector2d img = m.IpmToImage(Eigen::Vector2d(c, r));
       const bool inside = img.allFinite() && img.x() >= roi.left && img.x() <= roi.right &&
                           img.y() >= roi.top && img.y() <= roi.bottom;
-      map_x.at<float>(r, c) = inside ? static_cast<float>(img.x()) : -10.f;
-      map_y.at<float>(r, c) = inside ? static_cast<float>(img.y()) : -10.f;
-      if (inside) {
-        m.valid_.at<uint8_t>(r, c) = 255;
-        ++m.valid_count_;
+      if (!inside) continue;
+      const int i = r * options.width + c;
+      if (bilinear) {
+        // The ROI lies inside the image, so x0 + 1 and y0 + 1 do too except
+        // on the last column/row, where the weight of the outer pixel is 0.
+        const int x0 = std::min(static_cast<int>(img.x()), camera.image_width - 2);
+        const int y0 = std::min(static_cast<int>(img.y()), camera.image_height - 2);
+        const float fx = static_cast<float>(img.x() - x0);
+        const float fy = static_cast<float>(img.y() - y0);
+        m.src_x_[i] = x0;
+        m.src_y_[i] = y0;
+        m.weights_[i] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+      } else {
+        m.src_x_[i] = static_cast<int>(std::lround(img.x()));
+        m.src_y_[i] = static_cast<int>(std::lround(img.y()));
+        m.weights_[i] = {1.f, 0.f, 0.f, 0.f};
       }
+      m.valid_.at<uint8_t>(r, c) = 255;
+      ++m.valid_count_;
     }
   }
   if (m.valid_count_ == 0) return absl::InvalidArgumentError("ipm.roi maps to no IPM pixel");
   cv::bitwise_not(m.valid_, m.invalid_);
-  cv::convertMaps(map_x, map_y, m.map1_, m.map2_, CV_16SC2);
   return m;
 }
 
 cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel) const {
   CV_Assert(image.depth() == CV_8U && image.cols == camera_.image_width &&
             image.rows == camera_.image_height && channel >= 0 && channel < image.channels());
-  cv::Mat ipm8;
-  const int interp =
-      options_.interpolation == Interpolation::kBilinear ? cv::INTER_LINEAR : cv::INTER_NEAREST;
-  cv::remap(image, ipm8, map1_, map2_, interp, cv::BORDER_CONSTANT, cv::Scalar::all(0));
-  if (ipm8.channels() > 1) cv::extractChannel(ipm8, ipm8, channel);
-  cv::Mat out;
-  ipm8.convertTo(out, CV_32F, 1.0 / 255.0);
-  const double mean = cv::mean(out, valid_)[0];
-  out.setTo(cv::Scalar(mean), invalid_);
+  cv::Mat out(options_.height, options_.width, CV_32F);
+  const int cn = image.channels();
+  const size_t step = image.step[0];
+  const uint8_t* base = image.data + channel;
+  float* dst = out.ptr<float>(0);  // continuous: freshly allocated
+  const int n = options_.width * options_.height;
+  double sum = 0;
+  for (int i = 0; i < n; ++i) {
+    if (src_x_[i] < 0) continue;
+    const uint8_t* p = base + src_y_[i] * step + src_x_[i] * cn;
+    const auto& w = weights_[i];
+    const float v = (w[0] * p[0] + w[1] * p[cn] + w[2] * p[step] + w[3] * p[step + cn]) *
+                    (1.f / 255.f);
+    dst[i] = v;
+    sum += v;
+  }
+  const float mean = static_cast<float>(sum / valid_count_);
+  for (int i = 0; i < n; ++i) {
+    if (src_x_[i] < 0) dst[i] = mean;
+  }
   return out;
 }
 

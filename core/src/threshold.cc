@@ -28,19 +28,44 @@ float Quantile(std::vector<float>& values, double q) {
   return static_cast<float>(v_lo + frac * (v_hi - v_lo));
 }
 
+namespace {
+
+// The k-th smallest (0-based) of `values`, all > 0 and <= vmax, found through
+// a histogram so that only one bin's values need a selection.
+float KthPositive(const std::vector<float>& values, size_t k, float vmax) {
+  constexpr int kBins = 256;
+  const float scale = kBins / vmax;
+  int counts[kBins + 1] = {0};
+  for (float v : values) ++counts[std::min(kBins, static_cast<int>(v * scale))];
+  size_t below = 0;
+  int bin = 0;
+  while (below + counts[bin] <= k) below += counts[bin++];
+  thread_local std::vector<float> in_bin;
+  in_bin.clear();
+  for (float v : values) {
+    if (std::min(kBins, static_cast<int>(v * scale)) == bin) in_bin.push_back(v);
+  }
+  std::nth_element(in_bin.begin(), in_bin.begin() + (k - below), in_bin.end());
+  return in_bin[k - below];
+}
+
+}  // namespace
+
 float ApplyQuantileThreshold(cv::Mat& image, double q) {
   CV_Assert(image.type() == CV_32FC1);
   // Negative responses are dropped first; they make up the bulk of the
-  // pixels, so the quantile is computed over the positive values only and
+  // pixels, so the quantile is computed over the positive values only, with
   // the rank shifted by the number of zeros.
   thread_local std::vector<float> positives;
   positives.clear();
+  float vmax = 0.f;
   const size_t n = image.total();
   for (int r = 0; r < image.rows; ++r) {
     float* row = image.ptr<float>(r);
     for (int c = 0; c < image.cols; ++c) {
       if (row[c] > 0.f) {
         positives.push_back(row[c]);
+        vmax = std::max(vmax, row[c]);
       } else {
         row[c] = 0.f;
       }
@@ -51,15 +76,14 @@ float ApplyQuantileThreshold(cv::Mat& image, double q) {
   const double pos = std::clamp(q, 0.0, 1.0) * (n - 1);
   float threshold = 0.f;
   if (pos >= static_cast<double>(zeros)) {
-    // Rank within the positives: same interpolation as Quantile().
+    // Rank within the positives; interpolated as in Quantile().
     const double rank = pos - zeros;
     const size_t lo = static_cast<size_t>(std::floor(rank));
     const double frac = rank - lo;
-    std::nth_element(positives.begin(), positives.begin() + lo, positives.end());
-    const float v_lo = positives[lo];
+    const float v_lo = KthPositive(positives, lo, vmax);
     threshold = v_lo;
     if (frac > 0 && lo + 1 < positives.size()) {
-      const float v_hi = *std::min_element(positives.begin() + lo + 1, positives.end());
+      const float v_hi = KthPositive(positives, lo + 1, vmax);
       threshold = static_cast<float>(v_lo + frac * (v_hi - v_lo));
     }
   } else if (pos > zeros - 1.0) {

@@ -5,6 +5,9 @@
 #ifndef LANE_IPM_H_
 #define LANE_IPM_H_
 
+#include <array>
+#include <vector>
+
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
@@ -87,7 +90,11 @@ class IpmMapping {
   Roi roi_;
   double x_min_ = 0, x_max_ = 0, y_min_ = 0, y_max_ = 0;
   double mpp_x_ = 0, mpp_y_ = 0;
-  cv::Mat map1_, map2_;  // fixed-point maps for cv::remap
+  // Per IPM pixel (row-major): the source pixel's top-left neighbour and the
+  // four bilinear weights (nearest: one weight of 1). Invalid pixels have
+  // src_x_ = -1. Applied by a plain loop that reads one channel in place.
+  std::vector<int> src_x_, src_y_;
+  std::vector<std::array<float, 4>> weights_;
   cv::Mat valid_;
   cv::Mat invalid_;
   int valid_count_ = 0;

@@ -87,6 +87,8 @@ struct ChannelView {
     if (image.depth() == CV_32F) return image.ptr<float>(y)[x];
     return image.ptr<uint8_t>(y)[x * image.channels() + channel];
   }
+  // Bilinear sample; 0 outside the image.
+  float Bilinear(double x, double y) const;
 };
 
 // Samples of one channel along the segment center +- half * normal, one per
