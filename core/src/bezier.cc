@@ -74,8 +74,19 @@ std::optional<std::vector<double>> ChordLengthParams(const std::vector<Eigen::Ve
 
 std::optional<Bezier> FitBezier(const std::vector<Eigen::Vector2d>& pts) {
   if (pts.size() < 4) return std::nullopt;
-  const auto t = ChordLengthParams(pts);
-  if (!t) return std::nullopt;
+  // Chord-length parameters, computed in place (this runs once per RANSAC
+  // trial; ChordLengthParams() allocates).
+  thread_local std::vector<double> t_store;
+  std::vector<double>& t_values = t_store;
+  t_values.resize(pts.size());
+  t_values[0] = 0;
+  for (size_t i = 1; i < pts.size(); ++i) {
+    t_values[i] = t_values[i - 1] + (pts[i] - pts[i - 1]).norm();
+  }
+  const double total = t_values.back();
+  if (!(total > 1e-12)) return std::nullopt;
+  for (double& v : t_values) v /= total;
+  const std::vector<double>* t = &t_values;
   // P = (T M)^+ Q, the least-squares control points (paper, section II-D).
   Eigen::Matrix<double, 4, 2> cp;
   if (pts.size() == 4) {

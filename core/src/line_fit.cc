@@ -1,6 +1,5 @@
 #include "lane/line_fit.h"
 
-#include <Eigen/Eigenvalues>
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
@@ -116,10 +115,12 @@ std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> FitLineTls(
     const Eigen::Vector2d d = points[i] - mean;
     cov += w * d * d.transpose();
   }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
-  // Direction of largest spread; degenerate if the points are all equal.
-  if (!(eig.eigenvalues()(1) > 1e-12)) return std::nullopt;
-  Eigen::Vector2d dir = eig.eigenvectors().col(1);
+  // Principal axis of the 2x2 scatter matrix in closed form.
+  const double cxx = cov(0, 0), cyy = cov(1, 1), cxy = cov(0, 1);
+  const double spread = std::hypot(cxx - cyy, 2 * cxy);
+  if (!(cxx + cyy + spread > 1e-12)) return std::nullopt;  // all points equal
+  const double angle = 0.5 * std::atan2(2 * cxy, cxx - cyy);
+  Eigen::Vector2d dir(std::cos(angle), std::sin(angle));
   if (dir.y() < 0) dir = -dir;
   return std::make_pair(mean, dir);
 }

@@ -24,10 +24,11 @@ class SplineEstimator {
                   std::pair<const IpmLine*, double> window)
       : image_(image), options_(options), window_(window) {}
 
-  std::optional<Bezier> Estimate(std::vector<Eigen::Vector2d> sample) const {
-    std::sort(sample.begin(), sample.end(),
+  std::optional<Bezier> Estimate(const std::vector<Eigen::Vector2d>& sample) const {
+    sorted_ = sample;
+    std::sort(sorted_.begin(), sorted_.end(),
               [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.y() < b.y(); });
-    return FitBezier(sample);
+    return FitBezier(sorted_);
   }
 
   double Score(const Bezier& spline) const {
@@ -38,6 +39,7 @@ class SplineEstimator {
   const cv::Mat& image_;
   const SplineRansacOptions& options_;
   std::pair<const IpmLine*, double> window_;
+  mutable std::vector<Eigen::Vector2d> sorted_;  // scratch, reused across trials
 };
 
 }  // namespace

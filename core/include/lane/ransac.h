@@ -26,23 +26,25 @@ struct RansacReport {
   int trials = 0;
 };
 
-// Draws `k` distinct indices with probability proportional to `cumulative`
-// (the running sum of the weights). Deterministic for a given engine state.
-inline std::vector<int> WeightedSample(const std::vector<double>& cumulative, int k,
-                                       std::mt19937_64& rng) {
-  std::vector<int> out;
+// Draws `out.size()` distinct indices with probability proportional to
+// `cumulative` (the running sum of the weights) into `out`. Returns false if
+// that many distinct indices could not be drawn. Deterministic for a given
+// engine state.
+inline bool WeightedSample(const std::vector<double>& cumulative, std::vector<int>& out,
+                           std::mt19937_64& rng) {
+  const int k = static_cast<int>(out.size());
   const int n = static_cast<int>(cumulative.size());
-  if (n < k || cumulative.back() <= 0) return out;
+  if (n < k || cumulative.back() <= 0) return false;
   std::uniform_real_distribution<double> uni(0.0, cumulative.back());
-  for (int attempts = 0; static_cast<int>(out.size()) < k && attempts < 20 * k; ++attempts) {
+  int have = 0;
+  for (int attempts = 0; have < k && attempts < 20 * k; ++attempts) {
     const double r = uni(rng);
     int idx = static_cast<int>(std::upper_bound(cumulative.begin(), cumulative.end(), r) -
                                cumulative.begin());
     idx = std::min(idx, n - 1);
-    if (std::find(out.begin(), out.end(), idx) == out.end()) out.push_back(idx);
+    if (std::find(out.begin(), out.begin() + have, idx) == out.begin() + have) out[have++] = idx;
   }
-  if (static_cast<int>(out.size()) < k) out.clear();
-  return out;
+  return have == k;
 }
 
 // Runs `iterations` trials. `initial` (if any) is scored first, so a good
@@ -62,10 +64,10 @@ RansacReport<typename Estimator::Model> Ransac(
   double acc = 0;
   for (size_t i = 0; i < weights.size(); ++i) cumulative[i] = (acc += std::max(0.0, weights[i]));
   std::vector<Eigen::Vector2d> sample(Estimator::kSampleSize);
+  std::vector<int> idx(Estimator::kSampleSize);
   for (int it = 0; it < iterations; ++it) {
     ++report.trials;
-    const std::vector<int> idx = WeightedSample(cumulative, Estimator::kSampleSize, rng);
-    if (idx.empty()) break;
+    if (!WeightedSample(cumulative, idx, rng)) break;
     for (int j = 0; j < Estimator::kSampleSize; ++j) sample[j] = points[idx[j]];
     const auto model = estimator.Estimate(sample);
     if (!model) continue;
