@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
-./scripts/build.sh -DLANE_BUILD_TESTS=OFF -DLANE_BUILD_BENCH=OFF
+./scripts/build.sh -DLANE_BUILD_TESTS=OFF -DLANE_BUILD_BENCH=OFF -DLANE_BUILD_SERVICE=ON
 OUT=out/demo
 rm -rf "$OUT" && mkdir -p "$OUT"
 build/tools/lane render --config configs/synthetic.json --count 20 --seed 1 --out "$OUT/frames"

@@ -4,6 +4,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
-BUILD_DIR=${BUILD_DIR:-build} ./scripts/build.sh -DLANE_WERROR=ON -DLANE_BUILD_TESTS=ON
+BUILD_DIR=${BUILD_DIR:-build} ./scripts/build.sh -DLANE_WERROR=ON -DLANE_BUILD_TESTS=ON -DLANE_BUILD_BENCH=ON -DLANE_BUILD_SERVICE=ON
 cd "${BUILD_DIR:-build}"
 ctest --output-on-failure -j "$(nproc)" --timeout 900
