@@ -90,7 +90,7 @@ FrameSet* Culane() {
     s->camera.pitch_deg = -4.858;
     s->camera.yaw_deg = 3.706;
     s->camera.height_m = 1.3;
-    s->ipm.roi = {270 * sx, 1240 * sx, 450 * sy, 545 * sy};
+    s->ipm.roi = {250 * sx, 1250 * sx, 420 * sy, 550 * sy};
     std::vector<std::string> files;
     for (const auto& e : fs::directory_iterator(dir)) {
       if (e.path().extension() == ".jpg") files.push_back(e.path().string());

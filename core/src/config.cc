@@ -98,6 +98,8 @@ LANE_FIELDS(PostprocessOptions) {
   v.Field("ipm_max_angle_from_vertical_deg", s.ipm_max_angle_from_vertical_deg);
   v.Field("min_straightness", s.min_straightness);
   v.Field("min_length_fraction", s.min_length_fraction);
+  v.Field("side_offset_m", s.side_offset_m);
+  v.Field("min_side_contrast", s.min_side_contrast);
   v.Field("ipm_extend_step_px", s.ipm_extend_step_px);
   v.Field("ipm_normal_search_px", s.ipm_normal_search_px);
   v.Field("backproject_samples", s.backproject_samples);

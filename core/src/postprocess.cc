@@ -158,8 +158,8 @@ std::optional<Bezier> LocalizeSpline(const Bezier& spline, const ChannelView& im
 
 double BarContrast(const Bezier& spline, const ChannelView& image, double side_offset_px,
                    int samples) {
-  double sum = 0;
-  int n = 0;
+  std::vector<double> values;
+  values.reserve(samples);
   for (int i = 0; i < samples; ++i) {
     const double t = (i + 0.5) / samples;
     const Eigen::Vector2d p = spline.Eval(t);
@@ -174,10 +174,15 @@ double BarContrast(const Bezier& spline, const ChannelView& image, double side_o
     const Eigen::Vector2d l = p - side_offset_px * normal;
     const Eigen::Vector2d r = p + side_offset_px * normal;
     if (!InBounds(l, image) || !InBounds(r, image)) continue;
-    sum += std::min(centre - Bilinear(image, l.x(), l.y()), centre - Bilinear(image, r.x(), r.y()));
-    ++n;
+    values.push_back(
+        std::min(centre - Bilinear(image, l.x(), l.y()), centre - Bilinear(image, r.x(), r.y())));
   }
-  return n > 0 ? sum / n : 0.0;
+  if (values.empty()) return 0.0;
+  // The upper quartile: a dashed marking is a bar along a quarter of its
+  // length or more, while a step (curb, asphalt edge) is never one.
+  const size_t k = (values.size() * 3) / 4;
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  return values[k];
 }
 
 Bezier ExtendSpline(const Bezier& spline, const ChannelView& image, const ExtendOptions& options) {

@@ -28,7 +28,8 @@ struct PostprocessOptions {
   // is dark on one side only, yet excites the second-derivative filter too.
   // Along the top-view spline, the IPM intensity must exceed the intensity
   // `side_offset_m` to the left and to the right by at least
-  // `min_side_contrast` (IPM intensity units, 1 = full scale) on average.
+  // `min_side_contrast` (IPM intensity units, 1 = full scale) along at least
+  // a quarter of its length (so dashed markings pass).
   // 0 disables the check. The paper lists curbs as its main source of false
   // positives (section IV).
   double side_offset_m = 0.3;
@@ -112,9 +113,10 @@ std::optional<Bezier> LocalizeSpline(const Bezier& spline, const ChannelView& im
                                      double search_px, double sigma_px, double min_cos,
                                      double* mean_contrast);
 
-// Mean over samples of `spline` of min(I(p) - I(p - d n), I(p) - I(p + d n))
-// where n is the normal, d = side_offset_px and I(p) is the brightest value
-// within 1 px of p along n: how much brighter the curve is than both sides.
+// Upper quartile over samples of `spline` of min(I(p) - I(p - d n), I(p) -
+// I(p + d n)) where n is the normal, d = side_offset_px and I(p) is the
+// brightest value within 1 px of p along n: how much brighter the curve is
+// than both of its sides (the quartile lets dashed markings pass).
 double BarContrast(const Bezier& spline, const ChannelView& image, double side_offset_px,
                    int samples = 20);
 
