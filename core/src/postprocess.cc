@@ -95,7 +95,8 @@ std::vector<float> SampleProfile(const ChannelView& image, const Eigen::Vector2d
 std::optional<ProfilePeak> FindProfilePeak(const std::vector<float>& profile, double sigma_px) {
   const int n = static_cast<int>(profile.size());
   if (n < 3) return std::nullopt;
-  std::vector<double> s(n);
+  thread_local std::vector<double> s;
+  s.resize(n);
   if (sigma_px > 0) {
     const int h = std::max(1, static_cast<int>(std::ceil(2.5 * sigma_px)));
     thread_local std::vector<double> kernel;
@@ -113,10 +114,13 @@ std::optional<ProfilePeak> FindProfilePeak(const std::vector<float>& profile, do
     for (int i = 0; i < n; ++i) s[i] = profile[i];
   }
   const int best = static_cast<int>(std::max_element(s.begin(), s.end()) - s.begin());
-  std::vector<double> sorted = s;
-  std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
-  const double median = sorted[n / 2];
-  const double contrast = s[best] - median;
+  // Contrast over the profile's mean: a marking covers a few of its samples,
+  // so the mean is close to the background (and, unlike a median, costs no
+  // selection; this runs a few hundred times per frame).
+  double mean = 0;
+  for (double v : s) mean += v;
+  mean /= n;
+  const double contrast = s[best] - mean;
   if (!(contrast > 0)) return std::nullopt;
   double offset = best;
   if (best > 0 && best < n - 1) {

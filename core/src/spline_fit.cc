@@ -9,8 +9,91 @@
 namespace lane {
 namespace {
 
-bool InsideImage(const Eigen::Vector2d& p, const cv::Mat& image) {
-  return p.x() >= 0 && p.y() >= 0 && p.x() <= image.cols - 1 && p.y() <= image.rows - 1;
+// The raw-score lookups of one window: per row, the columns inside the
+// window (lo..hi) and their prefix sums, so that the sum over a sample's
+// jitter columns is one subtraction. Built once per line, used by every
+// RANSAC trial.
+class WindowedRaster {
+ public:
+  WindowedRaster(const cv::Mat& image, const IpmLine* line, double half, int jitter)
+      : cols_(image.cols), jitter_(jitter), lo_(image.rows), hi_(image.rows), start_(image.rows) {
+    for (int y = 0; y < image.rows; ++y) {
+      int lo = 0, hi = image.cols - 1;
+      if (line) {
+        const double c = line->XAt(y);
+        lo = std::max(lo, static_cast<int>(std::ceil(c - half)));
+        hi = std::min(hi, static_cast<int>(std::floor(c + half)));
+      }
+      lo_[y] = lo;
+      hi_[y] = hi;
+      start_[y] = prefix_.size();
+      const float* row = image.ptr<float>(y);
+      double acc = 0;
+      prefix_.push_back(0);
+      for (int x = lo; x <= hi; ++x) prefix_.push_back(acc += row[x]);
+    }
+  }
+
+  int rows() const { return static_cast<int>(lo_.size()); }
+  int cols() const { return cols_; }
+
+  // Sum of the window's pixels in columns x - jitter .. x + jitter of row y.
+  double Sum(int x, int y) const {
+    const int a = std::max(lo_[y], x - jitter_);
+    const int b = std::min(hi_[y], x + jitter_);
+    if (a > b) return 0.0;
+    const double* p = prefix_.data() + start_[y];
+    return p[b - lo_[y] + 1] - p[a - lo_[y]];
+  }
+
+ private:
+  int cols_;
+  int jitter_;
+  std::vector<int> lo_, hi_;
+  std::vector<size_t> start_;
+  std::vector<double> prefix_;
+};
+
+double ScoreOnRaster(const Bezier& spline, const WindowedRaster& raster,
+                     const SplineRansacOptions& options) {
+  for (const auto& p : spline.p) {
+    if (!(p.x() >= 0 && p.y() >= 0 && p.x() <= raster.cols() - 1 && p.y() <= raster.rows() - 1)) {
+      return 0.0;  // a control point outside the image disqualifies the spline
+    }
+  }
+  // The curve in power form, Q(t) = ((a t + b) t + c) t + d, for Horner
+  // evaluation in the hot loop (this runs once per RANSAC trial).
+  const Eigen::Vector2d a = -spline.p[0] + 3 * spline.p[1] - 3 * spline.p[2] + spline.p[3];
+  const Eigen::Vector2d b = 3 * spline.p[0] - 6 * spline.p[1] + 3 * spline.p[2];
+  const Eigen::Vector2d c = -3 * spline.p[0] + 3 * spline.p[1];
+  const Eigen::Vector2d d = spline.p[0];
+  // Raster the curve at dt = 0.01; each pixel counts once, with the jitter
+  // columns either side. All control points are inside the image, so the
+  // curve (inside their convex hull) is too and coordinates are >= 0.
+  double raw = 0;
+  int last_x = -1, last_y = -1;
+  for (int i = 0; i <= 100; ++i) {
+    const double t = i * 0.01;
+    const int x = static_cast<int>(((a.x() * t + b.x()) * t + c.x()) * t + d.x() + 0.5);
+    const int y = static_cast<int>(((a.y() * t + b.y()) * t + c.y()) * t + d.y() + 0.5);
+    if ((x == last_x && y == last_y) || y >= raster.rows() || x >= raster.cols()) continue;
+    last_x = x;
+    last_y = y;
+    raw += raster.Sum(x, y);
+  }
+  if (raw <= 0) return 0.0;
+  // Length from a 20-segment polyline (within 0.1 % for these curves).
+  double length = 0;
+  Eigen::Vector2d prev = d;
+  for (int i = 1; i <= 20; ++i) {
+    const double t = i * 0.05;
+    const Eigen::Vector2d q = ((a * t + b) * t + c) * t + d;
+    length += (q - prev).norm();
+    prev = q;
+  }
+  const double l_norm = length / raster.rows() - 1.0;             // paper's l'
+  const double theta_norm = (spline.Straightness() - 1.0) / 2.0;  // paper's theta'
+  return raw * (1.0 + options.k1 * l_norm + options.k2 * theta_norm);
 }
 
 // RANSAC estimator: 4 weighted samples sorted by row, least-squares Bezier
@@ -20,9 +103,8 @@ class SplineEstimator {
   using Model = Bezier;
   static constexpr int kSampleSize = 4;
 
-  SplineEstimator(const cv::Mat& image, const SplineRansacOptions& options,
-                  std::pair<const IpmLine*, double> window)
-      : image_(image), options_(options), window_(window) {}
+  SplineEstimator(const WindowedRaster& raster, const SplineRansacOptions& options)
+      : raster_(raster), options_(options) {}
 
   std::optional<Bezier> Estimate(const std::vector<Eigen::Vector2d>& sample) const {
     sorted_ = sample;
@@ -31,14 +113,11 @@ class SplineEstimator {
     return FitBezier(sorted_);
   }
 
-  double Score(const Bezier& spline) const {
-    return SplineScore(spline, image_, options_, window_);
-  }
+  double Score(const Bezier& spline) const { return ScoreOnRaster(spline, raster_, options_); }
 
  private:
-  const cv::Mat& image_;
+  const WindowedRaster& raster_;
   const SplineRansacOptions& options_;
-  std::pair<const IpmLine*, double> window_;
   mutable std::vector<Eigen::Vector2d> sorted_;  // scratch, reused across trials
 };
 
@@ -66,59 +145,8 @@ absl::Status SplineRansacOptions::Validate() const {
 
 double SplineScore(const Bezier& spline, const cv::Mat& image, const SplineRansacOptions& options,
                    const std::pair<const IpmLine*, double>& window) {
-  for (const auto& p : spline.p) {
-    if (!InsideImage(p, image)) return 0.0;
-  }
-  // The curve in power form, Q(t) = ((a t + b) t + c) t + d, for Horner
-  // evaluation in the hot loop (this runs once per RANSAC trial).
-  const Eigen::Vector2d a = -spline.p[0] + 3 * spline.p[1] - 3 * spline.p[2] + spline.p[3];
-  const Eigen::Vector2d b = 3 * spline.p[0] - 6 * spline.p[1] + 3 * spline.p[2];
-  const Eigen::Vector2d c = -3 * spline.p[0] + 3 * spline.p[1];
-  const Eigen::Vector2d d = spline.p[0];
-  // Window: columns within half of x = x0 + slope * y.
-  double w_x0 = 0, w_slope = 0, w_half = 1e9;
-  if (window.first) {
-    w_x0 = window.first->XAt(0);
-    w_slope = window.first->XAt(1) - w_x0;
-    w_half = window.second;
-  }
-  // Raster the curve at dt = 0.01; each pixel counts once, with the jitter
-  // columns either side. All control points are inside the image, so the
-  // curve (inside their convex hull) is too and coordinates are >= 0.
-  double raw = 0;
-  int last_x = -1, last_y = -1;
-  for (int i = 0; i <= 100; ++i) {
-    const double t = i * 0.01;
-    const double qx = ((a.x() * t + b.x()) * t + c.x()) * t + d.x();
-    const double qy = ((a.y() * t + b.y()) * t + c.y()) * t + d.y();
-    const int x = static_cast<int>(qx + 0.5);
-    const int y = static_cast<int>(qy + 0.5);
-    if ((x == last_x && y == last_y) || y >= image.rows || x >= image.cols) continue;
-    last_x = x;
-    last_y = y;
-    const float* row = image.ptr<float>(y);
-    int lo = std::max(0, x - options.jitter_px);
-    int hi = std::min(image.cols - 1, x + options.jitter_px);
-    if (window.first) {
-      const double wc = w_x0 + w_slope * y;
-      lo = std::max(lo, static_cast<int>(wc - w_half + 0.999999));   // ceil for wc - half > -1
-      hi = std::min(hi, static_cast<int>(wc + w_half));                // floor, wc + half >= 0
-    }
-    for (int xx = lo; xx <= hi; ++xx) raw += row[xx];
-  }
-  if (raw <= 0) return 0.0;
-  // Length from a 20-segment polyline (within 0.1 % for these curves).
-  double length = 0;
-  Eigen::Vector2d prev = d;
-  for (int i = 1; i <= 20; ++i) {
-    const double t = i * 0.05;
-    const Eigen::Vector2d q = ((a * t + b) * t + c) * t + d;
-    length += (q - prev).norm();
-    prev = q;
-  }
-  const double l_norm = length / image.rows - 1.0;                // paper's l'
-  const double theta_norm = (spline.Straightness() - 1.0) / 2.0;  // paper's theta'
-  return raw * (1.0 + options.k1 * l_norm + options.k2 * theta_norm);
+  return ScoreOnRaster(spline, WindowedRaster(image, window.first, window.second, options.jitter_px),
+                       options);
 }
 
 std::optional<SplineFit> FitSplineAroundLine(const cv::Mat& thresholded, const IpmLine& line,
@@ -128,7 +156,8 @@ std::optional<SplineFit> FitSplineAroundLine(const cv::Mat& thresholded, const I
   const WeightedPoints pts = CollectWindow(
       thresholded, [&line](double y) { return line.XAt(y); }, half_width_px);
   // Only the window's pixels count towards the score.
-  const SplineEstimator estimator(thresholded, options, {&line, half_width_px});
+  const WindowedRaster raster(thresholded, &line, half_width_px, options.jitter_px);
+  const SplineEstimator estimator(raster, options);
   const Bezier initial = Bezier::Line(line.top, line.bottom);
   const auto report = Ransac(estimator, pts.points, pts.weights, options.iterations, rng, initial);
   if (!report.model || !(report.score > 0)) return std::nullopt;

@@ -270,7 +270,7 @@ TEST(ConfigTest, ShippedConfigsParse) {
   EXPECT_EQ(culane->camera.image_width, 1640);
   EXPECT_EQ(culane->camera.image_height, 590);
   EXPECT_EQ(culane->camera.pitch_deg, -4.858);
-  EXPECT_EQ(culane->ipm.roi.right, 1240);
+  EXPECT_EQ(culane->ipm.roi.right, 1250);
 
   const absl::StatusOr<Config> synthetic = LoadConfigFile(ConfigPath("synthetic.json"));
   ASSERT_TRUE(synthetic.ok()) << synthetic.status();

@@ -121,6 +121,38 @@ TEST(SplineScoreTest, PrefersLongerAndStraighterCurves) {
   EXPECT_EQ(SplineScore(outside, img, o), 0.0);
 }
 
+TEST(SplineScoreTest, MatchesABruteForceRasterOfTheWindow) {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  cv::Mat img(120, 160, CV_32F);
+  for (int r = 0; r < img.rows; ++r)
+    for (int c = 0; c < img.cols; ++c) img.at<float>(r, c) = u(rng) < 0.3f ? u(rng) : 0.f;
+  const Bezier s{{Eigen::Vector2d(60, 2), Eigen::Vector2d(70, 40), Eigen::Vector2d(66, 80),
+                  Eigen::Vector2d(75, 118)}};
+  IpmLine line;
+  line.top = {62, 0};
+  line.bottom = {72, 119};
+  SplineRansacOptions o;
+  const double half = 6.5;
+  // Brute force: rasterise at dt = 0.01, each pixel once, columns x-2..x+2
+  // that lie inside the window.
+  double raw = 0;
+  int lx = -1, ly = -1;
+  for (int i = 0; i <= 100; ++i) {
+    const Eigen::Vector2d q = s.Eval(i / 100.0);
+    const int x = static_cast<int>(std::lround(q.x())), y = static_cast<int>(std::lround(q.y()));
+    if (x == lx && y == ly) continue;
+    lx = x, ly = y;
+    for (int xx = x - o.jitter_px; xx <= x + o.jitter_px; ++xx) {
+      if (xx >= 0 && xx < img.cols && std::abs(xx - line.XAt(y)) <= half) raw += img.at<float>(y, xx);
+    }
+  }
+  const double length = s.Length(201);
+  const double expected =
+      raw * (1 + o.k1 * (length / img.rows - 1) + o.k2 * (s.Straightness() - 1) / 2);
+  EXPECT_NEAR(SplineScore(s, img, o, {&line, half}), expected, 1e-3 * expected);
+}
+
 TEST(SplineFitTest, RansacFollowsACurvedMarkingAwayFromItsLine) {
   cv::Mat img(120, 160, CV_32F, cv::Scalar(0));
   const Bezier truth{{Eigen::Vector2d(70, 0), Eigen::Vector2d(76, 40), Eigen::Vector2d(80, 80),

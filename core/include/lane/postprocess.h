@@ -98,7 +98,7 @@ std::vector<float> SampleProfile(const ChannelView& image, const Eigen::Vector2d
                                  const Eigen::Vector2d& normal, double half);
 
 // Offset (along the normal, pixels) of the strongest peak of the smoothed
-// profile and its contrast over the profile's median. nullopt if flat.
+// profile and its contrast over the profile's mean. nullopt if flat.
 struct ProfilePeak {
   double offset = 0;
   double contrast = 0;
