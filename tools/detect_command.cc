@@ -111,6 +111,16 @@ int RunDetect(const std::vector<std::string>& argv) {
                    absl::StrCat("cannot build the detector: ", detector.status().message()));
   }
   const lane::Mode detector_mode = detector->options().mode;
+  {
+    // The top view's scale: users need it to read the IPM coordinates.
+    const lane::IpmMapping& ipm = detector->ipm();
+    std::fprintf(stderr,
+                 "lane detect: top view %dx%d px covering x %.2f..%.2f m, y %.2f..%.2f m ahead: "
+                 "%.4f m/px across, %.4f m/px along; filter sigmas %.2f x %.2f px\n",
+                 ipm.width(), ipm.height(), ipm.x_min(), ipm.x_max(), ipm.y_min(), ipm.y_max(),
+                 ipm.metres_per_px_x(), ipm.metres_per_px_y(), detector->kernels().sigma_x_px,
+                 detector->kernels().sigma_y_px);
+  }
   const int expected_width = config->camera.image_width;
   const int expected_height = config->camera.image_height;
 
