@@ -1,0 +1,89 @@
+#include "frame_processor.h"
+
+#include <exception>
+
+#include "absl/strings/str_cat.h"
+#include "absl/time/clock.h"
+#include "convert.h"
+#include "frame_decoder.h"
+#include "status_map.h"
+
+namespace lane::server {
+namespace {
+
+double MillisecondsBetween(SteadyTime a, SteadyTime b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+}  // namespace
+
+Arrival Arrival::Now() {
+  return Arrival{std::chrono::steady_clock::now(), absl::GetCurrentTimeNanos()};
+}
+
+double SecondsSince(SteadyTime start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void StartResponse(const v1::FrameRequest& request, const std::string& camera_id,
+                   const Arrival& arrival, v1::FrameResponse* response) {
+  response->set_frame_id(request.frame_id());
+  response->set_capture_time_unix_ns(request.capture_time_unix_ns());
+  response->set_camera_id(camera_id);
+  response->set_server_receive_time_unix_ns(arrival.unix_ns);
+}
+
+absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& session,
+                          int64_t max_frame_pixels, const Arrival& arrival, Metrics& metrics,
+                          v1::FrameResponse* response) {
+  const SteadyTime start = std::chrono::steady_clock::now();
+  const double queue_wait_ms = MillisecondsBetween(arrival.steady, start);
+  metrics.ObserveQueueWait(queue_wait_ms * 1e-3);
+  response->set_calibration_version(session.version);
+  v1::StageTimings* timings = response->mutable_timings();
+  timings->set_queue_wait_ms(queue_wait_ms);
+
+  DecodeOptions decode;
+  decode.width = session.config.camera.image_width;
+  decode.height = session.config.camera.image_height;
+  decode.max_pixels = max_frame_pixels;
+  decode.gray = session.config.detector.channel == lane::Channel::kGray;
+
+  absl::Status status;
+  try {
+    absl::StatusOr<cv::Mat> frame = DecodeFrame(request, decode);
+    const SteadyTime decoded = std::chrono::steady_clock::now();
+    const double decode_ms = MillisecondsBetween(start, decoded);
+    timings->set_decode_ms(decode_ms);
+    metrics.ObserveStage(Stage::kDecode, decode_ms * 1e-3);
+    if (!frame.ok()) {
+      status = frame.status();
+    } else {
+      absl::StatusOr<lane::Detection> detection = session.detector.Detect(*frame);
+      if (detection.ok()) {
+        LanesToProto(*detection, response);
+        TimingsToProto(detection->timings, timings);
+        metrics.ObserveDetectorStages(detection->timings);
+        session.frames_processed.fetch_add(1, std::memory_order_relaxed);
+      } else {
+        status = detection.status();
+      }
+    }
+  } catch (const std::exception& e) {
+    // The core reports errors as values; an exception is a bug, not the
+    // client's fault.
+    status = absl::InternalError(absl::StrCat("detector failed: ", e.what()));
+  }
+  if (!status.ok()) response->clear_lanes();
+  ToFrameStatus(status, response->mutable_status());
+  metrics.CountFrame(ToFrameResult(response->status().code()));
+  metrics.ObserveFrameLatency(SecondsSince(arrival.steady));
+  return status;
+}
+
+void AnswerUnprocessed(const absl::Status& status, Metrics& metrics, v1::FrameResponse* response) {
+  ToFrameStatus(status, response->mutable_status());
+  metrics.CountFrame(ToFrameResult(response->status().code()));
+}
+
+}  // namespace lane::server

@@ -1,0 +1,48 @@
+// The work of one frame, on a worker thread: decode, detect, fill the
+// response, record the metrics. Shared by StreamFrames and Detect.
+#ifndef LANE_SERVER_FRAME_PROCESSOR_H_
+#define LANE_SERVER_FRAME_PROCESSOR_H_
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+
+#include "absl/status/status.h"
+#include "lane/v1/lane_service.pb.h"
+#include "metrics.h"
+#include "session.h"
+
+namespace lane::server {
+
+using SteadyTime = std::chrono::steady_clock::time_point;
+
+// When the server read a frame.
+struct Arrival {
+  SteadyTime steady;    // for durations
+  int64_t unix_ns = 0;  // for the response's timestamps
+  static Arrival Now();
+};
+
+double SecondsSince(SteadyTime start);
+
+// The fields of a response that do not depend on processing: frame id,
+// capture time, camera id, receive time.
+void StartResponse(const v1::FrameRequest& request, const std::string& camera_id,
+                   const Arrival& arrival, v1::FrameResponse* response);
+
+// Decodes and detects `request`'s frame with the session's detector and fills
+// `response` (status, lanes, timings, calibration version). A bad frame is
+// not an error of the call: its status goes into the response and is also
+// returned. Records queue wait, stage durations, frame latency and the
+// frame's result in `metrics`.
+absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& session,
+                          int64_t max_frame_pixels, const Arrival& arrival, Metrics& metrics,
+                          v1::FrameResponse* response);
+
+// Answers a frame without processing it (dropped, or refused before
+// processing): sets the status and counts the result.
+void AnswerUnprocessed(const absl::Status& status, Metrics& metrics, v1::FrameResponse* response);
+
+}  // namespace lane::server
+
+#endif  // LANE_SERVER_FRAME_PROCESSOR_H_

@@ -1,0 +1,258 @@
+#include "lane_service.h"
+
+#include <utility>
+
+#include "absl/time/clock.h"
+#include "convert.h"
+#include "frame_processor.h"
+#include "frame_stream.h"
+#include "status_map.h"
+
+namespace lane::server {
+namespace {
+
+v1::CreateOutcome OutcomeToProto(SessionRegistry::Outcome outcome) {
+  switch (outcome) {
+    case SessionRegistry::Outcome::kCreated:
+      return v1::CREATE_OUTCOME_CREATED;
+    case SessionRegistry::Outcome::kUnchanged:
+      return v1::CREATE_OUTCOME_UNCHANGED;
+    case SessionRegistry::Outcome::kReplaced:
+      return v1::CREATE_OUTCOME_REPLACED;
+  }
+  return v1::CREATE_OUTCOME_UNSPECIFIED;
+}
+
+void DefaultConfigToProto(lane::Mode mode, uint32_t max_inflight, v1::SessionConfig* out) {
+  lane::Config config;
+  config.detector = lane::DetectorOptions::ForMode(mode);
+  ConfigToProto(config, out);
+  StreamPolicy stream;
+  stream.max_inflight_frames = max_inflight;
+  StreamPolicyToProto(stream, out->mutable_stream());
+}
+
+}  // namespace
+
+LaneServiceImpl::LaneServiceImpl(ServiceOptions options, SessionRegistry& sessions,
+                                 WorkerPool& pool, Metrics& metrics)
+    : options_(std::move(options)), sessions_(sessions), pool_(pool), metrics_(metrics) {}
+
+LaneServiceImpl::~LaneServiceImpl() = default;
+
+void LaneServiceImpl::SetServing() {
+  std::lock_guard<std::mutex> lock(mu_);
+  if (state_ == State::kStarting) state_ = State::kServing;
+}
+
+void LaneServiceImpl::StartDrain() {
+  std::lock_guard<std::mutex> lock(mu_);
+  state_ = State::kDraining;
+  // Streams unregister themselves (under mu_) before they are deleted, so
+  // every pointer here is alive.
+  for (FrameStream* stream : streams_) stream->BeginDrain();
+}
+
+bool LaneServiceImpl::WaitForStreams(absl::Time deadline) {
+  std::unique_lock<std::mutex> lock(mu_);
+  return streams_cv_.wait_until(lock, absl::ToChronoTime(deadline),
+                                [this] { return streams_.empty(); });
+}
+
+size_t LaneServiceImpl::open_streams() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return streams_.size();
+}
+
+void LaneServiceImpl::Unregister(FrameStream* stream) {
+  std::lock_guard<std::mutex> lock(mu_);
+  streams_.erase(stream);
+  if (streams_.empty()) streams_cv_.notify_all();
+}
+
+absl::Status LaneServiceImpl::Admission() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  switch (state_) {
+    case State::kStarting:
+      return ServerStarting();
+    case State::kServing:
+      return absl::OkStatus();
+    case State::kDraining:
+      return ServerDraining();
+  }
+  return ServerDraining();
+}
+
+void LaneServiceImpl::FinishCall(grpc::ServerUnaryReactor* reactor, const std::string& method,
+                                 const absl::Status& status) {
+  const grpc::Status grpc_status = ToGrpcStatus(status);
+  metrics_.CountRpc(method, grpc_status.error_code());
+  reactor->Finish(grpc_status);
+}
+
+absl::StatusOr<SessionRegistry::CreateResult> LaneServiceImpl::EnsureSession(
+    const std::string& camera_id, const v1::SessionConfig& config, bool replace) {
+  absl::StatusOr<SessionSpec> spec = SessionSpecFromProto(config);
+  if (!spec.ok()) return spec.status();
+  return sessions_.Create(camera_id, *spec, replace);
+}
+
+grpc::ServerUnaryReactor* LaneServiceImpl::CreateSession(grpc::CallbackServerContext* context,
+                                                         const v1::CreateSessionRequest* request,
+                                                         v1::CreateSessionResponse* response) {
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  if (absl::Status s = Admission(); !s.ok()) {
+    FinishCall(reactor, "CreateSession", s);
+    return reactor;
+  }
+  // Building a detector is CPU work: on the pool. `request` and `response`
+  // stay valid until Finish.
+  const bool queued = pool_.TrySubmit([this, reactor, request, response] {
+    absl::StatusOr<SessionRegistry::CreateResult> created =
+        EnsureSession(request->camera_id(), request->config(), request->replace());
+    if (created.ok()) {
+      SessionToProto(*created->session, absl::Now(), response->mutable_session());
+      response->set_outcome(OutcomeToProto(created->outcome));
+    }
+    FinishCall(reactor, "CreateSession", created.status());
+  });
+  if (!queued) FinishCall(reactor, "CreateSession", WorkerQueueFull());
+  return reactor;
+}
+
+grpc::ServerUnaryReactor* LaneServiceImpl::GetSession(grpc::CallbackServerContext* context,
+                                                      const v1::GetSessionRequest* request,
+                                                      v1::Session* response) {
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  absl::Status status = Admission();
+  if (status.ok()) {
+    absl::StatusOr<SessionRegistry::Entry> entry = sessions_.Get(request->camera_id());
+    if (entry.ok()) SessionToProto(*entry->session, entry->last_used, response);
+    status = entry.status();
+  }
+  FinishCall(reactor, "GetSession", status);
+  return reactor;
+}
+
+grpc::ServerUnaryReactor* LaneServiceImpl::ListSessions(grpc::CallbackServerContext* context,
+                                                        const v1::ListSessionsRequest* /*request*/,
+                                                        v1::ListSessionsResponse* response) {
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  absl::Status status = Admission();
+  if (status.ok()) {
+    for (const SessionRegistry::Entry& entry : sessions_.List()) {
+      SessionToProto(*entry.session, entry.last_used, response->add_sessions());
+    }
+  }
+  FinishCall(reactor, "ListSessions", status);
+  return reactor;
+}
+
+grpc::ServerUnaryReactor* LaneServiceImpl::DeleteSession(grpc::CallbackServerContext* context,
+                                                         const v1::DeleteSessionRequest* request,
+                                                         v1::DeleteSessionResponse* /*response*/) {
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  absl::Status status = Admission();
+  if (status.ok()) status = sessions_.Delete(request->camera_id());
+  FinishCall(reactor, "DeleteSession", status);
+  return reactor;
+}
+
+grpc::ServerBidiReactor<v1::FrameRequest, v1::FrameResponse>* LaneServiceImpl::StreamFrames(
+    grpc::CallbackServerContext* /*context*/) {
+  auto* stream = new FrameStream(*this);
+  absl::Status reject;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (state_ == State::kServing) {
+      streams_.insert(stream);
+    } else {
+      reject = state_ == State::kStarting ? ServerStarting() : ServerDraining();
+    }
+  }
+  stream->Start(reject, reject.ok());
+  return stream;
+}
+
+grpc::ServerUnaryReactor* LaneServiceImpl::Detect(grpc::CallbackServerContext* context,
+                                                  const v1::FrameRequest* request,
+                                                  v1::FrameResponse* response) {
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  if (absl::Status s = Admission(); !s.ok()) {
+    FinishCall(reactor, "Detect", s);
+    return reactor;
+  }
+  const std::string& camera_id = request->camera_id();
+  if (camera_id.empty()) {
+    FinishCall(reactor, "Detect", InvalidRequest("frame without camera_id"));
+    return reactor;
+  }
+  std::shared_ptr<const Session> session;
+  if (!request->has_session_config()) {
+    session = sessions_.Find(camera_id);
+    if (session == nullptr) {
+      FinishCall(reactor, "Detect", NoSessionForFrame(camera_id));
+      return reactor;
+    }
+  }
+  const Arrival arrival = Arrival::Now();
+  metrics_.FrameReceived();
+  const bool queued = pool_.TrySubmit([this, reactor, request, response, arrival,
+                                       session = std::move(session)]() mutable {
+    absl::Status status;
+    if (session == nullptr) {  // the request carries its session config
+      absl::StatusOr<SessionRegistry::CreateResult> created = EnsureSession(
+          request->camera_id(), request->session_config(), request->replace_session());
+      if (created.ok()) {
+        session = std::move(created->session);
+      } else {
+        status = created.status();
+      }
+    }
+    if (session != nullptr) {
+      StartResponse(*request, request->camera_id(), arrival, response);
+      status =
+          ProcessFrame(*request, *session, options_.max_frame_pixels, arrival, metrics_, response);
+      response->set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
+    }
+    metrics_.FrameAnswered();
+    FinishCall(reactor, "Detect", status);
+  });
+  if (!queued) {
+    metrics_.FrameAnswered();
+    FinishCall(reactor, "Detect", WorkerQueueFull());
+  }
+  return reactor;
+}
+
+grpc::ServerUnaryReactor* LaneServiceImpl::GetServerInfo(
+    grpc::CallbackServerContext* context, const v1::GetServerInfoRequest* /*request*/,
+    v1::ServerInfo* response) {
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  const BuildInfo& build = options_.build;
+  response->set_version(build.version);
+  response->set_build(build.build_type + ", gRPC " + build.grpc_version + ", OpenCV " +
+                      build.opencv_version);
+  response->add_encoded_formats("jpeg");
+  response->add_encoded_formats("png");
+  response->add_raw_formats(v1::PIXEL_FORMAT_BGR8);
+  response->add_raw_formats(v1::PIXEL_FORMAT_RGB8);
+  response->add_raw_formats(v1::PIXEL_FORMAT_GRAY8);
+  const SessionRegistry::Options& registry = sessions_.options();
+  v1::ServerLimits* limits = response->mutable_limits();
+  limits->set_max_receive_message_bytes(options_.max_receive_message_bytes);
+  limits->set_max_frame_pixels(static_cast<uint64_t>(options_.max_frame_pixels));
+  limits->set_max_sessions(static_cast<uint32_t>(registry.max_sessions));
+  limits->set_session_ttl_seconds(
+      registry.ttl == absl::InfiniteDuration() ? 0.0 : absl::ToDoubleSeconds(registry.ttl));
+  limits->set_max_inflight_frames(registry.default_max_inflight_frames);
+  limits->set_workers(static_cast<uint32_t>(pool_.threads()));
+  DefaultConfigToProto(lane::Mode::kAll, registry.default_max_inflight_frames,
+                       response->mutable_default_config_all());
+  DefaultConfigToProto(lane::Mode::kTwo, registry.default_max_inflight_frames,
+                       response->mutable_default_config_two());
+  FinishCall(reactor, "GetServerInfo", absl::OkStatus());
+  return reactor;
+}
+
+}  // namespace lane::server

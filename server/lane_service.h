@@ -1,0 +1,108 @@
+// The lane.v1.LaneService implementation on gRPC's callback API.
+//
+// Reactions never block: session lookups take a short lock, and all CPU work
+// (building detectors, decoding, detecting) goes to the server's WorkerPool.
+// The service converts between protobuf and core types and records metrics;
+// sessions live in SessionRegistry, frame work in frame_processor, the stream
+// protocol in FrameStream.
+#ifndef LANE_SERVER_LANE_SERVICE_H_
+#define LANE_SERVER_LANE_SERVICE_H_
+
+#include <grpcpp/grpcpp.h>
+
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <unordered_set>
+
+#include "absl/status/statusor.h"
+#include "absl/time/time.h"
+#include "lane/v1/lane_service.grpc.pb.h"
+#include "metrics.h"
+#include "session_registry.h"
+#include "worker_pool.h"
+
+namespace lane::server {
+
+class FrameStream;
+
+struct ServiceOptions {
+  // Largest frame accepted, width * height.
+  int64_t max_frame_pixels = int64_t{3840} * 2160;
+  // Reported by GetServerInfo.
+  uint64_t max_receive_message_bytes = 0;
+  BuildInfo build;
+};
+
+class LaneServiceImpl final : public v1::LaneService::CallbackService {
+ public:
+  LaneServiceImpl(ServiceOptions options, SessionRegistry& sessions, WorkerPool& pool,
+                  Metrics& metrics);
+  ~LaneServiceImpl() override;
+
+  grpc::ServerUnaryReactor* CreateSession(grpc::CallbackServerContext* context,
+                                          const v1::CreateSessionRequest* request,
+                                          v1::CreateSessionResponse* response) override;
+  grpc::ServerUnaryReactor* GetSession(grpc::CallbackServerContext* context,
+                                       const v1::GetSessionRequest* request,
+                                       v1::Session* response) override;
+  grpc::ServerUnaryReactor* ListSessions(grpc::CallbackServerContext* context,
+                                         const v1::ListSessionsRequest* request,
+                                         v1::ListSessionsResponse* response) override;
+  grpc::ServerUnaryReactor* DeleteSession(grpc::CallbackServerContext* context,
+                                          const v1::DeleteSessionRequest* request,
+                                          v1::DeleteSessionResponse* response) override;
+  grpc::ServerBidiReactor<v1::FrameRequest, v1::FrameResponse>* StreamFrames(
+      grpc::CallbackServerContext* context) override;
+  grpc::ServerUnaryReactor* Detect(grpc::CallbackServerContext* context,
+                                   const v1::FrameRequest* request,
+                                   v1::FrameResponse* response) override;
+  grpc::ServerUnaryReactor* GetServerInfo(grpc::CallbackServerContext* context,
+                                          const v1::GetServerInfoRequest* request,
+                                          v1::ServerInfo* response) override;
+
+  // Lifecycle: calls are refused with UNAVAILABLE until SetServing and after
+  // StartDrain. StartDrain also tells every open stream to stop reading,
+  // answer the frames it has received and end with UNAVAILABLE.
+  void SetServing();
+  void StartDrain();
+  // Waits until every stream has ended or `deadline` passes; true if all did.
+  bool WaitForStreams(absl::Time deadline);
+  size_t open_streams() const;
+
+  // For FrameStream.
+  SessionRegistry& sessions() { return sessions_; }
+  WorkerPool& pool() { return pool_; }
+  Metrics& metrics() { return metrics_; }
+  const ServiceOptions& options() const { return options_; }
+  // Creates or confirms the session described by a request (on a worker:
+  // it may build a detector).
+  absl::StatusOr<SessionRegistry::CreateResult> EnsureSession(const std::string& camera_id,
+                                                              const v1::SessionConfig& config,
+                                                              bool replace);
+  void Unregister(FrameStream* stream);
+
+ private:
+  enum class State { kStarting, kServing, kDraining };
+
+  // OK while serving, else UNAVAILABLE.
+  absl::Status Admission() const;
+  // Finishes a unary call and counts it.
+  void FinishCall(grpc::ServerUnaryReactor* reactor, const std::string& method,
+                  const absl::Status& status);
+
+  const ServiceOptions options_;
+  SessionRegistry& sessions_;
+  WorkerPool& pool_;
+  Metrics& metrics_;
+
+  mutable std::mutex mu_;
+  std::condition_variable streams_cv_;
+  State state_ = State::kStarting;            // guarded by mu_
+  std::unordered_set<FrameStream*> streams_;  // guarded by mu_
+};
+
+}  // namespace lane::server
+
+#endif  // LANE_SERVER_LANE_SERVICE_H_

@@ -1,0 +1,129 @@
+// lane-server: the lane-marker detection service. See docs/service.md.
+//
+//   lane-server --default_config=configs/synthetic.json
+#include <pthread.h>
+#include <signal.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <thread>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "absl/flags/usage_config.h"
+#include "absl/strings/match.h"
+#include "absl/time/time.h"
+#include "server.h"
+
+ABSL_FLAG(std::string, address, "0.0.0.0:50051", "gRPC listening address (host:port).");
+ABSL_FLAG(std::string, metrics_address, "0.0.0.0:9464",
+          "Prometheus /metrics listening address (host:port); empty = no endpoint.");
+ABSL_FLAG(int, workers, 0, "Worker threads that decode and detect; 0 = one per core.");
+ABSL_FLAG(int, max_queued_tasks, 1024,
+          "Unary Detect/CreateSession calls beyond this many queued tasks get "
+          "RESOURCE_EXHAUSTED.");
+ABSL_FLAG(int, max_inflight_frames, 8,
+          "Default bound on a stream's frames received and not yet answered.");
+ABSL_FLAG(int, max_sessions, 64, "Most sessions held; more is RESOURCE_EXHAUSTED.");
+ABSL_FLAG(absl::Duration, session_ttl, absl::Hours(1),
+          "Idle sessions are evicted after this long; 'inf' = never.");
+ABSL_FLAG(int64_t, max_frame_pixels, int64_t{3840} * 2160,
+          "Largest frame accepted, width * height (checked before decoding).");
+ABSL_FLAG(int, max_receive_message_bytes, 16 * 1024 * 1024,
+          "gRPC maximum receive message size, bytes (a raw 1920x1080 BGR frame is 6220800).");
+ABSL_FLAG(absl::Duration, keepalive_time, absl::Seconds(30), "Ping an idle connection this often.");
+ABSL_FLAG(absl::Duration, keepalive_timeout, absl::Seconds(10),
+          "Close a connection whose keepalive ping is not answered within this.");
+ABSL_FLAG(absl::Duration, keepalive_min_client_interval, absl::Seconds(10),
+          "Shortest interval between client pings the server accepts.");
+ABSL_FLAG(bool, keepalive_permit_without_calls, true,
+          "Allow keepalive pings on connections without calls.");
+ABSL_FLAG(absl::Duration, shutdown_deadline, absl::Seconds(10),
+          "On SIGTERM/SIGINT: time for open streams to answer their frames before "
+          "Shutdown cancels what remains.");
+ABSL_FLAG(std::string, default_config, "",
+          "JSON config file (format of configs/*.json) for a session created at start-up.");
+ABSL_FLAG(std::string, default_camera_id, "default", "Camera id of the --default_config session.");
+ABSL_FLAG(int, opencv_threads, 1,
+          "OpenCV's own threads per call; 1 because the worker pool already uses every core.");
+
+int main(int argc, char** argv) {
+  // --help lists the flags of this file (the default filter expects a file
+  // named after the program).
+  absl::FlagsUsageConfig usage;
+  usage.contains_help_flags = [](absl::string_view file) {
+    return absl::EndsWith(file, "server/main.cc");
+  };
+  absl::SetFlagsUsageConfig(usage);
+  absl::SetProgramUsageMessage(
+      "lane-server: lane-marker detection over gRPC. See docs/service.md.");
+  absl::ParseCommandLine(argc, argv);
+
+  // SIGTERM and SIGINT are taken by a thread of ours (sigwait), so block them
+  // before any other thread exists: every thread inherits the mask.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  cv::setNumThreads(absl::GetFlag(FLAGS_opencv_threads));
+
+  lane::server::ServerOptions options;
+  options.address = absl::GetFlag(FLAGS_address);
+  options.metrics_address = absl::GetFlag(FLAGS_metrics_address);
+  options.workers = absl::GetFlag(FLAGS_workers);
+  options.max_queued_tasks =
+      static_cast<size_t>(std::max(1, absl::GetFlag(FLAGS_max_queued_tasks)));
+  options.max_inflight_frames =
+      static_cast<uint32_t>(std::max(1, absl::GetFlag(FLAGS_max_inflight_frames)));
+  options.max_sessions = static_cast<size_t>(std::max(1, absl::GetFlag(FLAGS_max_sessions)));
+  options.session_ttl = absl::GetFlag(FLAGS_session_ttl);
+  options.max_frame_pixels = absl::GetFlag(FLAGS_max_frame_pixels);
+  options.max_receive_message_bytes = absl::GetFlag(FLAGS_max_receive_message_bytes);
+  options.keepalive_time = absl::GetFlag(FLAGS_keepalive_time);
+  options.keepalive_timeout = absl::GetFlag(FLAGS_keepalive_timeout);
+  options.keepalive_min_client_interval = absl::GetFlag(FLAGS_keepalive_min_client_interval);
+  options.keepalive_permit_without_calls = absl::GetFlag(FLAGS_keepalive_permit_without_calls);
+  options.shutdown_deadline = absl::GetFlag(FLAGS_shutdown_deadline);
+  options.default_config_path = absl::GetFlag(FLAGS_default_config);
+  options.default_camera_id = absl::GetFlag(FLAGS_default_camera_id);
+  options.build = lane::server::CurrentBuildInfo();
+
+  auto registry = std::make_shared<prometheus::Registry>();
+  absl::StatusOr<std::unique_ptr<lane::server::LaneServer>> started =
+      lane::server::LaneServer::Start(options, registry);
+  if (!started.ok()) {
+    std::cerr << "lane-server: " << started.status() << "\n";
+    return 1;
+  }
+  lane::server::LaneServer& server = **started;
+  std::cerr << "lane-server " << options.build.version << ": gRPC on port " << server.port();
+  if (server.metrics_port() >= 0) std::cerr << ", metrics on port " << server.metrics_port();
+  if (!options.default_config_path.empty()) {
+    std::cerr << ", session '" << options.default_camera_id << "' from "
+              << options.default_config_path;
+  }
+  std::cerr << std::endl;
+
+  // First signal: drain. Second signal: exit at once.
+  std::thread([&server, signals] {
+    int signal = 0;
+    sigwait(&signals, &signal);
+    std::cerr << "lane-server: signal " << signal << ", draining" << std::endl;
+    std::thread([&server] { server.Drain(); }).detach();
+    sigwait(&signals, &signal);
+    std::cerr << "lane-server: second signal, exiting now" << std::endl;
+    std::_Exit(1);
+  }).detach();
+
+  server.Wait();
+  std::cerr << "lane-server: stopped" << std::endl;
+  return 0;
+}

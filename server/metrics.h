@@ -1,0 +1,84 @@
+// The service's Prometheus metrics, all built on a registry the caller owns
+// (no globals): the server exposes that registry on /metrics, tests read it
+// through Registry::Collect().
+//
+// Latency histograms are in seconds, with buckets from 50 us to 1 s.
+#ifndef LANE_SERVER_METRICS_H_
+#define LANE_SERVER_METRICS_H_
+
+#include <grpcpp/support/status.h>
+#include <prometheus/counter.h>
+#include <prometheus/family.h>
+#include <prometheus/gauge.h>
+#include <prometheus/histogram.h>
+#include <prometheus/registry.h>
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "lane/detector.h"
+#include "status_map.h"
+
+namespace lane::server {
+
+// Labels of lanesvc_build_info.
+struct BuildInfo {
+  std::string version;
+  std::string build_type;
+  std::string grpc_version;
+  std::string opencv_version;
+};
+
+// The stages of lanesvc_stage_duration_seconds{stage}.
+enum class Stage { kDecode, kIpm, kFilter, kThreshold, kLines, kSplines, kPostprocess };
+inline constexpr int kNumStages = 7;
+const char* StageLabel(Stage stage);
+
+class Metrics {
+ public:
+  // 50 us .. 1 s in 1-2.5-5 steps.
+  static prometheus::Histogram::BucketBoundaries LatencyBuckets();
+
+  Metrics(prometheus::Registry& registry, const BuildInfo& build);
+
+  // lanesvc_frame_latency_seconds: from receiving a frame to its response
+  // being ready (every processed frame, whatever its status; not dropped ones).
+  void ObserveFrameLatency(double seconds) { frame_latency_.Observe(seconds); }
+  // lanesvc_stage_duration_seconds{stage}.
+  void ObserveStage(Stage stage, double seconds) {
+    stages_[static_cast<int>(stage)]->Observe(seconds);
+  }
+  // The detector's stages, from its timings (milliseconds).
+  void ObserveDetectorStages(const lane::StageTimings& timings);
+  // lanesvc_queue_wait_seconds: from receiving a frame to a worker starting it.
+  void ObserveQueueWait(double seconds) { queue_wait_.Observe(seconds); }
+  // lanesvc_frames_total{result}.
+  void CountFrame(FrameResult result) { frames_[static_cast<int>(result)]->Increment(); }
+  // lanesvc_frames_received_total, and lanesvc_inflight_frames: received and
+  // not yet answered.
+  void FrameReceived() {
+    received_.Increment();
+    inflight_.Increment();
+  }
+  void FrameAnswered() { inflight_.Decrement(); }
+  // lanesvc_sessions_active.
+  void SetSessions(double n) { sessions_.Set(n); }
+  // grpc_server_handled_total{grpc_method,grpc_code}: every finished call of
+  // the lane service.
+  void CountRpc(const std::string& method, grpc::StatusCode code);
+
+ private:
+  prometheus::Histogram& frame_latency_;
+  prometheus::Histogram& queue_wait_;
+  std::array<prometheus::Histogram*, kNumStages> stages_{};
+  std::array<prometheus::Counter*, 4> frames_{};
+  prometheus::Counter& received_;
+  prometheus::Gauge& inflight_;
+  prometheus::Gauge& sessions_;
+  prometheus::Family<prometheus::Counter>& rpcs_;
+};
+
+}  // namespace lane::server
+
+#endif  // LANE_SERVER_METRICS_H_

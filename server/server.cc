@@ -1,0 +1,197 @@
+#include "server.h"
+
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/health_check_service_interface.h>
+
+#include <algorithm>
+#include <exception>
+#include <opencv2/core/version.hpp>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "absl/time/clock.h"
+#include "lane/config.h"
+
+#ifndef LANE_VERSION
+#define LANE_VERSION "0.0.0"
+#endif
+#ifndef LANE_BUILD_TYPE
+#define LANE_BUILD_TYPE "unknown"
+#endif
+
+namespace lane::server {
+namespace {
+
+int ToMillis(absl::Duration d) {
+  return static_cast<int>(std::min<int64_t>(absl::ToInt64Milliseconds(d), INT32_MAX));
+}
+
+}  // namespace
+
+BuildInfo CurrentBuildInfo() {
+  BuildInfo info;
+  info.version = LANE_VERSION;
+  info.build_type = LANE_BUILD_TYPE;
+  info.grpc_version = grpc::Version();
+  info.opencv_version = CV_VERSION;
+  return info;
+}
+
+LaneServer::LaneServer(const ServerOptions& options) : options_(options) {}
+
+LaneServer::~LaneServer() { Drain(); }
+
+absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
+    const ServerOptions& options, std::shared_ptr<prometheus::Registry> registry) {
+  // Fail fast on a bad default config, before anything listens.
+  absl::StatusOr<lane::Config> default_config;
+  if (!options.default_config_path.empty()) {
+    default_config = lane::LoadConfigFile(options.default_config_path);
+    if (!default_config.ok()) {
+      return absl::InvalidArgumentError(absl::StrCat("--default_config ",
+                                                     options.default_config_path, ": ",
+                                                     default_config.status().message()));
+    }
+  }
+
+  std::unique_ptr<LaneServer> server(new LaneServer(options));
+  server->registry_ = registry ? std::move(registry) : std::make_shared<prometheus::Registry>();
+  server->metrics_ = std::make_unique<Metrics>(*server->registry_, options.build);
+
+  SessionRegistry::Options registry_options;
+  registry_options.max_sessions = options.max_sessions;
+  registry_options.ttl = options.session_ttl;
+  registry_options.default_max_inflight_frames = std::max<uint32_t>(1, options.max_inflight_frames);
+  registry_options.max_frame_pixels = options.max_frame_pixels;
+  Metrics* metrics = server->metrics_.get();
+  registry_options.on_size_change = [metrics](size_t n) {
+    metrics->SetSessions(static_cast<double>(n));
+  };
+  server->sessions_ = std::make_unique<SessionRegistry>(std::move(registry_options));
+
+  WorkerPool::Options pool_options;
+  pool_options.threads = options.workers;
+  pool_options.max_queued = options.max_queued_tasks;
+  server->pool_ = std::make_unique<WorkerPool>(pool_options);
+
+  ServiceOptions service_options;
+  service_options.max_frame_pixels = options.max_frame_pixels;
+  service_options.max_receive_message_bytes =
+      static_cast<uint64_t>(std::max(0, options.max_receive_message_bytes));
+  service_options.build = options.build;
+  server->service_ = std::make_unique<LaneServiceImpl>(service_options, *server->sessions_,
+                                                       *server->pool_, *server->metrics_);
+
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  builder.AddListeningPort(options.address, grpc::InsecureServerCredentials(), &server->port_);
+  builder.RegisterService(server->service_.get());
+  builder.SetMaxReceiveMessageSize(options.max_receive_message_bytes);
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, ToMillis(options.keepalive_time));
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, ToMillis(options.keepalive_timeout));
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS,
+                             options.keepalive_permit_without_calls ? 1 : 0);
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS,
+                             ToMillis(options.keepalive_min_client_interval));
+  server->server_ = builder.BuildAndStart();
+  if (server->server_ == nullptr || server->port_ == 0) {
+    return absl::UnavailableError(absl::StrCat("cannot listen on ", options.address));
+  }
+  // Start-up: NOT_SERVING (the lane service answers UNAVAILABLE) until ready.
+  server->server_->GetHealthCheckService()->SetServingStatus(false);
+
+  if (!options.metrics_address.empty()) {
+    try {
+      server->exposer_ = std::make_unique<prometheus::Exposer>(options.metrics_address, 2);
+      server->exposer_->RegisterCollectable(server->registry_);
+      const std::vector<int> ports = server->exposer_->GetListeningPorts();
+      server->metrics_port_ = ports.empty() ? -1 : ports.front();
+    } catch (const std::exception& e) {
+      return absl::UnavailableError(
+          absl::StrCat("cannot serve metrics on ", options.metrics_address, ": ", e.what()));
+    }
+  }
+
+  if (default_config.ok() && !options.default_config_path.empty()) {
+    absl::StatusOr<SessionRegistry::CreateResult> created = server->sessions_->Create(
+        options.default_camera_id, SessionSpec{*default_config, StreamPolicy{}}, false);
+    if (!created.ok()) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "--default_config ", options.default_config_path, ": ", created.status().message()));
+    }
+  }
+
+  if (options.session_ttl != absl::InfiniteDuration()) {
+    server->sweeper_ = std::thread([s = server.get()] { s->SweepLoop(); });
+  }
+
+  server->service_->SetServing();
+  server->server_->GetHealthCheckService()->SetServingStatus(true);
+  return server;
+}
+
+void LaneServer::SweepLoop() {
+  const absl::Duration interval =
+      std::clamp(options_.session_ttl / 4, absl::Milliseconds(10), absl::Seconds(1));
+  std::unique_lock<std::mutex> lock(mu_);
+  while (!stopping_) {
+    cv_.wait_for(lock, absl::ToChronoMilliseconds(interval), [this] { return stopping_; });
+    if (stopping_) break;
+    lock.unlock();
+    sessions_->EvictIdle();
+    lock.lock();
+  }
+}
+
+void LaneServer::BeginDrain() {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (draining_) return;
+    draining_ = true;
+    drain_deadline_ = absl::Now() + options_.shutdown_deadline;
+  }
+  // 1. Health NOT_SERVING.
+  if (server_ != nullptr) server_->GetHealthCheckService()->SetServingStatus(false);
+  // 2. New calls and streams are refused; open streams stop reading.
+  if (service_ != nullptr) service_->StartDrain();
+}
+
+void LaneServer::Drain() {
+  BeginDrain();
+  absl::Time deadline;
+  {
+    std::unique_lock<std::mutex> lock(mu_);
+    if (shutting_down_) {
+      cv_.wait(lock, [this] { return drained_; });
+      return;
+    }
+    shutting_down_ = true;
+    deadline = drain_deadline_;
+  }
+  // 3. Open streams answer every frame they have received, then end.
+  if (service_ != nullptr) service_->WaitForStreams(deadline);
+  // 4. Shutdown with the deadline: calls still open then are cancelled.
+  if (server_ != nullptr) server_->Shutdown(absl::ToChronoTime(deadline));
+  // Tasks still queued only release their streams (the calls are over).
+  if (pool_ != nullptr) pool_->Shutdown();
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    stopping_ = true;
+  }
+  cv_.notify_all();
+  if (sweeper_.joinable()) sweeper_.join();
+  exposer_.reset();
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    drained_ = true;
+  }
+  cv_.notify_all();
+}
+
+void LaneServer::Wait() {
+  std::unique_lock<std::mutex> lock(mu_);
+  cv_.wait(lock, [this] { return drained_; });
+}
+
+}  // namespace lane::server

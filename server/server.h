@@ -1,0 +1,132 @@
+// lane-server: the gRPC server (lane service, health, reflection), its worker
+// pool, session registry, TTL sweeper and Prometheus endpoint, with the
+// start-up and drain sequences.
+#ifndef LANE_SERVER_SERVER_H_
+#define LANE_SERVER_SERVER_H_
+
+#include <grpcpp/grpcpp.h>
+#include <prometheus/exposer.h>
+#include <prometheus/registry.h>
+
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "absl/status/statusor.h"
+#include "absl/time/time.h"
+#include "lane_service.h"
+#include "metrics.h"
+#include "session_registry.h"
+#include "worker_pool.h"
+
+namespace lane::server {
+
+struct ServerOptions {
+  // gRPC listening address; port 0 picks a free port (see LaneServer::port).
+  std::string address = "0.0.0.0:50051";
+  // Prometheus /metrics listening address; empty = no endpoint. Port 0 picks
+  // a free port (see LaneServer::metrics_port).
+  std::string metrics_address = "0.0.0.0:9464";
+  // Worker threads for decoding and detection; 0 = one per core.
+  int workers = 0;
+  // Unary Detect / CreateSession calls beyond this many queued tasks are
+  // RESOURCE_EXHAUSTED (streams are bounded by their in-flight limit).
+  size_t max_queued_tasks = 1024;
+  // Default bound on a stream's frames in flight (sessions may set theirs).
+  uint32_t max_inflight_frames = 8;
+  size_t max_sessions = 64;
+  // Idle sessions are evicted after this; absl::InfiniteDuration() = never.
+  absl::Duration session_ttl = absl::Hours(1);
+  // Largest frame, width * height.
+  int64_t max_frame_pixels = int64_t{3840} * 2160;
+  // 16 MiB: a raw 1920x1080 BGR frame is 6.2 MB; a raw 4K one 24.9 MB.
+  int max_receive_message_bytes = 16 * 1024 * 1024;
+  // HTTP/2 keepalive: ping an idle connection every keepalive_time, drop it
+  // when a ping is not answered within keepalive_timeout; accept client pings
+  // every keepalive_min_client_interval at most (also without calls when
+  // keepalive_permit_without_calls).
+  absl::Duration keepalive_time = absl::Seconds(30);
+  absl::Duration keepalive_timeout = absl::Seconds(10);
+  absl::Duration keepalive_min_client_interval = absl::Seconds(10);
+  bool keepalive_permit_without_calls = true;
+  // Drain budget: streams get until this deadline to answer what they have
+  // received, then Shutdown cancels whatever remains at the same deadline.
+  absl::Duration shutdown_deadline = absl::Seconds(10);
+  // Optional session created at start-up: a JSON config file (format of
+  // lane::ParseConfig) under default_camera_id.
+  std::string default_config_path;
+  std::string default_camera_id = "default";
+  BuildInfo build;
+};
+
+class LaneServer {
+ public:
+  // Builds and starts everything. Health is NOT_SERVING (and the lane service
+  // answers UNAVAILABLE) until the default session exists and the metrics
+  // endpoint listens; then SERVING.
+  static absl::StatusOr<std::unique_ptr<LaneServer>> Start(
+      const ServerOptions& options, std::shared_ptr<prometheus::Registry> registry);
+
+  // Drain() if it has not run.
+  ~LaneServer();
+
+  LaneServer(const LaneServer&) = delete;
+  LaneServer& operator=(const LaneServer&) = delete;
+
+  // The first steps of the drain, without waiting: health NOT_SERVING; new
+  // calls and streams refused with UNAVAILABLE; open streams stop reading,
+  // answer every frame they have received and end with UNAVAILABLE. Starts
+  // the shutdown deadline. Idempotent.
+  void BeginDrain();
+  // The whole drain: BeginDrain; wait for the open streams until the
+  // deadline; grpc::Server::Shutdown with the same deadline (what is still
+  // open then is cancelled); then the workers, the sweeper and the metrics
+  // endpoint stop. Thread-safe and idempotent; returns when the server is
+  // down.
+  void Drain();
+  // Blocks until a Drain (from another thread) has completed.
+  void Wait();
+
+  int port() const { return port_; }
+  // -1 without a metrics endpoint.
+  int metrics_port() const { return metrics_port_; }
+  SessionRegistry& sessions() { return *sessions_; }
+  LaneServiceImpl& service() { return *service_; }
+  Metrics& metrics() { return *metrics_; }
+  grpc::Server& grpc_server() { return *server_; }
+
+ private:
+  explicit LaneServer(const ServerOptions& options);
+  void SweepLoop();
+
+  const ServerOptions options_;
+  std::shared_ptr<prometheus::Registry> registry_;
+  std::unique_ptr<Metrics> metrics_;
+  std::unique_ptr<SessionRegistry> sessions_;
+  std::unique_ptr<WorkerPool> pool_;
+  std::unique_ptr<LaneServiceImpl> service_;
+  std::unique_ptr<grpc::Server> server_;
+  std::unique_ptr<prometheus::Exposer> exposer_;
+  int port_ = 0;
+  int metrics_port_ = -1;
+
+  std::thread sweeper_;
+  std::mutex mu_;
+  std::condition_variable cv_;
+  bool stopping_ = false;       // guarded by mu_: the sweeper stops
+  bool draining_ = false;       // guarded by mu_: BeginDrain has run
+  bool shutting_down_ = false;  // guarded by mu_: a Drain is past BeginDrain
+  bool drained_ = false;        // guarded by mu_
+  absl::Time drain_deadline_;   // guarded by mu_
+};
+
+// The build described by compile-time constants (version, build type,
+// library versions).
+BuildInfo CurrentBuildInfo();
+
+}  // namespace lane::server
+
+#endif  // LANE_SERVER_SERVER_H_

@@ -1,0 +1,71 @@
+// A camera's session: what a client configured under a camera id, and the
+// detector built from it. Immutable once created (only its counter moves), so
+// a frame in flight keeps using the session it started with even when the
+// session is replaced or deleted meanwhile.
+#ifndef LANE_SERVER_SESSION_H_
+#define LANE_SERVER_SESSION_H_
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+#include <utility>
+
+#include "absl/time/time.h"
+#include "lane/config.h"
+#include "lane/detector.h"
+
+namespace lane::server {
+
+enum class Backpressure {
+  kBlock,       // at the in-flight bound, stop reading the stream
+  kDropOldest,  // at the in-flight bound, drop the oldest frame not yet started
+};
+
+// How a camera's streams queue frames.
+struct StreamPolicy {
+  Backpressure backpressure = Backpressure::kBlock;
+  // Frames of one stream received and not yet answered, at most. 0 = the
+  // server's default (resolved when the session is created).
+  uint32_t max_inflight_frames = 0;
+
+  bool operator==(const StreamPolicy& o) const {
+    return backpressure == o.backpressure && max_inflight_frames == o.max_inflight_frames;
+  }
+  bool operator!=(const StreamPolicy& o) const { return !(*this == o); }
+};
+
+// What CreateSession (or a stream's first frame) asks for.
+struct SessionSpec {
+  lane::Config config;
+  StreamPolicy stream;
+};
+
+struct Session {
+  Session(std::string camera_id_in, uint64_t version_in, lane::Config config_in,
+          std::string config_json_in, StreamPolicy stream_in, lane::Detector detector_in,
+          absl::Time create_time_in)
+      : camera_id(std::move(camera_id_in)),
+        version(version_in),
+        config(std::move(config_in)),
+        config_json(std::move(config_json_in)),
+        stream(stream_in),
+        detector(std::move(detector_in)),
+        create_time(create_time_in) {}
+
+  const std::string camera_id;
+  // Unique within the process; new on every create and replace.
+  const uint64_t version;
+  const lane::Config config;
+  // lane::ConfigToJson(config): the canonical form compared by CreateSession.
+  const std::string config_json;
+  // Resolved: max_inflight_frames > 0.
+  const StreamPolicy stream;
+  const lane::Detector detector;
+  const absl::Time create_time;
+  // Frames processed with this session.
+  mutable std::atomic<uint64_t> frames_processed{0};
+};
+
+}  // namespace lane::server
+
+#endif  // LANE_SERVER_SESSION_H_

@@ -1,0 +1,153 @@
+#include "session_registry.h"
+
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "status_map.h"
+
+namespace lane::server {
+
+SessionRegistry::SessionRegistry(Options options) : options_(std::move(options)) {}
+
+absl::Status SessionRegistry::ValidateCameraId(absl::string_view camera_id) {
+  if (camera_id.empty() || camera_id.size() > 128) {
+    return InvalidRequest("camera_id must have 1 to 128 characters");
+  }
+  for (const char c : camera_id) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '.' || c == '_' || c == ':' || c == '/' || c == '-';
+    if (!ok) {
+      return InvalidRequest(
+          absl::StrCat("camera_id '", camera_id, "' has a character outside [A-Za-z0-9._:/-]"));
+    }
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std::string& camera_id,
+                                                                      const SessionSpec& spec,
+                                                                      bool replace) {
+  if (absl::Status s = ValidateCameraId(camera_id); !s.ok()) return s;
+  const lane::CameraModel& camera = spec.config.camera;
+  if (int64_t{camera.image_width} * camera.image_height > options_.max_frame_pixels) {
+    return InvalidRequest(absl::StrCat("session config: the camera's ", camera.image_width, "x",
+                                       camera.image_height, " frames exceed --max_frame_pixels ",
+                                       options_.max_frame_pixels));
+  }
+  StreamPolicy stream = spec.stream;
+  if (stream.max_inflight_frames == 0) {
+    stream.max_inflight_frames = options_.default_max_inflight_frames;
+  }
+  if (stream.max_inflight_frames > 4096) {
+    return InvalidRequest("stream.max_inflight_frames must be at most 4096");
+  }
+  std::string config_json = lane::ConfigToJson(spec.config);
+
+  // The checks that need no detector, so a confirmation costs nothing.
+  auto check_locked = [&](absl::Time now) -> absl::StatusOr<std::shared_ptr<const Session>> {
+    auto it = sessions_.find(camera_id);
+    if (it != sessions_.end()) {
+      const Session& existing = *it->second.session;
+      if (existing.config_json == config_json && existing.stream == stream) {
+        it->second.last_used = now;
+        return it->second.session;
+      }
+      if (!replace) return SessionConfigConflict(camera_id, existing.version);
+    } else if (sessions_.size() >= options_.max_sessions) {
+      return TooManySessions(options_.max_sessions);
+    }
+    return nullptr;
+  };
+
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    absl::StatusOr<std::shared_ptr<const Session>> existing = check_locked(options_.clock());
+    if (!existing.ok()) return existing.status();
+    if (*existing != nullptr) return CreateResult{*std::move(existing), Outcome::kUnchanged};
+  }
+
+  // Expensive (IPM maps, kernels): outside the lock.
+  absl::StatusOr<lane::Detector> detector =
+      lane::Detector::Create(spec.config.camera, spec.config.ipm, spec.config.detector);
+  if (!detector.ok()) {
+    return InvalidRequest(absl::StrCat("session config: ", detector.status().message()));
+  }
+
+  std::lock_guard<std::mutex> lock(mu_);
+  const absl::Time now = options_.clock();
+  // Another call may have changed the entry meanwhile: check again.
+  absl::StatusOr<std::shared_ptr<const Session>> existing = check_locked(now);
+  if (!existing.ok()) return existing.status();
+  if (*existing != nullptr) return CreateResult{*std::move(existing), Outcome::kUnchanged};
+
+  auto session =
+      std::make_shared<const Session>(camera_id, next_version_++, spec.config,
+                                      std::move(config_json), stream, *std::move(detector), now);
+  auto [it, inserted] = sessions_.insert_or_assign(camera_id, Entry{session, now});
+  (void)it;
+  NotifySizeLocked();
+  return CreateResult{std::move(session), inserted ? Outcome::kCreated : Outcome::kReplaced};
+}
+
+std::shared_ptr<const Session> SessionRegistry::Find(absl::string_view camera_id) {
+  std::lock_guard<std::mutex> lock(mu_);
+  auto it = sessions_.find(camera_id);
+  if (it == sessions_.end()) return nullptr;
+  it->second.last_used = options_.clock();
+  return it->second.session;
+}
+
+absl::StatusOr<SessionRegistry::Entry> SessionRegistry::Get(absl::string_view camera_id) {
+  std::lock_guard<std::mutex> lock(mu_);
+  auto it = sessions_.find(camera_id);
+  if (it == sessions_.end()) return SessionNotFound(camera_id);
+  it->second.last_used = options_.clock();
+  return it->second;
+}
+
+std::vector<SessionRegistry::Entry> SessionRegistry::List() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  std::vector<Entry> out;
+  out.reserve(sessions_.size());
+  for (const auto& [id, entry] : sessions_) out.push_back(entry);
+  return out;
+}
+
+absl::Status SessionRegistry::Delete(absl::string_view camera_id) {
+  std::shared_ptr<const Session> doomed;  // destroyed outside the lock
+  std::lock_guard<std::mutex> lock(mu_);
+  auto it = sessions_.find(camera_id);
+  if (it == sessions_.end()) return SessionNotFound(camera_id);
+  doomed = std::move(it->second.session);
+  sessions_.erase(it);
+  NotifySizeLocked();
+  return absl::OkStatus();
+}
+
+size_t SessionRegistry::EvictIdle() {
+  if (options_.ttl == absl::InfiniteDuration()) return 0;
+  std::vector<std::shared_ptr<const Session>> doomed;  // destroyed outside the lock
+  std::lock_guard<std::mutex> lock(mu_);
+  const absl::Time cutoff = options_.clock() - options_.ttl;
+  for (auto it = sessions_.begin(); it != sessions_.end();) {
+    if (it->second.last_used <= cutoff) {
+      doomed.push_back(std::move(it->second.session));
+      it = sessions_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  if (!doomed.empty()) NotifySizeLocked();
+  return doomed.size();
+}
+
+size_t SessionRegistry::size() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return sessions_.size();
+}
+
+void SessionRegistry::NotifySizeLocked() {
+  if (options_.on_size_change) options_.on_size_change(sessions_.size());
+}
+
+}  // namespace lane::server

@@ -1,0 +1,91 @@
+// camera id -> session. Thread-safe.
+//
+// Sessions are shared_ptr<const Session>: a frame holds the snapshot it
+// started with, so replacing or deleting a session never disturbs frames in
+// flight. Detectors are built outside the registry's lock.
+#ifndef LANE_SERVER_SESSION_REGISTRY_H_
+#define LANE_SERVER_SESSION_REGISTRY_H_
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+#include "absl/time/time.h"
+#include "session.h"
+
+namespace lane::server {
+
+class SessionRegistry {
+ public:
+  struct Options {
+    // CreateSession beyond this many sessions is RESOURCE_EXHAUSTED.
+    size_t max_sessions = 64;
+    // Sessions unused for this long are evicted by EvictIdle();
+    // absl::InfiniteDuration() = never.
+    absl::Duration ttl = absl::Hours(1);
+    // Resolves StreamPolicy::max_inflight_frames == 0.
+    uint32_t default_max_inflight_frames = 8;
+    // Cameras whose frames are larger than this are refused.
+    int64_t max_frame_pixels = int64_t{3840} * 2160;
+    // Time source (tests inject a fake clock).
+    std::function<absl::Time()> clock = [] { return absl::Now(); };
+    // Called with the number of sessions after every change, under the
+    // registry's lock: keep it cheap (a gauge's Set) and never call back.
+    std::function<void(size_t)> on_size_change;
+  };
+
+  enum class Outcome { kCreated, kUnchanged, kReplaced };
+  struct CreateResult {
+    std::shared_ptr<const Session> session;
+    Outcome outcome = Outcome::kCreated;
+  };
+
+  struct Entry {
+    std::shared_ptr<const Session> session;
+    absl::Time last_used;
+  };
+
+  explicit SessionRegistry(Options options);
+
+  // Creates a session, or confirms an identical one (same config and stream
+  // policy): see CreateSession in lane_service.proto. INVALID_ARGUMENT for a
+  // bad camera id or config, ALREADY_EXISTS, RESOURCE_EXHAUSTED.
+  absl::StatusOr<CreateResult> Create(const std::string& camera_id, const SessionSpec& spec,
+                                      bool replace);
+
+  // The session of a camera, marking it used; nullptr if none.
+  std::shared_ptr<const Session> Find(absl::string_view camera_id);
+  // Like Find with its last use; NOT_FOUND if none.
+  absl::StatusOr<Entry> Get(absl::string_view camera_id);
+  // All sessions, sorted by camera id.
+  std::vector<Entry> List() const;
+  // NOT_FOUND if none.
+  absl::Status Delete(absl::string_view camera_id);
+
+  // Deletes sessions unused for the TTL. Returns how many.
+  size_t EvictIdle();
+
+  size_t size() const;
+  const Options& options() const { return options_; }
+
+  // OK or INVALID_ARGUMENT: 1 to 128 characters of [A-Za-z0-9._:/-].
+  static absl::Status ValidateCameraId(absl::string_view camera_id);
+
+ private:
+  void NotifySizeLocked();
+
+  const Options options_;
+  mutable std::mutex mu_;
+  std::map<std::string, Entry, std::less<>> sessions_;  // guarded by mu_
+  uint64_t next_version_ = 1;                           // guarded by mu_
+};
+
+}  // namespace lane::server
+
+#endif  // LANE_SERVER_SESSION_REGISTRY_H_

@@ -1,0 +1,62 @@
+// A fixed set of threads running tasks in FIFO order. The server owns one;
+// gRPC reactions hand it all CPU work (decoding, detection, building
+// detectors) so that they never block.
+#ifndef LANE_SERVER_WORKER_POOL_H_
+#define LANE_SERVER_WORKER_POOL_H_
+
+#include <condition_variable>
+#include <cstddef>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace lane::server {
+
+class WorkerPool {
+ public:
+  struct Options {
+    // Threads; 0 = one per core (std::thread::hardware_concurrency()).
+    int threads = 0;
+    // TrySubmit refuses tasks beyond this many queued ones.
+    size_t max_queued = 1024;
+  };
+
+  explicit WorkerPool(Options options);
+  // Shutdown().
+  ~WorkerPool();
+
+  WorkerPool(const WorkerPool&) = delete;
+  WorkerPool& operator=(const WorkerPool&) = delete;
+
+  // Queues a task whatever the queue's length: for callers that bound their
+  // own work (a stream's frames in flight). False only after Shutdown.
+  bool Submit(std::function<void()> task);
+  // Queues a task unless max_queued tasks are waiting or after Shutdown.
+  bool TrySubmit(std::function<void()> task);
+
+  // Refuses new tasks, runs the queued ones and joins the threads.
+  // Idempotent. Must not be called from a worker.
+  void Shutdown();
+
+  int threads() const { return num_threads_; }
+  size_t queued() const;
+
+ private:
+  bool Push(std::function<void()> task, bool bounded);
+  void Run();
+
+  const size_t max_queued_;
+  int num_threads_ = 0;
+  std::mutex shutdown_mu_;  // serialises Shutdown
+  mutable std::mutex mu_;
+  std::condition_variable cv_;
+  std::deque<std::function<void()>> queue_;  // guarded by mu_
+  bool stopping_ = false;                    // guarded by mu_
+  std::vector<std::thread> threads_;
+};
+
+}  // namespace lane::server
+
+#endif  // LANE_SERVER_WORKER_POOL_H_

@@ -1,0 +1,96 @@
+#include "convert.h"
+
+#include <gtest/gtest.h>
+
+namespace lane::server {
+namespace {
+
+TEST(ConvertTest, EmptyConfigIsTheDefaults) {
+  absl::StatusOr<lane::Config> config = ConfigFromProto(v1::SessionConfig());
+  ASSERT_TRUE(config.ok()) << config.status();
+  EXPECT_EQ(lane::ConfigToJson(*config), lane::ConfigToJson(lane::Config{}));
+}
+
+TEST(ConvertTest, ModeSelectsItsDefaultsThenFieldsOverride) {
+  v1::SessionConfig proto;
+  proto.mutable_detector()->set_mode(v1::MODE_TWO);
+  proto.mutable_detector()->mutable_spline_ransac()->set_iterations(11);
+  proto.mutable_camera()->set_pitch_deg(12.5);
+  proto.mutable_ipm()->mutable_roi()->set_top(230);
+  absl::StatusOr<lane::Config> config = ConfigFromProto(proto);
+  ASSERT_TRUE(config.ok()) << config.status();
+  const lane::DetectorOptions two = lane::DetectorOptions::ForMode(lane::Mode::kTwo);
+  EXPECT_EQ(config->detector.mode, lane::Mode::kTwo);
+  EXPECT_EQ(config->detector.threshold.quantile, two.threshold.quantile);
+  EXPECT_EQ(config->detector.spline_ransac.iterations, 11);
+  EXPECT_DOUBLE_EQ(config->camera.pitch_deg, 12.5);
+  EXPECT_DOUBLE_EQ(config->ipm.roi.top, 230);
+  EXPECT_DOUBLE_EQ(config->ipm.roi.left, lane::Roi{}.left);
+}
+
+TEST(ConvertTest, RoundTrip) {
+  lane::Config config;
+  config.detector = lane::DetectorOptions::ForMode(lane::Mode::kTwo);
+  config.detector.channel = lane::Channel::kGray;
+  config.detector.seed = 99;
+  config.detector.postprocess.extend_in_image = false;
+  config.ipm.interpolation = lane::Interpolation::kNearest;
+  config.camera.yaw_deg = 1.5;
+  v1::SessionConfig proto;
+  ConfigToProto(config, &proto);
+  absl::StatusOr<lane::Config> back = ConfigFromProto(proto);
+  ASSERT_TRUE(back.ok()) << back.status();
+  EXPECT_EQ(lane::ConfigToJson(*back), lane::ConfigToJson(config));
+}
+
+TEST(ConvertTest, JsonAlternative) {
+  v1::SessionConfig proto;
+  proto.set_config_json(R"({"camera": {"pitch_deg": 11}})");
+  absl::StatusOr<lane::Config> config = ConfigFromProto(proto);
+  ASSERT_TRUE(config.ok()) << config.status();
+  EXPECT_DOUBLE_EQ(config->camera.pitch_deg, 11);
+  proto.mutable_camera()->set_fu(1);
+  EXPECT_EQ(ConfigFromProto(proto).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+TEST(ConvertTest, RefusesUnknownEnumsAndInvalidValues) {
+  v1::SessionConfig proto;
+  proto.mutable_detector()->set_channel(static_cast<v1::Channel>(9));
+  EXPECT_EQ(ConfigFromProto(proto).status().code(), absl::StatusCode::kInvalidArgument);
+  proto = {};
+  proto.mutable_ipm()->set_interpolation(static_cast<v1::Interpolation>(9));
+  EXPECT_EQ(ConfigFromProto(proto).status().code(), absl::StatusCode::kInvalidArgument);
+  proto = {};
+  proto.mutable_camera()->set_fu(-1);
+  EXPECT_EQ(ConfigFromProto(proto).status().code(), absl::StatusCode::kInvalidArgument);
+  v1::StreamOptions stream;
+  stream.set_backpressure(static_cast<v1::Backpressure>(9));
+  EXPECT_EQ(StreamPolicyFromProto(stream).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+TEST(ConvertTest, Lanes) {
+  lane::Detection detection;
+  lane::Lane lane;
+  for (int i = 0; i < 4; ++i) {
+    lane.image[i] = {i, 10.0 * i};
+    lane.ipm[i] = {2.0 * i, 3.0};
+    lane.ground[i] = {-1.8, 5.0 * i};
+  }
+  lane.score = 4.5;
+  detection.lanes = {lane, lane};
+  detection.timings.total_ms = 3;
+  v1::FrameResponse response;
+  LanesToProto(detection, &response);
+  TimingsToProto(detection.timings, response.mutable_timings());
+  ASSERT_EQ(response.lanes_size(), 2);
+  const v1::Lane& l = response.lanes(0);
+  ASSERT_EQ(l.image().control_points_size(), 4);
+  EXPECT_DOUBLE_EQ(l.image().control_points(3).y(), 30.0);
+  EXPECT_DOUBLE_EQ(l.ipm().control_points(2).x(), 4.0);
+  EXPECT_DOUBLE_EQ(l.ground().control_points(1).y(), 5.0);
+  EXPECT_DOUBLE_EQ(l.score(), 4.5);
+  EXPECT_DOUBLE_EQ(response.timings().detect_ms(), 3);
+}
+
+}  // namespace
+}  // namespace lane::server

@@ -1,0 +1,79 @@
+#include "metrics.h"
+
+#include <gtest/gtest.h>
+
+#include "test_util.h"
+
+namespace lane::server {
+namespace {
+
+using testing::MetricValue;
+
+TEST(MetricsTest, FamiliesOnTheInjectedRegistry) {
+  prometheus::Registry registry;
+  Metrics metrics(registry, {"1.2.3", "Release", "1.51.1", "4.6.0"});
+  std::set<std::string> names;
+  for (const prometheus::MetricFamily& f : registry.Collect()) names.insert(f.name);
+  for (const char* name :
+       {"lanesvc_frame_latency_seconds", "lanesvc_stage_duration_seconds",
+        "lanesvc_queue_wait_seconds", "lanesvc_frames_total", "lanesvc_frames_received_total",
+        "lanesvc_inflight_frames", "lanesvc_sessions_active", "lanesvc_build_info"}) {
+    EXPECT_EQ(names.count(name), 1u) << name;
+  }
+  EXPECT_EQ(MetricValue(registry, "lanesvc_build_info", {{"version", "1.2.3"}}), 1);
+  // grpc_server_handled_total has a series per method and code seen.
+  metrics.CountRpc("Detect", grpc::StatusCode::OK);
+  names.clear();
+  for (const prometheus::MetricFamily& f : registry.Collect()) names.insert(f.name);
+  EXPECT_EQ(names.count("grpc_server_handled_total"), 1u);
+  // Every stage and result exists from the start (at 0).
+  for (const char* stage :
+       {"decode", "ipm", "filter", "threshold", "lines", "splines", "postprocess"}) {
+    bool found = false;
+    for (const prometheus::MetricFamily& f : registry.Collect()) {
+      if (f.name != "lanesvc_stage_duration_seconds") continue;
+      for (const auto& m : f.metric) {
+        for (const auto& l : m.label) found = found || (l.name == "stage" && l.value == stage);
+      }
+    }
+    EXPECT_TRUE(found) << stage;
+  }
+}
+
+TEST(MetricsTest, BucketsFrom50MicrosecondsToOneSecond) {
+  const auto buckets = Metrics::LatencyBuckets();
+  ASSERT_FALSE(buckets.empty());
+  EXPECT_DOUBLE_EQ(buckets.front(), 50e-6);
+  EXPECT_DOUBLE_EQ(buckets.back(), 1.0);
+  EXPECT_TRUE(std::is_sorted(buckets.begin(), buckets.end()));
+}
+
+TEST(MetricsTest, Records) {
+  prometheus::Registry registry;
+  Metrics metrics(registry, {});
+  metrics.ObserveFrameLatency(0.003);
+  metrics.ObserveFrameLatency(0.004);
+  lane::StageTimings timings;
+  timings.ipm_ms = 1;
+  metrics.ObserveDetectorStages(timings);
+  metrics.CountFrame(FrameResult::kDropped);
+  metrics.FrameReceived();
+  metrics.FrameReceived();
+  metrics.FrameAnswered();
+  metrics.SetSessions(3);
+  metrics.CountRpc("Detect", grpc::StatusCode::INVALID_ARGUMENT);
+  metrics.CountRpc("Detect", grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(MetricValue(registry, "lanesvc_frame_latency_seconds"), 2);
+  EXPECT_EQ(MetricValue(registry, "lanesvc_stage_duration_seconds", {{"stage", "ipm"}}), 1);
+  EXPECT_EQ(MetricValue(registry, "lanesvc_frames_total", {{"result", "dropped"}}), 1);
+  EXPECT_EQ(MetricValue(registry, "lanesvc_frames_total", {{"result", "ok"}}), 0);
+  EXPECT_EQ(MetricValue(registry, "lanesvc_frames_received_total"), 2);
+  EXPECT_EQ(MetricValue(registry, "lanesvc_inflight_frames"), 1);
+  EXPECT_EQ(MetricValue(registry, "lanesvc_sessions_active"), 3);
+  EXPECT_EQ(MetricValue(registry, "grpc_server_handled_total",
+                        {{"grpc_method", "Detect"}, {"grpc_code", "INVALID_ARGUMENT"}}),
+            2);
+}
+
+}  // namespace
+}  // namespace lane::server
