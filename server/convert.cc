@@ -155,6 +155,8 @@ absl::Status DetectorFromProto(const v1::DetectorOptions& p, lane::DetectorOptio
   LANE_COPY_IF_SET(pp, po, extend_min_row);
   LANE_COPY_IF_SET(pp, po, extend_max_row);
   LANE_COPY_IF_SET(pp, po, min_image_length_px);
+  LANE_COPY_IF_SET(pp, po, side_offset_m);
+  LANE_COPY_IF_SET(pp, po, min_side_contrast);
   LANE_COPY_IF_SET(pp, po, localize_in_image);
   LANE_COPY_IF_SET(pp, po, extend_in_image);
   LANE_COPY_IF_SET(pp, po, extend_in_ipm);
@@ -289,6 +291,8 @@ void ConfigToProto(const lane::Config& config, v1::SessionConfig* out) {
   LANE_SET(pp, po, extend_min_row);
   LANE_SET(pp, po, extend_max_row);
   LANE_SET(pp, po, min_image_length_px);
+  LANE_SET(pp, po, side_offset_m);
+  LANE_SET(pp, po, min_side_contrast);
   LANE_SET(pp, po, localize_in_image);
   LANE_SET(pp, po, extend_in_image);
   LANE_SET(pp, po, extend_in_ipm);

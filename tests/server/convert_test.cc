@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
+#include <nlohmann/json.hpp>
+
 namespace lane::server {
 namespace {
 
@@ -41,6 +44,38 @@ TEST(ConvertTest, RoundTrip) {
   absl::StatusOr<lane::Config> back = ConfigFromProto(proto);
   ASSERT_TRUE(back.ok()) << back.status();
   EXPECT_EQ(lane::ConfigToJson(*back), lane::ConfigToJson(config));
+}
+
+// Every key of the config file must survive the proto: perturb every number
+// and switch of a full config, then compare config -> proto -> config.
+TEST(ConvertTest, EveryConfigFieldSurvivesTheProto) {
+  nlohmann::json doc = nlohmann::json::parse(lane::ConfigToJson(lane::Config{}));
+  int leaves = 0;
+  std::function<void(nlohmann::json&)> perturb = [&](nlohmann::json& j) {
+    for (auto& [key, value] : j.items()) {
+      if (value.is_object()) {
+        perturb(value);
+      } else if (value.is_boolean()) {
+        value = !value.get<bool>();
+        ++leaves;
+      } else if (value.is_number_integer() || value.is_number_unsigned()) {
+        value = value.get<int64_t>() + 1;
+        ++leaves;
+      } else if (value.is_number_float()) {
+        value = value.get<double>() * 0.97 + 0.001;
+        ++leaves;
+      }
+    }
+  };
+  perturb(doc);
+  ASSERT_GT(leaves, 50);
+  absl::StatusOr<lane::Config> config = lane::ParseConfig(doc.dump());
+  ASSERT_TRUE(config.ok()) << config.status();
+  v1::SessionConfig proto;
+  ConfigToProto(*config, &proto);
+  absl::StatusOr<lane::Config> back = ConfigFromProto(proto);
+  ASSERT_TRUE(back.ok()) << back.status();
+  EXPECT_EQ(lane::ConfigToJson(*back), lane::ConfigToJson(*config));
 }
 
 TEST(ConvertTest, JsonAlternative) {
