@@ -11,6 +11,7 @@ namespace lane_tools {
 int RunDetect(const std::vector<std::string>& args);
 int RunRender(const std::vector<std::string>& args);
 int RunConfig(const std::vector<std::string>& args);
+int RunEval(const std::vector<std::string>& args);
 
 }  // namespace lane_tools
 

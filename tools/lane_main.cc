@@ -17,6 +17,7 @@ constexpr char kUsage[] =
     "  detect   detect lanes in images, directories, list files or videos\n"
     "  render   render synthetic road frames with ground-truth labels\n"
     "  config   print the effective configuration (every key)\n"
+    "  eval     score detections against a labelled data set (paper rule, CULane F1)\n"
     "\n"
     "Run 'lane COMMAND --help' for the options of a command.\n";
 
@@ -37,6 +38,7 @@ int main(int argc, char** argv) {
   if (command == "detect") return RunDetect(args);
   if (command == "render") return RunRender(args);
   if (command == "config") return RunConfig(args);
+  if (command == "eval") return RunEval(args);
   std::fprintf(stderr, "lane: unknown command \"%s\"\n\n%s", command.c_str(), kUsage);
   return kExitUsage;
 }

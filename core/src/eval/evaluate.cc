@@ -1,0 +1,288 @@
+#include "lane/eval/evaluate.h"
+
+#include <algorithm>
+#include <chrono>
+#include <exception>
+#include <filesystem>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
+#include "absl/strings/str_split.h"
+#include "lane/eval/ego.h"
+
+namespace lane::eval {
+namespace {
+
+std::vector<Curve> Curves(const std::vector<DetectedLane>& lanes) {
+  std::vector<Curve> out;
+  out.reserve(lanes.size());
+  for (const DetectedLane& l : lanes) out.push_back(l.curve);
+  return out;
+}
+
+// Runs `fill` on every frame, scores it, hands it to `on_frame` and counts
+// it. `fill(frame, outcome)` sets the outcome's size, lanes, error, image
+// and detection.
+template <class Fill>
+EvalReport Run(const Dataset& dataset, const EvalOptions& options, const FrameCallback& on_frame,
+               Fill fill) {
+  EvalReport report;
+  report.dataset = dataset.root;
+  report.format = dataset.format;
+  report.options = options;
+  report.warnings = dataset.warnings;
+  const int total = dataset.FrameCount();
+  int index = 0;
+  for (const Clip& clip : dataset.clips) {
+    ClipCounts counts;
+    counts.clip = clip.name;
+    for (const LabelledFrame& frame : clip.frames) {
+      FrameOutcome outcome;
+      outcome.clip = &clip;
+      outcome.frame = &frame;
+      outcome.index = index++;
+      outcome.total = total;
+      fill(frame, outcome);
+      if (!outcome.error.empty()) {
+        ++counts.failed_frames;
+        outcome.lanes.clear();
+      }
+      if (frame.labelled) {
+        outcome.score =
+            ScoreFrame(Curves(outcome.lanes), frame, outcome.width, outcome.height, options);
+        ++counts.frames;
+        counts.missing_results += outcome.missing_result ? 1 : 0;
+        counts.paper.Add(outcome.score->paper);
+        counts.culane.Add(outcome.score->culane);
+      } else {
+        ++counts.unlabelled_frames;
+      }
+      if (on_frame) on_frame(outcome);
+    }
+    report.total += counts;
+    report.clips.push_back(std::move(counts));
+  }
+  report.total.clip = "Total";
+  return report;
+}
+
+double MillisecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+// "a/b/c.jpg" -> "a/b/c.jpg", "b/c.jpg", "c.jpg".
+std::vector<std::string> Suffixes(const std::string& name) {
+  const std::vector<std::string> parts = absl::StrSplit(name, '/', absl::SkipEmpty());
+  std::vector<std::string> out;
+  for (size_t k = 0; k < parts.size(); ++k) {
+    out.push_back(absl::StrJoin(parts.begin() + k, parts.end(), "/"));
+  }
+  return out;
+}
+
+std::string NormalName(const std::string& name) {
+  std::string n = std::filesystem::path(name).lexically_normal().generic_string();
+  while (n.rfind("./", 0) == 0) n.erase(0, 2);
+  return n;
+}
+
+}  // namespace
+
+absl::Status EvalOptions::Validate() const {
+  if (absl::Status s = paper.Validate(); !s.ok()) return s;
+  return culane.Validate();
+}
+
+FrameScore ScoreFrame(const std::vector<Curve>& detections, const LabelledFrame& frame, int width,
+                      int height, const EvalOptions& options) {
+  FrameScore score;
+  if (options.mode == Mode::kTwo) {
+    std::vector<Curve> all;
+    all.reserve(frame.boundaries.size());
+    for (const LabelledBoundary& b : frame.boundaries) all.push_back(b.curve);
+    const double last_row = height - 1.0;
+    const double row = options.ego_row >= 0 ? std::min(options.ego_row, last_row) : last_row;
+    const EgoBoundaries ego = SelectEgoBoundaries(all, width / 2.0, row);
+    if (ego.left >= 0) score.scored_labels.push_back(ego.left);
+    if (ego.right >= 0) score.scored_labels.push_back(ego.right);
+  } else {
+    for (size_t i = 0; i < frame.boundaries.size(); ++i) {
+      score.scored_labels.push_back(static_cast<int>(i));
+    }
+  }
+  std::vector<Curve> labels;
+  labels.reserve(score.scored_labels.size());
+  for (int i : score.scored_labels) labels.push_back(frame.boundaries[i].curve);
+  score.paper = MatchPaperRule(detections, labels, width, options.paper);
+  score.culane = MatchCulane(detections, labels, width, height, options.culane);
+  return score;
+}
+
+absl::StatusOr<EvalReport> EvaluateDetector(const Dataset& dataset, const Detector& detector,
+                                            const EvalOptions& options,
+                                            const FrameCallback& on_frame) {
+  if (absl::Status s = options.Validate(); !s.ok()) return s;
+  const CameraModel& camera = detector.ipm().camera();
+  std::optional<Detection> detection;
+  return Run(dataset, options, on_frame, [&](const LabelledFrame& frame, FrameOutcome& outcome) {
+    outcome.width = camera.image_width;
+    outcome.height = camera.image_height;
+    detection.reset();
+    const auto start = std::chrono::steady_clock::now();
+    try {
+      outcome.image = cv::imread(frame.image_path, cv::IMREAD_COLOR);
+    } catch (const cv::Exception&) {
+      outcome.image.release();
+    }
+    outcome.decode_ms = MillisecondsSince(start);
+    if (outcome.image.empty()) {
+      outcome.error = absl::StrCat("cannot read image ", frame.image_path);
+      return;
+    }
+    if (outcome.image.cols != camera.image_width || outcome.image.rows != camera.image_height) {
+      outcome.error = absl::StrCat("frame is ", outcome.image.cols, "x", outcome.image.rows,
+                                   " but the camera expects ", camera.image_width, "x",
+                                   camera.image_height, " (camera.image_width/image_height)");
+      return;
+    }
+    try {
+      absl::StatusOr<Detection> result = detector.Detect(outcome.image);
+      if (!result.ok()) {
+        outcome.error = std::string(result.status().message());
+        return;
+      }
+      detection = std::move(*result);
+    } catch (const std::exception& e) {
+      outcome.error = absl::StrCat("detector error: ", e.what());
+      return;
+    }
+    outcome.detection = &*detection;
+    for (const Lane& lane : detection->lanes) {
+      outcome.lanes.push_back({Curve::FromBezier(lane.image), lane.score});
+    }
+  });
+}
+
+absl::StatusOr<EvalReport> EvaluateResults(const Dataset& dataset,
+                                           const std::vector<FrameResult>& results,
+                                           const EvalOptions& options,
+                                           const FrameCallback& on_frame) {
+  if (absl::Status s = options.Validate(); !s.ok()) return s;
+  if (results.empty()) return absl::InvalidArgumentError("the results file holds no frame");
+  const int total = dataset.FrameCount();
+  std::vector<const LabelledFrame*> frames;
+  for (const Clip& clip : dataset.clips) {
+    for (const LabelledFrame& f : clip.frames) frames.push_back(&f);
+  }
+  // The record of each data set frame.
+  std::map<const LabelledFrame*, const FrameResult*> record_of;
+  std::vector<std::string> unmatched;
+  const bool by_index = std::all_of(results.begin(), results.end(),
+                                    [](const FrameResult& r) { return r.index >= 0; });
+  if (by_index) {
+    for (const FrameResult& r : results) {
+      if (r.index >= total) {
+        return absl::InvalidArgumentError(absl::StrCat(
+            "results frame#", r.index, " is beyond the data set's ", total,
+            " frames (frames are numbered from 0 over all clips in order; use --clip to "
+            "score one clip)"));
+      }
+      record_of[frames[r.index]] = &r;
+    }
+  } else {
+    std::map<std::string, int> exact;
+    std::map<std::string, std::vector<int>> by_suffix;
+    for (int i = 0; i < total; ++i) {
+      exact[frames[i]->name] = i;
+      for (const std::string& s : Suffixes(frames[i]->name)) by_suffix[s].push_back(i);
+    }
+    for (const FrameResult& r : results) {
+      const std::string name = NormalName(r.frame);
+      int index = -1;
+      if (const auto it = exact.find(name); it != exact.end()) {
+        index = it->second;
+      } else if (const auto s = by_suffix.find(name); s != by_suffix.end()) {
+        if (s->second.size() > 1) {
+          return absl::InvalidArgumentError(
+              absl::StrCat("results frame \"", r.frame, "\" could be ", frames[s->second[0]]->name,
+                           " or ", frames[s->second[1]]->name,
+                           ": name frames by their path relative to the data set folder"));
+        }
+        index = s->second.front();
+      }
+      if (index < 0) {
+        unmatched.push_back(r.frame);
+        continue;
+      }
+      if (!record_of.emplace(frames[index], &r).second) {
+        return absl::InvalidArgumentError(
+            absl::StrCat("the results hold two records for frame ", frames[index]->name));
+      }
+    }
+    if (record_of.empty()) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "no results record names a frame of ", dataset.root, " (results name e.g. \"",
+          results.front().frame, "\", the data set has e.g. \"",
+          total > 0 ? frames.front()->name : std::string(), "\")"));
+    }
+  }
+
+  // Frame sizes the records do not give: the labels', the options', or the
+  // clip's first decodable image's.
+  const Clip* size_clip = nullptr;
+  cv::Size clip_size;
+  absl::StatusOr<EvalReport> report =
+      Run(dataset, options, on_frame, [&](const LabelledFrame& frame, FrameOutcome& outcome) {
+        const auto it = record_of.find(&frame);
+        const FrameResult* record = it == record_of.end() ? nullptr : it->second;
+        outcome.missing_result = record == nullptr;
+        if (record != nullptr) {
+          outcome.lanes = record->lanes;
+          outcome.error = record->error;
+          outcome.width = record->width;
+          outcome.height = record->height;
+        }
+        if (outcome.width <= 0 || outcome.height <= 0) {
+          outcome.width = frame.width;
+          outcome.height = frame.height;
+        }
+        if (outcome.width <= 0 || outcome.height <= 0) {
+          outcome.width = options.default_width;
+          outcome.height = options.default_height;
+        }
+        if (outcome.width <= 0 || outcome.height <= 0) {
+          if (size_clip != outcome.clip || clip_size.empty()) {
+            size_clip = outcome.clip;
+            clip_size = cv::Size();
+            try {
+              const cv::Mat image = cv::imread(frame.image_path, cv::IMREAD_COLOR);
+              clip_size = image.size();
+            } catch (const cv::Exception&) {
+            }
+          }
+          outcome.width = clip_size.width;
+          outcome.height = clip_size.height;
+          if (clip_size.empty() && outcome.error.empty()) {
+            outcome.error = absl::StrCat("frame size unknown: cannot read image ", frame.image_path,
+                                         " (give a config)");
+          }
+        }
+      });
+  if (report.ok() && !unmatched.empty()) {
+    report->warnings.push_back(absl::StrCat(unmatched.size(),
+                                            " results record(s) match no frame of the data set, "
+                                            "e.g. \"",
+                                            unmatched.front(), "\" (ignored)"));
+  }
+  if (report.ok() && report->total.missing_results > 0) {
+    report->warnings.push_back(absl::StrCat(report->total.missing_results,
+                                            " labelled frame(s) have no results record (scored "
+                                            "as no detections)"));
+  }
+  return report;
+}
+
+}  // namespace lane::eval

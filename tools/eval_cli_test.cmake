@@ -1,0 +1,101 @@
+# End-to-end test of `lane eval`, run by ctest as
+#   cmake -DLANE=<lane binary> -DSRC=<source dir> -DOUT=<scratch dir> -P eval_cli_test.cmake
+# Renders a few synthetic frames, evaluates the detector on them, then scores
+# the results it wrote (JSON Lines and the original .txt format) and expects
+# the same tables.
+foreach(var LANE SRC OUT)
+  if(NOT DEFINED ${var})
+    message(FATAL_ERROR "eval_cli_test.cmake needs -D${var}=...")
+  endif()
+endforeach()
+
+file(REMOVE_RECURSE "${OUT}")
+file(MAKE_DIRECTORY "${OUT}")
+set(CONFIG "${SRC}/configs/synthetic.json")
+
+macro(run expected name)
+  execute_process(COMMAND "${LANE}" ${ARGN}
+                  RESULT_VARIABLE ${name}_rc OUTPUT_VARIABLE ${name}_out
+                  ERROR_VARIABLE ${name}_err TIMEOUT 240)
+  if(NOT "${${name}_rc}" STREQUAL "${expected}")
+    message(FATAL_ERROR "lane ${ARGN}\nexit: ${${name}_rc} (expected ${expected})\n"
+                        "stdout:\n${${name}_out}\nstderr:\n${${name}_err}")
+  endif()
+endmacro()
+
+macro(expect_contains text part what)
+  string(FIND "${text}" "${part}" _pos)
+  if(_pos EQUAL -1)
+    message(FATAL_ERROR "${what}: expected to contain '${part}', got:\n${text}")
+  endif()
+endmacro()
+
+# The two "| Total | ..." rows of a table (paper rule, CULane).
+function(total_rows text out)
+  string(REGEX MATCHALL "\\| Total \\|[^\n]*" rows "${text}")
+  set(${out} "${rows}" PARENT_SCOPE)
+endfunction()
+
+# --- usage -------------------------------------------------------------------
+run(0 help eval --help)
+expect_contains("${help_out}" "--results" "lane eval --help")
+run(0 top_help --help)
+expect_contains("${top_help_out}" "eval" "lane --help")
+run(2 no_dataset eval --config "${CONFIG}")
+expect_contains("${no_dataset_err}" "no DATASET" "lane eval without a data set")
+run(2 no_source eval "${OUT}")
+expect_contains("${no_source_err}" "--config" "lane eval without --config or --results")
+run(2 bad_rule eval --config "${CONFIG}" --rule xor "${OUT}")
+run(1 missing eval --config "${CONFIG}" "${OUT}/no-such-folder")
+expect_contains("${missing_err}" "no such folder" "lane eval on a missing folder")
+run(1 not_a_dataset eval --config "${CONFIG}" "${OUT}")
+expect_contains("${not_a_dataset_err}" "cannot tell the format" "lane eval on an empty folder")
+
+# --- detector run ------------------------------------------------------------
+run(0 render render --config "${CONFIG}" --count 4 --seed 3 --num-lanes 2 --out "${OUT}/frames")
+run(0 eval eval --config "${CONFIG}" --out "${OUT}/eval" --overlays "${OUT}/eval/overlays"
+    --write-baseline "${OUT}/baseline.json" "${OUT}/frames")
+expect_contains("${eval_out}" "## Paper rule" "lane eval tables")
+expect_contains("${eval_out}" "## CULane metric" "lane eval tables")
+expect_contains("${eval_out}" "| Total | 4 |" "lane eval tables")
+expect_contains("${eval_err}" "CULane F1" "lane eval summary")
+foreach(f table.md table.json results.jsonl results.txt overlays/000000.png overlays/000003.png)
+  if(NOT EXISTS "${OUT}/eval/${f}")
+    message(FATAL_ERROR "lane eval --out/--overlays did not write ${f}")
+  endif()
+endforeach()
+file(READ "${OUT}/baseline.json" baseline)
+expect_contains("${baseline}" "\"culane_f1\"" "--write-baseline")
+expect_contains("${baseline}" "--write-baseline" "--write-baseline records its command")
+file(READ "${OUT}/eval/table.json" table_json)
+expect_contains("${table_json}" "\"correct_rate\"" "table.json")
+file(STRINGS "${OUT}/eval/results.jsonl" jsonl_lines)
+list(LENGTH jsonl_lines n)
+if(NOT n EQUAL 4)
+  message(FATAL_ERROR "results.jsonl has ${n} lines, expected 4")
+endif()
+total_rows("${eval_out}" detector_rows)
+
+# --- scoring the written results gives the same tables ---------------------
+run(0 jsonl eval --results "${OUT}/eval/results.jsonl" "${OUT}/frames")
+total_rows("${jsonl_out}" jsonl_rows)
+if(NOT "${jsonl_rows}" STREQUAL "${detector_rows}")
+  message(FATAL_ERROR "scoring results.jsonl gave\n${jsonl_rows}\ninstead of\n${detector_rows}")
+endif()
+run(0 txt eval --results "${OUT}/eval/results.txt" --config "${CONFIG}" "${OUT}/frames")
+total_rows("${txt_out}" txt_rows)
+if(NOT "${txt_rows}" STREQUAL "${detector_rows}")
+  message(FATAL_ERROR "scoring results.txt gave\n${txt_rows}\ninstead of\n${detector_rows}")
+endif()
+run(2 seed_with_results eval --results "${OUT}/eval/results.txt" --seed 3 "${OUT}/frames")
+
+# --- 2-lanes mode and the original counting ----------------------------------
+run(0 two eval --config "${CONFIG}" --mode two --count many-to-one --rule or "${OUT}/frames")
+expect_contains("${two_out}" "mode two" "lane eval --mode two")
+expect_contains("${two_out}" "ego lane" "lane eval --mode two")
+expect_contains("${two_out}" "many-to-one" "lane eval --count many-to-one")
+
+# --- a broken results file names the file and line -------------------------
+file(WRITE "${OUT}/broken.jsonl" "{\"schema\":1,\"frame\":\"000000.png\",\"lanes\":[]}\nnot json\n")
+run(1 broken eval --results "${OUT}/broken.jsonl" "${OUT}/frames")
+expect_contains("${broken_err}" "broken.jsonl:2: not a JSON object" "a malformed results file")
