@@ -4,21 +4,12 @@
 
 #include <cmath>
 
+#include "test_cameras.h"
+
 namespace lane {
 namespace {
 
-CameraModel CulaneCamera() {
-  CameraModel c;
-  c.fu = c.fv = 1000;
-  c.cu = 820;
-  c.cv = 295;
-  c.pitch_deg = -4.858;
-  c.yaw_deg = 3.706;
-  c.height_m = 1.3;
-  c.image_width = 1640;
-  c.image_height = 590;
-  return c;
-}
+using ::lane::testing::CulaneCamera;
 
 TEST(CameraTest, RoundTripImageGroundImage) {
   for (const CameraModel& cam : {CameraModel{}, CulaneCamera()}) {

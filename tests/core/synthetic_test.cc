@@ -12,6 +12,7 @@
 
 #include "lane/bezier.h"
 #include "lane/camera.h"
+#include "test_cameras.h"
 
 namespace {
 
@@ -23,19 +24,7 @@ using lane::SyntheticOptions;
 
 CameraModel CaltechCamera() { return CameraModel{}; }
 
-CameraModel CulaneCamera() {
-  CameraModel c;
-  c.fu = 1000;
-  c.fv = 1000;
-  c.cu = 820;
-  c.cv = 295;
-  c.pitch_deg = -4.858;
-  c.yaw_deg = 3.706;
-  c.height_m = 1.3;
-  c.image_width = 1640;
-  c.image_height = 590;
-  return c;
-}
+using ::lane::testing::CulaneCamera;
 
 SyntheticFrame Render(const CameraModel& cam, const SyntheticOptions& opt, uint64_t seed) {
   auto frame = RenderSyntheticFrame(cam, opt, seed);
