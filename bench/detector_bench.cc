@@ -13,12 +13,11 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "lane/detector.h"
 #include "lane/synthetic.h"
@@ -32,10 +31,10 @@ using lane::Detector;
 struct FrameSet {
   CameraModel camera;
   lane::IpmOptions ipm;
-  std::vector<cv::Mat> frames;              // decoded BGR, 640x480
-  std::vector<std::vector<uchar>> jpegs;    // the same frames as JPEG
+  std::vector<cv::Mat> frames;            // decoded BGR, 640x480
+  std::vector<std::vector<uchar>> jpegs;  // the same frames as JPEG
   std::unique_ptr<Detector> detector;
-  std::vector<lane::Intermediates> inter;   // per-frame intermediates
+  std::vector<lane::Intermediates> inter;  // per-frame intermediates
 };
 
 std::string DataDir() {
@@ -43,7 +42,8 @@ std::string DataDir() {
                         "/work/shared/data/culane-driver161-a"}) {
     if (fs::is_directory(p)) return p;
   }
-  if (const char* env = std::getenv("LANE_DATA_DIR")) return std::string(env) + "/culane-driver161-a";
+  if (const char* env = std::getenv("LANE_DATA_DIR"))
+    return std::string(env) + "/culane-driver161-a";
   return "";
 }
 
@@ -119,7 +119,9 @@ bool Skip(benchmark::State& state, FrameSet* set) {
   return true;
 }
 
-void SetLabel(benchmark::State& state) { state.SetLabel(state.range(0) == 0 ? "synthetic" : "culane"); }
+void SetLabel(benchmark::State& state) {
+  state.SetLabel(state.range(0) == 0 ? "synthetic" : "culane");
+}
 
 void BM_Detect(benchmark::State& state) {
   FrameSet* set = Get(state);
@@ -230,9 +232,8 @@ void BM_StageSplines(benchmark::State& state) {
   for (auto _ : state) {
     const auto& in = set->inter[i++ % set->inter.size()];
     for (const auto& line : in.lines) {
-      auto fit = lane::FitSplineAroundLine(in.thresholded, line,
-                                           o.spline_ransac.window_half_width_m / mpp,
-                                           o.spline_ransac, rng);
+      auto fit = lane::FitSplineAroundLine(
+          in.thresholded, line, o.spline_ransac.window_half_width_m / mpp, o.spline_ransac, rng);
       benchmark::DoNotOptimize(fit);
     }
   }

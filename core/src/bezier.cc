@@ -102,9 +102,9 @@ std::optional<Bezier> FitBezier(const std::vector<Eigen::Vector2d>& pts) {
     Eigen::Matrix4d inv;
     bool invertible = false;
     a.computeInverseWithCheck(inv, invertible, 1e-12);
-    cp = invertible ? Eigen::Matrix<double, 4, 2>(inv * q)
-                    : Eigen::Matrix<double, 4, 2>(
-                          a.completeOrthogonalDecomposition().pseudoInverse() * q);
+    cp = invertible
+             ? Eigen::Matrix<double, 4, 2>(inv * q)
+             : Eigen::Matrix<double, 4, 2>(a.completeOrthogonalDecomposition().pseudoInverse() * q);
   } else {
     // Through the 4x4 normal matrix: pinv(A) Q = pinv(A^T A) A^T Q, which
     // keeps every matrix fixed-size.

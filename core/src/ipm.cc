@@ -132,8 +132,8 @@ cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel) const {
     if (src_x_[i] < 0) continue;
     const uint8_t* p = base + src_y_[i] * step + src_x_[i] * cn;
     const auto& w = weights_[i];
-    const float v = (w[0] * p[0] + w[1] * p[cn] + w[2] * p[step] + w[3] * p[step + cn]) *
-                    (1.f / 255.f);
+    const float v =
+        (w[0] * p[0] + w[1] * p[cn] + w[2] * p[step] + w[3] * p[step + cn]) * (1.f / 255.f);
     dst[i] = v;
     sum += v;
   }

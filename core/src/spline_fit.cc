@@ -145,8 +145,8 @@ absl::Status SplineRansacOptions::Validate() const {
 
 double SplineScore(const Bezier& spline, const cv::Mat& image, const SplineRansacOptions& options,
                    const std::pair<const IpmLine*, double>& window) {
-  return ScoreOnRaster(spline, WindowedRaster(image, window.first, window.second, options.jitter_px),
-                       options);
+  return ScoreOnRaster(
+      spline, WindowedRaster(image, window.first, window.second, options.jitter_px), options);
 }
 
 std::optional<SplineFit> FitSplineAroundLine(const cv::Mat& thresholded, const IpmLine& line,

@@ -144,7 +144,8 @@ TEST(SplineScoreTest, MatchesABruteForceRasterOfTheWindow) {
     if (x == lx && y == ly) continue;
     lx = x, ly = y;
     for (int xx = x - o.jitter_px; xx <= x + o.jitter_px; ++xx) {
-      if (xx >= 0 && xx < img.cols && std::abs(xx - line.XAt(y)) <= half) raw += img.at<float>(y, xx);
+      if (xx >= 0 && xx < img.cols && std::abs(xx - line.XAt(y)) <= half)
+        raw += img.at<float>(y, xx);
     }
   }
   const double length = s.Length(201);

@@ -5,11 +5,10 @@
 #ifndef LANE_IPM_H_
 #define LANE_IPM_H_
 
-#include <array>
-#include <vector>
-
 #include <Eigen/Core>
+#include <array>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "lane/camera.h"
