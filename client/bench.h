@@ -1,0 +1,136 @@
+// The load generator of `lane-client bench`: N camera streams against the
+// service, each with its own session, and the in-process reference (the same
+// decode and detect without gRPC).
+//
+// Every frame is timed on its own: its send time is recorded under its
+// frame_id and its response is matched by frame_id. In open loop the send
+// times follow an absolute schedule computed from the start (camera c sends
+// frame k at start + (k + c/N)/R), and latency is counted from the scheduled
+// time, so a server that slows the sender down (HTTP/2 flow control,
+// backpressure) shows up in the latency instead of hiding it.
+#ifndef LANE_CLIENT_BENCH_H_
+#define LANE_CLIENT_BENCH_H_
+
+#include <grpcpp/grpcpp.h>
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "absl/time/time.h"
+#include "lane/config.h"
+#include "lane/v1/lane_service.pb.h"
+
+namespace lane_client {
+
+// One frame of the benchmark, prepared once.
+struct BenchFrame {
+  std::string name;
+  // The frame as a request: only its image (`encoded` or `raw`).
+  lane::v1::FrameRequest request;
+  // `request` serialized. A message on the wire is a small header (camera id,
+  // frame id, capture time) followed by these bytes, which are never copied
+  // by the client.
+  std::string image_part;
+};
+
+// Synthetic 640x480 road frames (or the camera's size), rendered with
+// lane::RenderSyntheticFrame through `camera`, seeds 1..count, JPEG-encoded
+// at `jpeg_quality` with cv::imencode, or raw BGR8 when `raw`.
+absl::StatusOr<std::vector<BenchFrame>> SyntheticBenchFrames(const lane::CameraModel& camera,
+                                                             int count, bool raw, int jpeg_quality);
+// The frames of INPUT arguments (as `stream` reads them), at most `max_frames`.
+absl::StatusOr<std::vector<BenchFrame>> LoadBenchFrames(const std::vector<std::string>& inputs,
+                                                        bool raw, int max_frames);
+
+struct LatencySummary {
+  uint64_t count = 0;
+  double p50 = 0, p90 = 0, p99 = 0, p999 = 0, max = 0, mean = 0;  // milliseconds
+};
+// Nearest-rank percentiles of `values` (sorted in place).
+LatencySummary Summarize(std::vector<double>& values);
+
+struct Progress {
+  const char* phase = "";  // "warm-up", "run", "drain"
+  double elapsed_s = 0;
+  double total_s = 0;
+  uint64_t ok = 0;      // measured frames answered OK so far
+  uint64_t errors = 0;  // measured frames failed or dropped so far
+  double fps = 0;       // OK responses per second over the last interval
+  double mean_ms = 0;   // their mean latency
+};
+using ProgressFn = std::function<void(const Progress&)>;
+
+struct LoadSpec {
+  // Cameras are spread over the channels: camera i uses channels[i % size].
+  std::vector<std::shared_ptr<grpc::Channel>> channels;
+  std::vector<std::string> channel_targets;  // the target of each channel
+  int cameras = 1;
+  std::string camera_prefix = "bench-";  // camera i is camera_prefix + i
+  lane::v1::SessionConfig session;
+  bool replace = false;
+  bool open_loop = false;
+  int inflight = 1;  // closed loop: frames in flight per camera
+  double fps = 0;    // open loop: frames per second per camera
+  absl::Duration warmup = absl::Seconds(2);
+  absl::Duration duration = absl::Seconds(10);
+  // After the run, how long the answers of the frames sent are waited for.
+  absl::Duration drain_timeout = absl::Seconds(10);
+  const std::vector<BenchFrame>* frames = nullptr;
+  ProgressFn progress;  // about every 0.5 s, from the calling thread
+};
+
+struct LoadResult {
+  int cameras = 0;
+  bool open_loop = false;
+  double target_fps = 0;  // open loop: cameras x fps; closed loop: 0
+  // OK answers of measured frames per second, over the time from the start
+  // of the measurement to the last of those answers.
+  double achieved_fps = 0;
+  double measured_s = 0;
+  // Measured frames: those due (open loop) or sent (closed loop) after the
+  // warm-up and before the end. frames_ok = frames_sent - errors_total - dropped.
+  uint64_t frames_scheduled = 0;
+  uint64_t frames_sent = 0;
+  uint64_t frames_ok = 0;
+  uint64_t dropped = 0;                    // answered FRAME_CODE_DROPPED (server backpressure)
+  uint64_t errors_total = 0;               // answered with an error, or lost with their stream
+  uint64_t unsent = 0;                     // due but not sent: no stream at the time
+  std::map<std::string, uint64_t> errors;  // by code: frame codes and gRPC codes
+  LatencySummary latency_ms;               // client: due/sent -> response received (OK frames)
+  LatencySummary server_ms;                // server: received -> response ready (OK frames)
+  double max_send_lag_ms = 0;              // open loop: the latest a frame was handed to gRPC
+  uint64_t stream_failures = 0;
+  std::map<std::string, uint64_t> ok_by_target;
+};
+
+// Creates (or confirms) the sessions, runs the load, waits for the answers.
+// An error only when the sessions cannot be created.
+absl::StatusOr<LoadResult> RunLoad(const LoadSpec& spec);
+
+// Deletes the sessions camera_prefix + 0 .. cameras-1, each through its
+// camera's channel. Best effort.
+void DeleteSessions(const LoadSpec& spec, int cameras);
+
+struct InprocessResult {
+  int workers = 0;
+  double fps = 0;
+  uint64_t frames = 0;
+  LatencySummary latency_ms;  // decode + detect of one frame
+};
+
+// The service's work without gRPC: `workers` threads decode (the server's
+// lane::server::DecodeFrame) and detect the same frames with a detector built
+// from `session`, for warm-up + duration.
+absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& frames,
+                                             const lane::v1::SessionConfig& session, int workers,
+                                             absl::Duration warmup, absl::Duration duration,
+                                             const ProgressFn& progress);
+
+}  // namespace lane_client
+
+#endif  // LANE_CLIENT_BENCH_H_

@@ -1,0 +1,276 @@
+#include "frames.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <opencv2/core/utils/logger.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <system_error>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "inputs.h"
+
+namespace lane_client {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kMaxListDepth = 8;
+
+std::string Where(const std::string& path, const std::string& name) {
+  return path == name ? std::string() : absl::StrCat(" (", path, ")");
+}
+
+bool ReadFile(const std::string& path, std::string* bytes) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  if (in.bad()) return false;
+  *bytes = std::move(buffer).str();
+  return true;
+}
+
+}  // namespace
+
+std::string MakeStem(const std::string& name) {
+  std::string stem = name;
+  const size_t slash = stem.find_last_of('/');
+  const size_t dot = stem.find_last_of('.');
+  const size_t hash = stem.find_last_of('#');
+  // The extension of the last path component (for "video.mp4#000012", of the
+  // video's name).
+  if (dot != std::string::npos && dot > 0 && (slash == std::string::npos || dot > slash)) {
+    if (hash != std::string::npos && hash > dot) {
+      stem.erase(dot, hash - dot);
+    } else {
+      stem.resize(dot);
+    }
+  }
+  for (char& c : stem) {
+    if (c == '/' || c == '\\' || c == '#' || c == ':' || c == ' ') c = '_';
+  }
+  const size_t first = stem.find_first_not_of("._");
+  stem = first == std::string::npos ? std::string() : stem.substr(first);
+  return stem.empty() ? std::string("frame") : stem;
+}
+
+bool IsJpegOrPng(const std::string& bytes) {
+  static constexpr unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  const auto* p = reinterpret_cast<const unsigned char*>(bytes.data());
+  if (bytes.size() >= 3 && p[0] == 0xFF && p[1] == 0xD8 && p[2] == 0xFF) return true;
+  return bytes.size() >= 8 && std::equal(kPng, kPng + 8, p);
+}
+
+FrameSource::FrameSource(const std::vector<std::string>& inputs, bool raw) : raw_(raw) {
+  for (const std::string& input : inputs) Expand(input, input, /*top_level=*/true, 0);
+}
+
+FrameSource::~FrameSource() = default;
+
+void FrameSource::Expand(const std::string& path, const std::string& name, bool top_level,
+                         int depth) {
+  const std::string file_name = fs::path(path).filename().string();
+  const std::string reported = top_level && !file_name.empty() ? file_name : name;
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec || !fs::exists(status)) {
+    entries_.push_back({Entry::kError, path, reported,
+                        absl::StrCat("no such file or directory", Where(path, reported))});
+    return;
+  }
+  if (fs::is_directory(status)) {
+    std::vector<std::string> files;
+    for (fs::directory_iterator it(path, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string file = it->path().filename().string();
+      if (lane_tools::IsImageExtension(lane_tools::LowerExtension(file)) &&
+          !fs::is_directory(it->path())) {
+        files.push_back(file);
+      }
+    }
+    if (ec) {
+      entries_.push_back(
+          {Entry::kError, path, name,
+           absl::StrCat("cannot list directory", Where(path, name), ": ", ec.message())});
+      return;
+    }
+    if (files.empty())
+      std::fprintf(stderr, "warning: no .jpg/.jpeg/.png files in %s\n", path.c_str());
+    std::sort(files.begin(), files.end());
+    for (const std::string& file : files) {
+      std::string entry_name = file;
+      if (!top_level) {
+        entry_name = absl::StrCat(name, name.empty() || name.back() == '/' ? "" : "/", file);
+      }
+      entries_.push_back({Entry::kImage, (fs::path(path) / file).string(), entry_name, ""});
+    }
+    return;
+  }
+  const std::string ext = lane_tools::LowerExtension(path);
+  if (ext == ".txt") {
+    if (depth >= kMaxListDepth) {
+      entries_.push_back(
+          {Entry::kError, path, name, absl::StrCat("lists nested too deeply", Where(path, name))});
+      return;
+    }
+    std::ifstream in(path);
+    if (!in) {
+      entries_.push_back(
+          {Entry::kError, path, name, absl::StrCat("cannot read list", Where(path, name))});
+      return;
+    }
+    const fs::path folder = fs::path(path).parent_path();
+    std::string line;
+    while (std::getline(in, line)) {
+      const std::string entry(absl::StripAsciiWhitespace(line));
+      if (entry.empty() || entry[0] == '#') continue;
+      const fs::path entry_path(entry);
+      Expand(entry_path.is_absolute() ? entry : (folder / entry_path).lexically_normal().string(),
+             entry, /*top_level=*/false, depth + 1);
+    }
+    return;
+  }
+  entries_.push_back(
+      {lane_tools::IsVideoExtension(ext) ? Entry::kVideo : Entry::kImage, path, reported, ""});
+}
+
+void FrameSource::ReadImage(const Entry& entry, ClientFrame* frame) const {
+  std::string bytes;
+  if (!ReadFile(entry.path, &bytes)) {
+    frame->error = absl::StrCat("cannot read file", Where(entry.path, entry.name));
+    return;
+  }
+  if (!raw_ && IsJpegOrPng(bytes)) {
+    frame->encoded = std::move(bytes);
+    return;
+  }
+  // --raw, or a format the server does not take: decode here.
+  cv::Mat decoded;
+  try {
+    decoded = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, bytes.data()),
+                           cv::IMREAD_COLOR);
+  } catch (const cv::Exception&) {
+    decoded.release();
+  }
+  if (decoded.empty()) {
+    frame->error = absl::StrCat("cannot decode image", Where(entry.path, entry.name));
+    return;
+  }
+  frame->bgr = decoded;
+}
+
+bool FrameSource::Next(ClientFrame* frame) {
+  while (next_ < entries_.size()) {
+    const Entry& entry = entries_[next_];
+    *frame = ClientFrame();
+    frame->name = entry.name;
+    frame->stem = MakeStem(entry.name);
+    switch (entry.kind) {
+      case Entry::kError:
+        frame->error = entry.error;
+        ++next_;
+        return true;
+      case Entry::kImage:
+        ReadImage(entry, frame);
+        ++next_;
+        return true;
+      case Entry::kVideo: {
+        if (!video_) {
+          video_ = std::make_unique<cv::VideoCapture>();
+          video_frame_ = 0;
+          const auto level = cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
+          const bool opened = video_->open(entry.path) && video_->isOpened();
+          cv::utils::logging::setLogLevel(level);
+          if (!opened) {
+            video_.reset();
+            frame->error = absl::StrCat("cannot open video", Where(entry.path, entry.name));
+            ++next_;
+            return true;
+          }
+        }
+        cv::Mat image;
+        if (video_->read(image) && !image.empty()) {
+          const std::string index = absl::StrFormat("%06d", video_frame_++);
+          frame->name = absl::StrCat(entry.name, "#", index);
+          frame->stem = MakeStem(frame->name);
+          if (image.channels() == 1) cv::cvtColor(image, image, cv::COLOR_GRAY2BGR);
+          frame->bgr = image;
+          return true;
+        }
+        const bool empty = video_frame_ == 0;
+        video_.reset();
+        ++next_;
+        if (empty) {
+          frame->error =
+              absl::StrCat("no frame could be decoded from video", Where(entry.path, entry.name));
+          return true;
+        }
+        continue;
+      }
+    }
+  }
+  return false;
+}
+
+void SetRawBgr(const cv::Mat& bgr, lane::v1::FrameRequest* request) {
+  lane::v1::RawImage* raw = request->mutable_raw();
+  raw->set_width(static_cast<uint32_t>(bgr.cols));
+  raw->set_height(static_cast<uint32_t>(bgr.rows));
+  raw->set_stride(0);
+  raw->set_pixel_format(lane::v1::PIXEL_FORMAT_BGR8);
+  std::string* data = raw->mutable_data();
+  const size_t row = static_cast<size_t>(bgr.cols) * 3;
+  if (bgr.isContinuous()) {
+    data->assign(reinterpret_cast<const char*>(bgr.data), row * static_cast<size_t>(bgr.rows));
+  } else {
+    data->clear();
+    data->reserve(row * static_cast<size_t>(bgr.rows));
+    for (int y = 0; y < bgr.rows; ++y) data->append(bgr.ptr<char>(y), row);
+  }
+}
+
+void SetRequestImage(const ClientFrame& frame, lane::v1::FrameRequest* request) {
+  if (!frame.encoded.empty()) {
+    request->set_encoded(frame.encoded);
+  } else {
+    SetRawBgr(frame.bgr, request);
+  }
+}
+
+cv::Mat DecodeRequestImage(const lane::v1::FrameRequest& request) {
+  try {
+    if (request.has_raw()) {
+      const lane::v1::RawImage& raw = request.raw();
+      const int channels = raw.pixel_format() == lane::v1::PIXEL_FORMAT_GRAY8 ? 1 : 3;
+      const size_t stride = raw.stride() != 0 ? raw.stride() : size_t{raw.width()} * channels;
+      if (raw.width() == 0 || raw.height() == 0 ||
+          raw.data().size() < stride * (raw.height() - 1) + size_t{raw.width()} * channels) {
+        return cv::Mat();
+      }
+      cv::Mat view(static_cast<int>(raw.height()), static_cast<int>(raw.width()),
+                   channels == 1 ? CV_8UC1 : CV_8UC3, const_cast<char*>(raw.data().data()), stride);
+      cv::Mat out;
+      if (raw.pixel_format() == lane::v1::PIXEL_FORMAT_RGB8) {
+        cv::cvtColor(view, out, cv::COLOR_RGB2BGR);
+      } else {
+        out = view.clone();
+      }
+      return out;
+    }
+    const std::string& bytes = request.encoded();
+    if (bytes.empty()) return cv::Mat();
+    return cv::imdecode(
+        cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data())),
+        cv::IMREAD_COLOR);
+  } catch (const cv::Exception&) {
+    return cv::Mat();
+  }
+}
+
+}  // namespace lane_client

@@ -1,0 +1,308 @@
+#include "streamer.h"
+
+#include <algorithm>
+#include <random>
+#include <thread>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "common.h"
+
+namespace lane_client {
+namespace {
+
+namespace v1 = lane::v1;
+
+double MillisecondsBetween(std::chrono::steady_clock::time_point a,
+                           std::chrono::steady_clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+}  // namespace
+
+bool IsTransient(grpc::StatusCode code) {
+  switch (code) {
+    case grpc::StatusCode::UNAVAILABLE:          // server starting, draining, unreachable
+    case grpc::StatusCode::DEADLINE_EXCEEDED:    // a unary call timed out
+    case grpc::StatusCode::CANCELLED:            // the server went away, or a stall
+    case grpc::StatusCode::ABORTED:              //
+    case grpc::StatusCode::INTERNAL:             // a broken HTTP/2 stream
+    case grpc::StatusCode::UNKNOWN:              //
+    case grpc::StatusCode::RESOURCE_EXHAUSTED:   // full worker queue or session table
+    case grpc::StatusCode::FAILED_PRECONDITION:  // the session is gone: re-created
+      return true;
+    default:
+      return false;
+  }
+}
+
+Streamer::Streamer(std::shared_ptr<grpc::Channel> channel, StreamerOptions options, Logger log)
+    : stub_(v1::LaneService::NewStub(std::move(channel))),
+      options_(std::move(options)),
+      log_(std::move(log)),
+      config_(options_.session),
+      next_frame_id_(options_.first_frame_id) {}
+
+void Streamer::Log(const std::string& message) const {
+  if (log_) log_(message);
+}
+
+grpc::Status Streamer::PrepareSession(bool first_connection) {
+  if (!config_) {
+    grpc::ClientContext context;
+    SetDeadline(&context, options_.call_timeout);
+    v1::GetSessionRequest request;
+    request.set_camera_id(options_.camera_id);
+    v1::Session session;
+    const grpc::Status status = stub_->GetSession(&context, request, &session);
+    if (status.error_code() == grpc::StatusCode::NOT_FOUND) {
+      return grpc::Status(grpc::StatusCode::NOT_FOUND,
+                          absl::StrCat("the server has no session for camera '", options_.camera_id,
+                                       "'; give --config to create it"));
+    }
+    if (!status.ok()) return status;
+    // The resolved config: re-creating it after a restart gives the same session.
+    config_ = session.config();
+    session_ = std::move(session);
+  }
+  grpc::ClientContext context;
+  SetDeadline(&context, options_.call_timeout);
+  v1::CreateSessionRequest request;
+  request.set_camera_id(options_.camera_id);
+  *request.mutable_config() = *config_;
+  request.set_replace(options_.replace && first_connection);
+  v1::CreateSessionResponse response;
+  const grpc::Status status = stub_->CreateSession(&context, request, &response);
+  if (!status.ok()) return status;
+  if (!first_connection && response.outcome() != v1::CREATE_OUTCOME_UNCHANGED) {
+    Log(absl::StrCat("session of camera '", options_.camera_id, "' re-created (version ",
+                     response.session().version(), ")"));
+  }
+  session_ = response.session();
+  return grpc::Status::OK;
+}
+
+absl::Status Streamer::Run(const Source& source, const Sink& sink) {
+  std::mt19937_64 rng(std::random_device{}());
+  absl::Duration backoff = options_.initial_backoff;
+  auto last_progress = Clock::now();
+  bool first_connection = true;
+  while (true) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (source_done_ && pending_.empty()) return absl::OkStatus();
+    }
+    bool progress = false;
+    grpc::Status status = PrepareSession(first_connection);
+    if (status.ok()) {
+      first_connection = false;
+      status = RunAttempt(source, sink, &progress);
+    }
+    EmitLocalErrors(sink);
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (status.ok() && source_done_ && pending_.empty()) return absl::OkStatus();
+    }
+    if (status.ok()) {
+      status = grpc::Status(grpc::StatusCode::UNKNOWN, "the stream ended with frames unanswered");
+    }
+    if (progress) {
+      backoff = options_.initial_backoff;
+      last_progress = Clock::now();
+    }
+    const std::string why = StatusText(status);
+    if (!IsTransient(status.error_code())) {
+      return absl::Status(static_cast<absl::StatusCode>(status.error_code()), why);
+    }
+    if (Clock::now() - last_progress > absl::ToChronoNanoseconds(options_.give_up_after)) {
+      return absl::UnavailableError(absl::StrCat("no frame answered for ",
+                                                 absl::FormatDuration(options_.give_up_after),
+                                                 "; last error: ", why));
+    }
+    stats_.failures.push_back(why);
+    size_t unanswered = 0;
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      unanswered = unanswered_;
+    }
+    std::uniform_real_distribution<double> jitter(0.8, 1.2);
+    const absl::Duration wait = backoff * jitter(rng);
+    Log(absl::StrCat(why, "; reconnecting in ",
+                     absl::FormatDuration(absl::Trunc(wait, absl::Milliseconds(1))), " (",
+                     unanswered, " frames to resend)"));
+    std::this_thread::sleep_for(absl::ToChronoNanoseconds(wait));
+    backoff = std::min(backoff * 2, options_.max_backoff);
+  }
+}
+
+void Streamer::EmitLocalErrors(const Sink& sink) {
+  std::vector<std::shared_ptr<StreamItem>> ready;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    while (!pending_.empty() && pending_.front()->request == nullptr) {
+      ready.push_back(std::move(pending_.front()));
+      pending_.pop_front();
+      if (passed_ > 0) --passed_;
+    }
+  }
+  for (const auto& item : ready) {
+    sink(*item, nullptr, 0.0);
+    ++stats_.frames;
+  }
+}
+
+grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* progress) {
+  grpc::ClientContext context;
+  std::unique_ptr<Stream> stream = stub_->StreamFrames(&context);
+  ++stats_.connections;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    passed_ = 0;
+    written_ = 0;
+    attempt_over_ = false;
+    writer_done_ = false;
+    stalled_ = false;
+    last_activity_ = Clock::now();
+  }
+  std::thread writer([this, &stream, &source] { WriterLoop(stream.get(), source); });
+  std::thread watchdog([this, &context] { WatchdogLoop(&context); });
+
+  std::string protocol_error;
+  v1::FrameResponse response;
+  while (stream->Read(&response)) {
+    const auto now = Clock::now();
+    std::vector<std::shared_ptr<StreamItem>> ready;
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      while (!pending_.empty() && pending_.front()->request == nullptr && passed_ > 0) {
+        ready.push_back(std::move(pending_.front()));
+        pending_.pop_front();
+        --passed_;
+      }
+      if (pending_.empty() || passed_ == 0 || written_ == 0 ||
+          pending_.front()->frame_id != response.frame_id()) {
+        protocol_error = absl::StrCat(
+            "response for frame_id ", response.frame_id(), " but the oldest unanswered frame is ",
+            pending_.empty() ? std::string("none") : absl::StrCat(pending_.front()->frame_id));
+      } else {
+        ready.push_back(std::move(pending_.front()));
+        pending_.pop_front();
+        --passed_;
+        --unanswered_;
+        --written_;
+        last_activity_ = now;
+      }
+    }
+    cv_.notify_all();
+    if (!protocol_error.empty()) break;
+    for (size_t i = 0; i < ready.size(); ++i) {
+      const StreamItem& item = *ready[i];
+      if (i + 1 < ready.size()) {
+        sink(item, nullptr, 0.0);
+      } else {
+        sink(item, &response, MillisecondsBetween(item.last_sent, now));
+        *progress = true;
+      }
+      ++stats_.frames;
+    }
+  }
+  bool writer_running = false;
+  {
+    std::unique_lock<std::mutex> lock(mu_);
+    attempt_over_ = true;
+    cv_.notify_all();
+    // The call is over, so a Write in progress fails by itself. Cancelling
+    // would replace the server's status (UNAVAILABLE) with CANCELLED: only
+    // when the writer does not return.
+    writer_running = !cv_.wait_for(lock, std::chrono::seconds(2), [this] { return writer_done_; });
+  }
+  if (writer_running || !protocol_error.empty()) context.TryCancel();
+  writer.join();
+  watchdog.join();
+  grpc::Status status = stream->Finish();
+  if (!protocol_error.empty()) return grpc::Status(grpc::StatusCode::INTERNAL, protocol_error);
+  bool stalled = false;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    stalled = stalled_;
+  }
+  if (stalled) {
+    status =
+        grpc::Status(grpc::StatusCode::CANCELLED,
+                     absl::StrCat("no response for ", absl::FormatDuration(options_.stall_timeout),
+                                  " with frames in flight"));
+  }
+  return status;
+}
+
+void Streamer::WriterLoop(Stream* stream, const Source& source) {
+  std::unique_lock<std::mutex> lock(mu_);
+  bool first_write = true;
+  while (!attempt_over_) {
+    if (passed_ < pending_.size()) {
+      std::shared_ptr<StreamItem> item = pending_[passed_];
+      ++passed_;
+      if (item->request == nullptr) continue;  // not readable here: nothing to send
+      if (item->attempts > 0) ++stats_.resent;
+      ++item->attempts;
+      item->last_sent = Clock::now();
+      if (written_++ == 0) last_activity_ = item->last_sent;
+      lock.unlock();
+      bool ok;
+      if (first_write && config_) {
+        // The first request carries the session config too, so the stream is
+        // self-sufficient behind a load balancer.
+        v1::FrameRequest request = *item->request;
+        *request.mutable_session_config() = *config_;
+        ok = stream->Write(request);
+      } else {
+        ok = stream->Write(*item->request);
+      }
+      first_write = false;
+      lock.lock();
+      if (!ok) break;  // the call is over; the reader learns why
+      continue;
+    }
+    if (!source_done_ && unanswered_ < options_.window) {
+      auto item = std::make_shared<StreamItem>();
+      item->frame_id = next_frame_id_;
+      lock.unlock();
+      const bool got = source(item.get());
+      lock.lock();
+      if (!got) {
+        source_done_ = true;
+      } else {
+        ++next_frame_id_;
+        if (item->request != nullptr) ++unanswered_;
+        pending_.push_back(std::move(item));
+      }
+      continue;
+    }
+    if (source_done_) {
+      lock.unlock();
+      stream->WritesDone();
+      lock.lock();
+      break;
+    }
+    cv_.wait(lock);
+  }
+  writer_done_ = true;
+  lock.unlock();
+  cv_.notify_all();
+}
+
+void Streamer::WatchdogLoop(grpc::ClientContext* context) {
+  const auto timeout = absl::ToChronoNanoseconds(options_.stall_timeout);
+  std::unique_lock<std::mutex> lock(mu_);
+  while (!attempt_over_) {
+    cv_.wait_for(lock, std::min<Clock::duration>(timeout, std::chrono::milliseconds(250)));
+    if (!attempt_over_ && written_ > 0 && Clock::now() - last_activity_ > timeout) {
+      stalled_ = true;
+      lock.unlock();
+      context->TryCancel();
+      return;
+    }
+  }
+}
+
+}  // namespace lane_client

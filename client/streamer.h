@@ -1,0 +1,138 @@
+// A stream of one camera's frames that survives server restarts: every frame
+// is answered exactly once, in order.
+//
+// Frames are read from a source as the window allows (at most `window` frames
+// unanswered), written on a StreamFrames call from a writer thread, and their
+// responses are matched to them by frame_id, in order, on the calling thread.
+// When the call fails with a transient status (UNAVAILABLE, a broken
+// connection, a stalled stream, a session gone missing), the streamer backs
+// off, re-creates the session with CreateSession (idempotent: UNCHANGED when
+// it exists), opens a new call and resends every frame that was not answered.
+// Responses already received are never asked for again, so no frame is
+// answered twice.
+#ifndef LANE_CLIENT_STREAMER_H_
+#define LANE_CLIENT_STREAMER_H_
+
+#include <grpcpp/grpcpp.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/time/time.h"
+#include "lane/v1/lane_service.grpc.pb.h"
+
+namespace lane_client {
+
+struct StreamItem {
+  uint64_t frame_id = 0;  // set by the streamer before the source fills the rest
+  std::string name;
+  std::string stem;
+  // What is sent; null when the frame could not be read (local_error).
+  std::shared_ptr<const lane::v1::FrameRequest> request;
+  std::string local_error;
+  // Sends so far, and when the last one started.
+  int attempts = 0;
+  std::chrono::steady_clock::time_point last_sent{};
+};
+
+struct StreamerOptions {
+  std::string camera_id = "default";
+  // The session to create (or confirm) on every connection. Without it the
+  // session must exist: its config is read with GetSession at the first
+  // connection and used to re-create it after a reconnection.
+  std::optional<lane::v1::SessionConfig> session;
+  // Replace a session with a different config (first connection only).
+  bool replace = false;
+  // Frames sent and not answered, at most.
+  size_t window = 8;
+  uint64_t first_frame_id = 0;
+  // Reconnection backoff: doubles from initial to max, +-20 % jitter.
+  absl::Duration initial_backoff = absl::Milliseconds(100);
+  absl::Duration max_backoff = absl::Seconds(2);
+  // Give up when no frame has been answered for this long across failures.
+  absl::Duration give_up_after = absl::Seconds(60);
+  // A call with frames in flight and no response for this long is cancelled
+  // and retried.
+  absl::Duration stall_timeout = absl::Seconds(30);
+  // Deadline of the unary calls (GetSession, CreateSession).
+  absl::Duration call_timeout = absl::Seconds(10);
+};
+
+struct StreamerStats {
+  uint64_t frames = 0;                // frames handed to the sink
+  uint64_t connections = 0;           // StreamFrames calls opened
+  uint64_t resent = 0;                // sends of a frame after its first
+  std::vector<std::string> failures;  // why calls were retried
+};
+
+class Streamer {
+ public:
+  // Fills `item` (name, stem, request with item->frame_id, or local_error);
+  // false when there are no more frames. Runs on the writer thread.
+  using Source = std::function<bool(StreamItem* item)>;
+  // Called once per frame, in frame order, on Run's thread. `response` is
+  // null for a frame with a local_error. `latency_ms`: last send to response.
+  using Sink = std::function<void(const StreamItem& item, const lane::v1::FrameResponse* response,
+                                  double latency_ms)>;
+  using Logger = std::function<void(const std::string& message)>;
+
+  Streamer(std::shared_ptr<grpc::Channel> channel, StreamerOptions options, Logger log = nullptr);
+
+  // OK when every frame of the source has been handed to the sink. Otherwise
+  // the error that stopped it (not transient, or no progress for
+  // give_up_after); frames handed to the sink before stay handed.
+  absl::Status Run(const Source& source, const Sink& sink);
+
+  const StreamerStats& stats() const { return stats_; }
+  // The session as the server last returned it (set once Run has connected).
+  const std::optional<lane::v1::Session>& session() const { return session_; }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  using Stream = grpc::ClientReaderWriter<lane::v1::FrameRequest, lane::v1::FrameResponse>;
+
+  grpc::Status PrepareSession(bool first_connection);
+  // One StreamFrames call. `progress`: some frame was answered.
+  grpc::Status RunAttempt(const Source& source, const Sink& sink, bool* progress);
+  void WriterLoop(Stream* stream, const Source& source);
+  void WatchdogLoop(grpc::ClientContext* context);
+  void EmitLocalErrors(const Sink& sink);
+  void Log(const std::string& message) const;
+
+  std::unique_ptr<lane::v1::LaneService::Stub> stub_;
+  const StreamerOptions options_;
+  const Logger log_;
+  std::optional<lane::v1::SessionConfig> config_;  // what is (re-)created
+  std::optional<lane::v1::Session> session_;
+  StreamerStats stats_;
+
+  std::mutex mu_;
+  std::condition_variable cv_;
+  // Guarded by mu_:
+  std::deque<std::shared_ptr<StreamItem>> pending_;  // not yet handed to the sink, in order
+  size_t passed_ = 0;      // items at the front of pending_ the writer has passed this call
+  size_t unanswered_ = 0;  // items of pending_ with a request
+  size_t written_ = 0;     // items written on this call and not answered
+  uint64_t next_frame_id_ = 0;
+  bool source_done_ = false;
+  bool attempt_over_ = false;
+  bool writer_done_ = false;
+  bool stalled_ = false;
+  Clock::time_point last_activity_{};
+};
+
+// Whether a failed call is worth retrying after a reconnection.
+bool IsTransient(grpc::StatusCode code);
+
+}  // namespace lane_client
+
+#endif  // LANE_CLIENT_STREAMER_H_

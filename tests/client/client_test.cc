@@ -1,0 +1,538 @@
+// lane-client against a real lane-server on a loopback port, with real JPEG
+// frames: the commands run in-process (lane_client::RunCommand) as the
+// executable would run them.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "bench.h"
+#include "commands.h"
+#include "common.h"
+#include "frames.h"
+#include "lane/config.h"
+#include "lane/synthetic.h"
+#include "server.h"
+
+namespace lane_client {
+namespace {
+
+namespace fs = std::filesystem;
+namespace v1 = lane::v1;
+using Json = nlohmann::json;
+
+const std::string kConfig = std::string(LANE_SOURCE_DIR) + "/configs/synthetic.json";
+constexpr int kFrames = 12;
+
+// A fresh directory, removed with its contents at the end.
+class TempDir {
+ public:
+  TempDir() {
+    static std::atomic<int> counter{0};
+    path_ = fs::temp_directory_path() /
+            ("lane-client-test-" + std::to_string(getpid()) + "-" + std::to_string(counter++));
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
+  std::string str() const { return path_.string(); }
+
+ private:
+  fs::path path_;
+};
+
+std::unique_ptr<lane::server::LaneServer> StartServer(
+    const std::string& address, absl::Duration shutdown_deadline = absl::Seconds(20)) {
+  lane::server::ServerOptions options;
+  options.address = address;
+  options.metrics_address = "";
+  options.workers = 2;
+  options.shutdown_deadline = shutdown_deadline;
+  options.build = lane::server::CurrentBuildInfo();
+  auto server = lane::server::LaneServer::Start(options, std::make_shared<prometheus::Registry>());
+  EXPECT_TRUE(server.ok()) << server.status();
+  return server.ok() ? *std::move(server) : nullptr;
+}
+
+std::string Target(const lane::server::LaneServer& server) {
+  return "127.0.0.1:" + std::to_string(server.port());
+}
+
+uint64_t FramesProcessed(lane::server::LaneServer& server, const std::string& camera) {
+  const auto session = server.sessions().Find(camera);
+  return session ? session->frames_processed.load() : 0;
+}
+
+std::vector<Json> ReadJsonLines(const std::string& path) {
+  std::vector<Json> out;
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) out.push_back(Json::parse(line));
+  return out;
+}
+
+Json ReadJson(const std::string& path) {
+  std::ifstream in(path);
+  return Json::parse(in);
+}
+
+template <typename F>
+bool PollUntil(F condition, double timeout_s = 30) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (!condition()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return true;
+}
+
+class ClientTest : public ::testing::Test {
+ protected:
+  // Synthetic 640x480 road frames, JPEG-encoded, rendered once.
+  static void SetUpTestSuite() {
+    frames_ = new TempDir();
+    const absl::StatusOr<lane::Config> config = lane::LoadConfigFile(kConfig);
+    ASSERT_TRUE(config.ok()) << config.status();
+    for (int i = 0; i < kFrames; ++i) {
+      absl::StatusOr<lane::SyntheticFrame> frame =
+          lane::RenderSyntheticFrame(config->camera, lane::SyntheticOptions(), 100 + i);
+      ASSERT_TRUE(frame.ok()) << frame.status();
+      char name[32];
+      std::snprintf(name, sizeof(name), "%06d.jpg", i);
+      ASSERT_TRUE(cv::imwrite(*frames_ / name, frame->bgr, {cv::IMWRITE_JPEG_QUALITY, 90}));
+      names_.push_back(name);
+    }
+  }
+  static void TearDownTestSuite() {
+    delete frames_;
+    frames_ = nullptr;
+  }
+
+  // A list file in the frames folder naming the frames `repeat` times over.
+  static std::string RepeatList(int repeat) {
+    const std::string path = *frames_ / ("repeat" + std::to_string(repeat) + ".txt");
+    std::ofstream out(path);
+    for (int r = 0; r < repeat; ++r) {
+      for (const std::string& name : names_) out << name << "\n";
+    }
+    return path;
+  }
+
+  static TempDir* frames_;
+  static std::vector<std::string> names_;
+};
+
+TempDir* ClientTest::frames_ = nullptr;
+std::vector<std::string> ClientTest::names_;
+
+TEST(ClientUnitTest, SplitsTargets) {
+  EXPECT_EQ(*SplitTargets("a:1"), std::vector<std::string>({"a:1"}));
+  EXPECT_EQ(*SplitTargets("a:1, b:2,c:3"), std::vector<std::string>({"a:1", "b:2", "c:3"}));
+  EXPECT_EQ(*SplitTargets("dns:///lanes.example:50051"),
+            std::vector<std::string>({"dns:///lanes.example:50051"}));
+  EXPECT_EQ(*SplitTargets("ipv4:127.0.0.1:1,127.0.0.1:2"),
+            std::vector<std::string>({"ipv4:127.0.0.1:1,127.0.0.1:2"}));
+  EXPECT_FALSE(SplitTargets("a:1,,b:2").ok());
+}
+
+TEST(ClientUnitTest, StemsLikeTheCli) {
+  EXPECT_EQ(MakeStem("cordova1/f00001.png"), "cordova1_f00001");
+  EXPECT_EQ(MakeStem("drive.mp4#000012"), "drive_000012");
+  EXPECT_EQ(MakeStem("000003.jpg"), "000003");
+}
+
+// The bench writes a small header and the frame's pre-serialized bytes one
+// after the other: the server must parse that as one request.
+TEST(ClientUnitTest, HeaderAndImagePartMakeOneRequest) {
+  lane::CameraModel camera;
+  const auto frames = SyntheticBenchFrames(camera, 1, /*raw=*/false, 90);
+  ASSERT_TRUE(frames.ok()) << frames.status();
+  v1::FrameRequest header;
+  header.set_camera_id("cam");
+  header.set_frame_id(42);
+  header.set_capture_time_unix_ns(7);
+  v1::FrameRequest parsed;
+  ASSERT_TRUE(parsed.ParseFromString(header.SerializeAsString() + frames->front().image_part));
+  EXPECT_EQ(parsed.camera_id(), "cam");
+  EXPECT_EQ(parsed.frame_id(), 42u);
+  EXPECT_EQ(parsed.capture_time_unix_ns(), 7);
+  EXPECT_EQ(parsed.encoded(), frames->front().request.encoded());
+}
+
+TEST_F(ClientTest, StreamWritesOneResultPerFrameInOrder) {
+  auto server = StartServer("127.0.0.1:0");
+  ASSERT_NE(server, nullptr);
+  TempDir out;
+  const int code = RunCommand({"stream", "--target", Target(*server), "--camera", "cam0",
+                               "--config", kConfig, "--output", out / "results.jsonl", "--overlay",
+                               out / "overlays", frames_->str()});
+  EXPECT_EQ(code, kExitOk);
+  const std::vector<Json> lines = ReadJsonLines(out / "results.jsonl");
+  ASSERT_EQ(lines.size(), static_cast<size_t>(kFrames));
+  int with_lanes = 0;
+  for (int i = 0; i < kFrames; ++i) {
+    const Json& line = lines[static_cast<size_t>(i)];
+    EXPECT_EQ(line["schema"], 1);
+    EXPECT_EQ(line["frame"], names_[static_cast<size_t>(i)]);
+    EXPECT_EQ(line["camera_id"], "cam0");
+    EXPECT_EQ(line["frame_id"], i);
+    EXPECT_EQ(line["status"], "OK") << line.dump();
+    EXPECT_EQ(line["attempts"], 1);
+    EXPECT_GT(line["capture_time_unix_ns"].get<int64_t>(), 0);
+    EXPECT_GE(line["server_send_time_unix_ns"].get<int64_t>(),
+              line["server_receive_time_unix_ns"].get<int64_t>());
+    EXPECT_GT(line["calibration_version"].get<uint64_t>(), 0u);
+    EXPECT_GT(line["timing_ms"]["detect"].get<double>(), 0);
+    EXPECT_GE(line["latency_ms"].get<double>(), 0);
+    for (const Json& lane : line["lanes"]) {
+      for (const char* frame : {"image", "ipm", "ground"}) {
+        ASSERT_EQ(lane[frame].size(), 4u);
+        EXPECT_EQ(lane[frame][0].size(), 2u);
+      }
+    }
+    if (!line["lanes"].empty()) ++with_lanes;
+    const std::string stem = names_[static_cast<size_t>(i)].substr(0, 6);
+    EXPECT_TRUE(fs::exists(out / ("overlays/" + stem + ".png")));
+    EXPECT_TRUE(fs::exists(out / ("overlays/" + stem + "_ipm.png")));
+  }
+  EXPECT_GE(with_lanes, kFrames - 1);
+  EXPECT_EQ(FramesProcessed(*server, "cam0"), static_cast<uint64_t>(kFrames));
+}
+
+// --raw sends pixels; an unreadable entry of a list keeps its place in the
+// output as a CLIENT_ERROR record, and the run exits 1.
+TEST_F(ClientTest, StreamRawKeepsUnreadableFramesInPlace) {
+  auto server = StartServer("127.0.0.1:0");
+  ASSERT_NE(server, nullptr);
+  TempDir out;
+  const std::string list = *frames_ / "with-missing.txt";
+  {
+    std::ofstream file(list);
+    file << names_[0] << "\nmissing.jpg\n" << names_[1] << "\n";
+  }
+  const int code =
+      RunCommand({"stream", "--target", Target(*server), "--camera", "raw0", "--config", kConfig,
+                  "--raw", "--output", out / "results.jsonl", list});
+  EXPECT_EQ(code, kExitFailure);
+  const std::vector<Json> lines = ReadJsonLines(out / "results.jsonl");
+  ASSERT_EQ(lines.size(), 3u);
+  EXPECT_EQ(lines[0]["frame"], names_[0]);
+  EXPECT_EQ(lines[0]["status"], "OK");
+  EXPECT_EQ(lines[1]["frame"], "missing.jpg");
+  EXPECT_EQ(lines[1]["status"], "CLIENT_ERROR");
+  EXPECT_EQ(lines[1]["frame_id"], 1);
+  EXPECT_EQ(lines[2]["frame"], names_[1]);
+  EXPECT_EQ(lines[2]["status"], "OK");
+  EXPECT_EQ(lines[2]["frame_id"], 2);
+}
+
+// Video frames are decoded here and sent raw; they are named VIDEO#000123.
+TEST_F(ClientTest, StreamSendsVideoFramesRaw) {
+  TempDir out;
+  const std::string video = out / "drive.avi";
+  {
+    cv::VideoWriter writer(video, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10,
+                           cv::Size(640, 480));
+    if (!writer.isOpened()) GTEST_SKIP() << "OpenCV cannot write an MJPG .avi here";
+    for (int i = 0; i < 3; ++i) writer.write(cv::imread(*frames_ / names_[static_cast<size_t>(i)]));
+  }
+  auto server = StartServer("127.0.0.1:0");
+  ASSERT_NE(server, nullptr);
+  EXPECT_EQ(RunCommand({"stream", "--target", Target(*server), "--camera", "video", "--config",
+                        kConfig, "--output", out / "results.jsonl", video}),
+            kExitOk);
+  const std::vector<Json> lines = ReadJsonLines(out / "results.jsonl");
+  ASSERT_EQ(lines.size(), 3u);
+  EXPECT_EQ(lines[0]["frame"], "drive.avi#000000");
+  EXPECT_EQ(lines[2]["frame"], "drive.avi#000002");
+  for (const Json& line : lines) EXPECT_EQ(line["status"], "OK") << line.dump();
+}
+
+// Without --config the session must exist; it is found with GetSession.
+TEST_F(ClientTest, StreamWithoutConfigNeedsASession) {
+  auto server = StartServer("127.0.0.1:0");
+  ASSERT_NE(server, nullptr);
+  TempDir out;
+  EXPECT_EQ(RunCommand({"stream", "--target", Target(*server), "--camera", "nobody", "--output",
+                        out / "results.jsonl", frames_->str()}),
+            kExitFailure);
+  ASSERT_EQ(RunCommand({"session", "create", "--target", Target(*server), "--camera", "known",
+                        "--config", kConfig}),
+            kExitOk);
+  EXPECT_EQ(RunCommand({"stream", "--target", Target(*server), "--camera", "known", "--output",
+                        out / "results.jsonl", frames_->str()}),
+            kExitOk);
+  EXPECT_EQ(ReadJsonLines(out / "results.jsonl").size(), static_cast<size_t>(kFrames));
+}
+
+// The server stops mid-stream and a new one starts on the same port: every
+// frame is answered exactly once, in order. `deadline` is the first server's
+// shutdown deadline: 20 s lets it answer what it received (a drain), 0 cuts
+// the frames in flight off.
+void RunRestart(const std::string& list, const std::vector<std::string>& names, int total,
+                absl::Duration deadline, bool expect_resends) {
+  auto first = StartServer("127.0.0.1:0", deadline);
+  ASSERT_NE(first, nullptr);
+  const std::string target = Target(*first);
+  TempDir out;
+  std::atomic<int> code{-1};
+  // A client window (16) above the server's in-flight bound (8): frames
+  // written but not yet read by the server when it stops are resent.
+  std::thread client([&] {
+    code = RunCommand({"stream", "--target", target, "--camera", "cam", "--config", kConfig,
+                       "--inflight", "16", "--retry-timeout", "60s", "--output",
+                       out / "results.jsonl", list});
+  });
+  ASSERT_TRUE(PollUntil([&] { return FramesProcessed(*first, "cam") >= 40; }));
+  first->Drain();
+  const uint64_t by_first = FramesProcessed(*first, "cam");
+  first.reset();
+  auto second = StartServer(target);  // same port; no session yet: the client re-creates it
+  client.join();
+  ASSERT_NE(second, nullptr);
+  EXPECT_EQ(code.load(), kExitOk);
+  EXPECT_LT(by_first, static_cast<uint64_t>(total)) << "the restart came too late";
+  EXPECT_GT(FramesProcessed(*second, "cam"), 0u);
+  const std::vector<Json> lines = ReadJsonLines(out / "results.jsonl");
+  ASSERT_EQ(lines.size(), static_cast<size_t>(total));
+  int resent = 0;
+  for (int i = 0; i < total; ++i) {
+    const Json& line = lines[static_cast<size_t>(i)];
+    ASSERT_EQ(line["frame_id"], i);
+    ASSERT_EQ(line["frame"], names[static_cast<size_t>(i) % names.size()]);
+    ASSERT_EQ(line["status"], "OK") << line.dump();
+    if (line["attempts"].get<int>() > 1) ++resent;
+  }
+  if (expect_resends) {
+    EXPECT_GT(resent, 0);
+  }
+}
+
+TEST_F(ClientTest, StreamSurvivesServerRestartAfterDrain) {
+  RunRestart(RepeatList(50), names_, 50 * kFrames, absl::Seconds(20), /*expect_resends=*/true);
+}
+
+TEST_F(ClientTest, StreamSurvivesServerCuttingFramesOff) {
+  RunRestart(RepeatList(50), names_, 50 * kFrames, absl::ZeroDuration(), /*expect_resends=*/false);
+}
+
+void ExpectConsistentRun(const Json& run) {
+  const uint64_t sent = run["frames_sent"];
+  const uint64_t ok = run["frames_ok"];
+  const uint64_t errors = run["errors_total"];
+  const uint64_t dropped = run["dropped"];
+  EXPECT_EQ(ok, sent - errors - dropped) << run.dump();
+  uint64_t by_code = 0;
+  for (const auto& [code, n] : run["errors"].items()) by_code += n.get<uint64_t>();
+  EXPECT_EQ(by_code, errors);
+  EXPECT_EQ(run["frames_scheduled"].get<uint64_t>(), sent + run["unsent"].get<uint64_t>());
+  const Json& latency = run["latency_ms"];
+  EXPECT_EQ(latency["count"].get<uint64_t>(), ok);
+  EXPECT_LE(latency["p50"].get<double>(), latency["p90"].get<double>());
+  EXPECT_LE(latency["p90"].get<double>(), latency["p99"].get<double>());
+  EXPECT_LE(latency["p99"].get<double>(), latency["p999"].get<double>());
+  EXPECT_LE(latency["p999"].get<double>(), latency["max"].get<double>());
+  EXPECT_GT(run["achieved_fps"].get<double>(), 0);
+}
+
+TEST_F(ClientTest, BenchClosedLoopJsonReport) {
+  auto server = StartServer("127.0.0.1:0");
+  ASSERT_NE(server, nullptr);
+  TempDir out;
+  const int code =
+      RunCommand({"bench", "--target", Target(*server), "--cameras", "2", "--inflight", "2",
+                  "--warmup", "300ms", "--duration", "1.5s", "--synthetic", "6", "--inprocess",
+                  "--json", "--slo-p99-ms", "10000", "--output", out / "report.json"});
+  EXPECT_EQ(code, kExitOk);
+  const Json report = ReadJson(out / "report.json");
+  EXPECT_EQ(report["schema"], 1);
+  EXPECT_EQ(report["mode"], "closed");
+  EXPECT_EQ(report["inflight_per_camera"], 2);
+  EXPECT_TRUE(report["fps_per_camera"].is_null());
+  EXPECT_EQ(report["frames"]["encoding"], "jpeg");
+  EXPECT_EQ(report["frames"]["width"], 640);
+  EXPECT_EQ(report["frames"]["height"], 480);
+  ASSERT_EQ(report["runs"].size(), 1u);
+  const Json& run = report["runs"][0];
+  EXPECT_EQ(run["cameras"], 2);
+  EXPECT_TRUE(run["target_fps"].is_null());
+  EXPECT_GT(run["frames_sent"].get<uint64_t>(), 0u);
+  EXPECT_GT(run["frames_ok"].get<uint64_t>(), 0u);
+  EXPECT_EQ(run["errors_total"], 0);
+  ExpectConsistentRun(run);
+  EXPECT_GT(run["server_ms"]["p50"].get<double>(), 0);
+  EXPECT_EQ(report["inprocess"]["workers"], 2);  // the server's, from GetServerInfo
+  EXPECT_GT(report["inprocess"]["fps"].get<double>(), 0);
+  EXPECT_GT(run["service_vs_inprocess"].get<double>(), 0);
+  EXPECT_EQ(run["slo_met"], true);
+  EXPECT_EQ(report["slo_met"], true);
+  // The sessions are deleted at the end.
+  EXPECT_EQ(server->sessions().size(), 0u);
+}
+
+TEST_F(ClientTest, BenchOpenLoopSweepCsvAndSloBreach) {
+  auto server = StartServer("127.0.0.1:0");
+  ASSERT_NE(server, nullptr);
+  TempDir out;
+  const int code = RunCommand({"bench", "--target", Target(*server), "--sweep", "1,2", "--fps",
+                               "25", "--warmup", "200ms", "--duration", "1s", "--synthetic", "4",
+                               "--json", "--slo-p99-ms", "0.001", "--output", out / "report.json"});
+  EXPECT_EQ(code, kExitSlo);
+  const Json report = ReadJson(out / "report.json");
+  EXPECT_EQ(report["mode"], "open");
+  EXPECT_EQ(report["fps_per_camera"], 25.0);
+  ASSERT_EQ(report["runs"].size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const Json& run = report["runs"][i];
+    const int cameras = static_cast<int>(i) + 1;
+    EXPECT_EQ(run["cameras"], cameras);
+    EXPECT_EQ(run["target_fps"], 25.0 * cameras);
+    // 1 s at 25 fps per camera on an absolute schedule.
+    EXPECT_NEAR(run["frames_scheduled"].get<double>(), 25.0 * cameras, 1.0 * cameras);
+    ExpectConsistentRun(run);
+    EXPECT_EQ(run["slo_met"], false);
+  }
+  EXPECT_EQ(report["slo_met"], false);
+
+  const int csv_code = RunCommand({"bench", "--target", Target(*server), "--cameras", "1",
+                                   "--warmup", "0", "--duration", "300ms", "--synthetic", "2",
+                                   "--csv", "--output", out / "report.csv"});
+  EXPECT_EQ(csv_code, kExitOk);
+  std::ifstream csv(out / "report.csv");
+  std::string header;
+  std::string row;
+  std::getline(csv, header);
+  std::getline(csv, row);
+  EXPECT_EQ(header.rfind("mode,cameras,", 0), 0u) << header;
+  EXPECT_EQ(row.rfind("closed,1,", 0), 0u) << row;
+}
+
+// A comma list of targets: camera i goes to target i mod 2.
+TEST_F(ClientTest, BenchSpreadsCamerasOverTargets) {
+  auto a = StartServer("127.0.0.1:0");
+  auto b = StartServer("127.0.0.1:0");
+  ASSERT_NE(a, nullptr);
+  ASSERT_NE(b, nullptr);
+  TempDir out;
+  const std::string targets = Target(*a) + "," + Target(*b);
+  EXPECT_EQ(RunCommand({"bench", "--target", targets, "--cameras", "4", "--warmup", "0",
+                        "--duration", "500ms", "--synthetic", "2", "--keep-sessions", "--json",
+                        "--output", out / "report.json"}),
+            kExitOk);
+  const Json report = ReadJson(out / "report.json");
+  const Json& run = report["runs"][0];
+  ExpectConsistentRun(run);
+  ASSERT_EQ(run["ok_by_target"].size(), 2u) << run.dump();
+  EXPECT_GT(run["ok_by_target"][Target(*a)].get<uint64_t>(), 0u);
+  EXPECT_GT(run["ok_by_target"][Target(*b)].get<uint64_t>(), 0u);
+  // Cameras 0 and 2 on the first server, 1 and 3 on the second.
+  EXPECT_GT(FramesProcessed(*a, "bench-0"), 0u);
+  EXPECT_GT(FramesProcessed(*a, "bench-2"), 0u);
+  EXPECT_GT(FramesProcessed(*b, "bench-1"), 0u);
+  EXPECT_GT(FramesProcessed(*b, "bench-3"), 0u);
+  EXPECT_EQ(FramesProcessed(*a, "bench-1"), 0u);
+}
+
+// drop_oldest with one frame in flight and far more frames than the server
+// can take: the server drops, the report counts the drops, and the counts
+// still add up.
+TEST_F(ClientTest, BenchCountsDroppedFrames) {
+  auto server = StartServer("127.0.0.1:0");
+  ASSERT_NE(server, nullptr);
+  TempDir out;
+  const int code = RunCommand({"bench",
+                               "--target",
+                               Target(*server),
+                               "--cameras",
+                               "1",
+                               "--fps",
+                               "1500",
+                               "--warmup",
+                               "0",
+                               "--duration",
+                               "1s",
+                               "--synthetic",
+                               "4",
+                               "--backpressure",
+                               "drop_oldest",
+                               "--session-inflight",
+                               "1",
+                               "--json",
+                               "--output",
+                               out / "report.json"});
+  EXPECT_EQ(code, kExitOk);
+  const Json run = ReadJson(out / "report.json")["runs"][0];
+  EXPECT_GT(run["dropped"].get<uint64_t>(), 0u) << run.dump();
+  ExpectConsistentRun(run);
+}
+
+TEST_F(ClientTest, HealthExitsZeroOnlyWhenServing) {
+  auto server = StartServer("127.0.0.1:0");
+  ASSERT_NE(server, nullptr);
+  const std::string target = Target(*server);
+  EXPECT_EQ(RunCommand({"health", "--target", target}), kExitOk);
+  server->BeginDrain();
+  EXPECT_EQ(RunCommand({"health", "--target", target}), kExitFailure);  // NOT_SERVING
+  server->Drain();
+  server.reset();
+  EXPECT_EQ(RunCommand({"health", "--target", target, "--timeout", "2s"}), kExitFailure);
+}
+
+TEST_F(ClientTest, SessionCommands) {
+  auto server = StartServer("127.0.0.1:0");
+  ASSERT_NE(server, nullptr);
+  const std::string target = Target(*server);
+  ::testing::internal::CaptureStdout();
+  EXPECT_EQ(
+      RunCommand({"session", "create", "--target", target, "--camera", "s1", "--config", kConfig}),
+      kExitOk);
+  EXPECT_EQ(
+      RunCommand({"session", "create", "--target", target, "--camera", "s1", "--config", kConfig}),
+      kExitOk);
+  EXPECT_EQ(RunCommand({"session", "create", "--target", target, "--camera", "s1", "--config",
+                        kConfig, "--mode", "two"}),
+            kExitFailure);  // ALREADY_EXISTS without --replace
+  EXPECT_EQ(RunCommand({"session", "get", "--target", target, "--camera", "s1"}), kExitOk);
+  EXPECT_EQ(RunCommand({"session", "list", "--target", target}), kExitOk);
+  EXPECT_EQ(RunCommand({"session", "delete", "--target", target, "--camera", "s1"}), kExitOk);
+  EXPECT_EQ(RunCommand({"session", "get", "--target", target, "--camera", "s1"}), kExitFailure);
+  const std::string output = ::testing::internal::GetCapturedStdout();
+  std::vector<Json> lines;
+  std::istringstream in(output);
+  for (std::string line; std::getline(in, line);) lines.push_back(Json::parse(line));
+  ASSERT_EQ(lines.size(), 5u) << output;
+  EXPECT_EQ(lines[0]["outcome"], "CREATE_OUTCOME_CREATED");
+  EXPECT_EQ(lines[1]["outcome"], "CREATE_OUTCOME_UNCHANGED");
+  EXPECT_EQ(lines[2]["camera_id"], "s1");
+  EXPECT_EQ(lines[2]["config"]["camera"]["image_width"], 640);
+  EXPECT_EQ(lines[3]["sessions"].size(), 1u);
+  EXPECT_EQ(lines[4]["deleted"], "s1");
+  EXPECT_EQ(server->sessions().size(), 0u);
+}
+
+TEST(ClientUsageTest, BadCommandLinesExitTwo) {
+  EXPECT_EQ(RunCommand({}), kExitUsage);
+  EXPECT_EQ(RunCommand({"nope"}), kExitUsage);
+  EXPECT_EQ(RunCommand({"stream"}), kExitUsage);
+  EXPECT_EQ(RunCommand({"bench", "--fps", "10", "--inflight", "2"}), kExitUsage);
+  EXPECT_EQ(RunCommand({"bench", "--sweep", "1,x"}), kExitUsage);
+  EXPECT_EQ(RunCommand({"session", "get"}), kExitUsage);
+}
+
+}  // namespace
+}  // namespace lane_client
