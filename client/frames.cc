@@ -21,8 +21,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kMaxListDepth = 8;
-
 std::string Where(const std::string& path, const std::string& name) {
   return path == name ? std::string() : absl::StrCat(" (", path, ")");
 }
@@ -39,28 +37,6 @@ bool ReadFile(const std::string& path, std::string* bytes) {
 
 }  // namespace
 
-std::string MakeStem(const std::string& name) {
-  std::string stem = name;
-  const size_t slash = stem.find_last_of('/');
-  const size_t dot = stem.find_last_of('.');
-  const size_t hash = stem.find_last_of('#');
-  // The extension of the last path component (for "video.mp4#000012", of the
-  // video's name).
-  if (dot != std::string::npos && dot > 0 && (slash == std::string::npos || dot > slash)) {
-    if (hash != std::string::npos && hash > dot) {
-      stem.erase(dot, hash - dot);
-    } else {
-      stem.resize(dot);
-    }
-  }
-  for (char& c : stem) {
-    if (c == '/' || c == '\\' || c == '#' || c == ':' || c == ' ') c = '_';
-  }
-  const size_t first = stem.find_first_not_of("._");
-  stem = first == std::string::npos ? std::string() : stem.substr(first);
-  return stem.empty() ? std::string("frame") : stem;
-}
-
 bool IsJpegOrPng(const std::string& bytes) {
   static constexpr unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
   const auto* p = reinterpret_cast<const unsigned char*>(bytes.data());
@@ -68,79 +44,12 @@ bool IsJpegOrPng(const std::string& bytes) {
   return bytes.size() >= 8 && std::equal(kPng, kPng + 8, p);
 }
 
-FrameSource::FrameSource(const std::vector<std::string>& inputs, bool raw) : raw_(raw) {
-  for (const std::string& input : inputs) Expand(input, input, /*top_level=*/true, 0);
-}
+FrameSource::FrameSource(const std::vector<std::string>& inputs, bool raw)
+    : raw_(raw), entries_(lane_tools::ExpandInputs(inputs)) {}
 
 FrameSource::~FrameSource() = default;
 
-void FrameSource::Expand(const std::string& path, const std::string& name, bool top_level,
-                         int depth) {
-  const std::string file_name = fs::path(path).filename().string();
-  const std::string reported = top_level && !file_name.empty() ? file_name : name;
-  std::error_code ec;
-  const fs::file_status status = fs::status(path, ec);
-  if (ec || !fs::exists(status)) {
-    entries_.push_back({Entry::kError, path, reported,
-                        absl::StrCat("no such file or directory", Where(path, reported))});
-    return;
-  }
-  if (fs::is_directory(status)) {
-    std::vector<std::string> files;
-    for (fs::directory_iterator it(path, ec), end; !ec && it != end; it.increment(ec)) {
-      const std::string file = it->path().filename().string();
-      if (lane_tools::IsImageExtension(lane_tools::LowerExtension(file)) &&
-          !fs::is_directory(it->path())) {
-        files.push_back(file);
-      }
-    }
-    if (ec) {
-      entries_.push_back(
-          {Entry::kError, path, name,
-           absl::StrCat("cannot list directory", Where(path, name), ": ", ec.message())});
-      return;
-    }
-    if (files.empty())
-      std::fprintf(stderr, "warning: no .jpg/.jpeg/.png files in %s\n", path.c_str());
-    std::sort(files.begin(), files.end());
-    for (const std::string& file : files) {
-      std::string entry_name = file;
-      if (!top_level) {
-        entry_name = absl::StrCat(name, name.empty() || name.back() == '/' ? "" : "/", file);
-      }
-      entries_.push_back({Entry::kImage, (fs::path(path) / file).string(), entry_name, ""});
-    }
-    return;
-  }
-  const std::string ext = lane_tools::LowerExtension(path);
-  if (ext == ".txt") {
-    if (depth >= kMaxListDepth) {
-      entries_.push_back(
-          {Entry::kError, path, name, absl::StrCat("lists nested too deeply", Where(path, name))});
-      return;
-    }
-    std::ifstream in(path);
-    if (!in) {
-      entries_.push_back(
-          {Entry::kError, path, name, absl::StrCat("cannot read list", Where(path, name))});
-      return;
-    }
-    const fs::path folder = fs::path(path).parent_path();
-    std::string line;
-    while (std::getline(in, line)) {
-      const std::string entry(absl::StripAsciiWhitespace(line));
-      if (entry.empty() || entry[0] == '#') continue;
-      const fs::path entry_path(entry);
-      Expand(entry_path.is_absolute() ? entry : (folder / entry_path).lexically_normal().string(),
-             entry, /*top_level=*/false, depth + 1);
-    }
-    return;
-  }
-  entries_.push_back(
-      {lane_tools::IsVideoExtension(ext) ? Entry::kVideo : Entry::kImage, path, reported, ""});
-}
-
-void FrameSource::ReadImage(const Entry& entry, ClientFrame* frame) const {
+void FrameSource::ReadImage(const lane_tools::InputEntry& entry, ClientFrame* frame) const {
   std::string bytes;
   if (!ReadFile(entry.path, &bytes)) {
     frame->error = absl::StrCat("cannot read file", Where(entry.path, entry.name));
@@ -167,20 +76,20 @@ void FrameSource::ReadImage(const Entry& entry, ClientFrame* frame) const {
 
 bool FrameSource::Next(ClientFrame* frame) {
   while (next_ < entries_.size()) {
-    const Entry& entry = entries_[next_];
+    const lane_tools::InputEntry& entry = entries_[next_];
     *frame = ClientFrame();
     frame->name = entry.name;
     frame->stem = MakeStem(entry.name);
     switch (entry.kind) {
-      case Entry::kError:
+      case lane_tools::InputEntry::kError:
         frame->error = entry.error;
         ++next_;
         return true;
-      case Entry::kImage:
+      case lane_tools::InputEntry::kImage:
         ReadImage(entry, frame);
         ++next_;
         return true;
-      case Entry::kVideo: {
+      case lane_tools::InputEntry::kVideo: {
         if (!video_) {
           video_ = std::make_unique<cv::VideoCapture>();
           video_frame_ = 0;

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "inputs.h"
 #include "lane/v1/lane_service.pb.h"
 
 namespace lane_client {
@@ -33,7 +34,7 @@ struct ClientFrame {
 
 class FrameSource {
  public:
-  // Expands the inputs:
+  // Expands the inputs as `lane detect` does (lane_tools::ExpandInputs):
   //  * a directory: its .jpg/.jpeg/.png files (not recursive), sorted by name;
   //  * a .txt file: a list, one path a line, relative to the list's folder;
   //    blank lines and '#' comments skipped; entries may be any input;
@@ -50,24 +51,17 @@ class FrameSource {
   bool Next(ClientFrame* frame);
 
  private:
-  struct Entry {
-    enum Kind { kImage, kVideo, kError } kind = kImage;
-    std::string path;
-    std::string name;
-    std::string error;
-  };
-  void Expand(const std::string& path, const std::string& name, bool top_level, int depth);
-  void ReadImage(const Entry& entry, ClientFrame* frame) const;
+  void ReadImage(const lane_tools::InputEntry& entry, ClientFrame* frame) const;
 
   const bool raw_;
-  std::vector<Entry> entries_;
+  std::vector<lane_tools::InputEntry> entries_;
   size_t next_ = 0;
   std::unique_ptr<cv::VideoCapture> video_;
   int video_frame_ = 0;
 };
 
 // "drive.mp4#000012" -> "drive_000012", "a/b.jpg" -> "a_b".
-std::string MakeStem(const std::string& name);
+using lane_tools::MakeStem;
 
 // True for the bytes of a JPEG or PNG file.
 bool IsJpegOrPng(const std::string& bytes);

@@ -31,21 +31,6 @@ std::string PathNote(const std::string& path, const std::string& name) {
   return path == name ? std::string() : absl::StrCat(" (", path, ")");
 }
 
-std::string MakeStem(const std::string& name) {
-  std::string stem = name;
-  // Drop the extension of the last component only.
-  const size_t slash = stem.find_last_of('/');
-  const size_t dot = stem.find_last_of('.');
-  if (dot != std::string::npos && (slash == std::string::npos || dot > slash) && dot > 0) {
-    stem.resize(dot);
-  }
-  for (char& c : stem) {
-    if (c == '/' || c == '\\' || c == '#' || c == ':' || c == ' ') c = '_';
-  }
-  while (!stem.empty() && (stem[0] == '.' || stem[0] == '_')) stem.erase(0, 1);
-  return stem.empty() ? std::string("frame") : stem;
-}
-
 }  // namespace
 
 std::string LowerExtension(const std::string& path) {
@@ -60,14 +45,49 @@ bool IsVideoExtension(const std::string& ext) {
   return ext == ".mp4" || ext == ".avi" || ext == ".mkv" || ext == ".mov";
 }
 
-FrameReader::FrameReader(const std::vector<std::string>& inputs) {
-  for (const std::string& input : inputs) Expand(input, input, /*top_level=*/true, 0);
+namespace {
+
+void ExpandInto(const std::string& path, const std::string& name, bool top_level, int depth,
+                std::vector<InputEntry>& entries);
+
+}  // namespace
+
+std::vector<InputEntry> ExpandInputs(const std::vector<std::string>& inputs) {
+  std::vector<InputEntry> entries;
+  for (const std::string& input : inputs) ExpandInto(input, input, /*top_level=*/true, 0, entries);
+  return entries;
 }
+
+std::string MakeStem(const std::string& name) {
+  std::string stem = name;
+  const size_t slash = stem.find_last_of('/');
+  const size_t dot = stem.find_last_of('.');
+  const size_t hash = stem.find_last_of('#');
+  // The extension of the last path component (for "video.mp4#000012", of the
+  // video's name).
+  if (dot != std::string::npos && dot > 0 && (slash == std::string::npos || dot > slash)) {
+    if (hash != std::string::npos && hash > dot) {
+      stem.erase(dot, hash - dot);
+    } else {
+      stem.resize(dot);
+    }
+  }
+  for (char& c : stem) {
+    if (c == '/' || c == '\\' || c == '#' || c == ':' || c == ' ') c = '_';
+  }
+  const size_t first = stem.find_first_not_of("._");
+  stem = first == std::string::npos ? std::string() : stem.substr(first);
+  return stem.empty() ? std::string("frame") : stem;
+}
+
+FrameReader::FrameReader(const std::vector<std::string>& inputs) : entries_(ExpandInputs(inputs)) {}
 
 FrameReader::~FrameReader() = default;
 
-void FrameReader::Expand(const std::string& path, const std::string& name, bool top_level,
-                         int depth) {
+namespace {
+
+void ExpandInto(const std::string& path, const std::string& name, bool top_level, int depth,
+                std::vector<InputEntry>& entries) {
   // Given directly, a file is reported by its file name; inside a list, by
   // the list's line.
   const std::string file_name = fs::path(path).filename().string();
@@ -75,8 +95,8 @@ void FrameReader::Expand(const std::string& path, const std::string& name, bool 
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
   if (ec || !fs::exists(status)) {
-    entries_.push_back({Entry::kError, path, reported,
-                        absl::StrCat("no such file or directory", PathNote(path, reported))});
+    entries.push_back({InputEntry::kError, path, reported,
+                       absl::StrCat("no such file or directory", PathNote(path, reported))});
     return;
   }
   if (fs::is_directory(status)) {
@@ -88,8 +108,8 @@ void FrameReader::Expand(const std::string& path, const std::string& name, bool 
       }
     }
     if (ec) {
-      entries_.push_back(
-          {Entry::kError, path, name,
+      entries.push_back(
+          {InputEntry::kError, path, name,
            absl::StrCat("cannot list directory", PathNote(path, name), ": ", ec.message())});
       return;
     }
@@ -101,21 +121,21 @@ void FrameReader::Expand(const std::string& path, const std::string& name, bool 
       const std::string entry_name =
           top_level ? file
                     : absl::StrCat(name, name.empty() || name.back() == '/' ? "" : "/", file);
-      entries_.push_back({Entry::kImage, (fs::path(path) / file).string(), entry_name, ""});
+      entries.push_back({InputEntry::kImage, (fs::path(path) / file).string(), entry_name, ""});
     }
     return;
   }
   const std::string ext = LowerExtension(path);
   if (ext == ".txt") {
     if (depth >= kMaxListDepth) {
-      entries_.push_back({Entry::kError, path, name,
-                          absl::StrCat("lists nested too deeply", PathNote(path, name))});
+      entries.push_back({InputEntry::kError, path, name,
+                         absl::StrCat("lists nested too deeply", PathNote(path, name))});
       return;
     }
     std::ifstream in(path);
     if (!in) {
-      entries_.push_back(
-          {Entry::kError, path, name, absl::StrCat("cannot read list", PathNote(path, name))});
+      entries.push_back(
+          {InputEntry::kError, path, name, absl::StrCat("cannot read list", PathNote(path, name))});
       return;
     }
     const fs::path folder = fs::path(path).parent_path();
@@ -126,25 +146,28 @@ void FrameReader::Expand(const std::string& path, const std::string& name, bool 
       const fs::path entry_path(entry);
       const std::string resolved =
           entry_path.is_absolute() ? entry : (folder / entry_path).lexically_normal().string();
-      Expand(resolved, entry, /*top_level=*/false, depth + 1);
+      ExpandInto(resolved, entry, /*top_level=*/false, depth + 1, entries);
     }
     return;
   }
-  entries_.push_back({IsVideoExtension(ext) ? Entry::kVideo : Entry::kImage, path, reported, ""});
+  entries.push_back(
+      {IsVideoExtension(ext) ? InputEntry::kVideo : InputEntry::kImage, path, reported, ""});
 }
+
+}  // namespace
 
 bool FrameReader::Next(InputFrame* frame) {
   while (next_ < entries_.size()) {
-    const Entry& entry = entries_[next_];
+    const InputEntry& entry = entries_[next_];
     *frame = InputFrame();
     frame->name = entry.name;
     frame->stem = MakeStem(entry.name);
     switch (entry.kind) {
-      case Entry::kError:
+      case InputEntry::kError:
         frame->error = entry.error;
         ++next_;
         return true;
-      case Entry::kImage: {
+      case InputEntry::kImage: {
         const auto start = std::chrono::steady_clock::now();
         frame->bgr = cv::imread(entry.path, cv::IMREAD_COLOR);
         frame->decode_ms = MillisecondsSince(start);
@@ -154,7 +177,7 @@ bool FrameReader::Next(InputFrame* frame) {
         ++next_;
         return true;
       }
-      case Entry::kVideo: {
+      case InputEntry::kVideo: {
         if (!video_) {
           video_ = std::make_unique<cv::VideoCapture>();
           video_frame_ = 0;

@@ -23,6 +23,23 @@ struct InputFrame {
   double decode_ms = 0;
 };
 
+// One input after expansion: an image file, a video, or an error to report.
+struct InputEntry {
+  enum Kind { kImage, kVideo, kError } kind = kImage;
+  std::string path;   // to open
+  std::string name;   // to report (see InputFrame::name)
+  std::string error;  // kError: why
+};
+
+// Expands the INPUT arguments, following the rules of FrameReader below,
+// without opening any image or video. Shared by `lane` and `lane-client`.
+std::vector<InputEntry> ExpandInputs(const std::vector<std::string>& inputs);
+
+// A frame name made into a file name stem: the extension of the last path
+// component dropped ("video.mp4#000012" -> "video_000012"), '/', '\', '#',
+// ':' and ' ' -> '_', leading '.' and '_' removed; "frame" if nothing is left.
+std::string MakeStem(const std::string& name);
+
 // Expands the INPUT arguments:
 //  * an existing directory: its .jpg/.jpeg/.png files (not recursive), sorted
 //    by name;
@@ -43,15 +60,7 @@ class FrameReader {
   bool Next(InputFrame* frame);
 
  private:
-  struct Entry {
-    enum Kind { kImage, kVideo, kError } kind = kImage;
-    std::string path;   // to open
-    std::string name;   // to report
-    std::string error;  // kError
-  };
-  void Expand(const std::string& path, const std::string& name, bool top_level, int depth);
-
-  std::vector<Entry> entries_;
+  std::vector<InputEntry> entries_;
   size_t next_ = 0;
   // The video being read, and its next frame index.
   std::unique_ptr<cv::VideoCapture> video_;
