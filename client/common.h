@@ -43,6 +43,27 @@ absl::StatusOr<std::optional<double>> GetNumber(const lane_tools::Args& args,
 // "1,2,4" -> {1, 2, 4}: positive integers.
 absl::StatusOr<std::vector<int>> ParseIntList(const std::string& text, const std::string& name);
 
+// Transport security and credentials of every channel MakeChannel builds:
+// TLS when ca_pem is set (cert/key: a client certificate for mutual TLS), a
+// Bearer token sent as `authorization` metadata on every call when token is
+// set.
+struct Security {
+  std::string ca_pem;
+  std::string cert_pem;
+  std::string key_pem;
+  std::string token;
+};
+// Takes --ca FILE, --cert FILE, --key FILE and --token-file FILE (also
+// --name=FILE) out of `args` (options before a "--" only) and reads the
+// files; the token comes from --token-file or else the environment variable
+// LANE_TOKEN. INVALID_ARGUMENT on a missing value or an unreadable file.
+absl::StatusOr<Security> TakeSecurityOptions(std::vector<std::string>& args);
+// The security of the channels built from now on (default: plaintext, no
+// token).
+void SetSecurity(Security security);
+// The usage text of the options above.
+extern const char kSecurityUsage[];
+
 // --target: "host:port", "dns:///name[:port]", or a comma list "a:1,b:2".
 // A gRPC URI with its own address list ("ipv4:a:1,b:2", "ipv6:...") is kept
 // whole. Empty entries are an error.

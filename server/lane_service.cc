@@ -3,6 +3,7 @@
 #include <utility>
 
 #include "absl/time/clock.h"
+#include "auth.h"
 #include "convert.h"
 #include "frame_processor.h"
 #include "frame_stream.h"
@@ -70,7 +71,8 @@ void LaneServiceImpl::Unregister(FrameStream* stream) {
   if (streams_.empty()) streams_cv_.notify_all();
 }
 
-absl::Status LaneServiceImpl::Admission() const {
+absl::Status LaneServiceImpl::Admission(const grpc::ServerContextBase& context) const {
+  if (absl::Status auth = CheckBearerToken(context, options_.auth_tokens); !auth.ok()) return auth;
   std::lock_guard<std::mutex> lock(mu_);
   switch (state_) {
     case State::kStarting:
@@ -101,7 +103,7 @@ grpc::ServerUnaryReactor* LaneServiceImpl::CreateSession(grpc::CallbackServerCon
                                                          const v1::CreateSessionRequest* request,
                                                          v1::CreateSessionResponse* response) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  if (absl::Status s = Admission(); !s.ok()) {
+  if (absl::Status s = Admission(*context); !s.ok()) {
     FinishCall(reactor, "CreateSession", s);
     return reactor;
   }
@@ -124,7 +126,7 @@ grpc::ServerUnaryReactor* LaneServiceImpl::GetSession(grpc::CallbackServerContex
                                                       const v1::GetSessionRequest* request,
                                                       v1::Session* response) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  absl::Status status = Admission();
+  absl::Status status = Admission(*context);
   if (status.ok()) {
     absl::StatusOr<SessionRegistry::Entry> entry = sessions_.Get(request->camera_id());
     if (entry.ok()) SessionToProto(*entry->session, entry->last_used, response);
@@ -138,7 +140,7 @@ grpc::ServerUnaryReactor* LaneServiceImpl::ListSessions(grpc::CallbackServerCont
                                                         const v1::ListSessionsRequest* /*request*/,
                                                         v1::ListSessionsResponse* response) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  absl::Status status = Admission();
+  absl::Status status = Admission(*context);
   if (status.ok()) {
     for (const SessionRegistry::Entry& entry : sessions_.List()) {
       SessionToProto(*entry.session, entry.last_used, response->add_sessions());
@@ -152,17 +154,17 @@ grpc::ServerUnaryReactor* LaneServiceImpl::DeleteSession(grpc::CallbackServerCon
                                                          const v1::DeleteSessionRequest* request,
                                                          v1::DeleteSessionResponse* /*response*/) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  absl::Status status = Admission();
+  absl::Status status = Admission(*context);
   if (status.ok()) status = sessions_.Delete(request->camera_id());
   FinishCall(reactor, "DeleteSession", status);
   return reactor;
 }
 
 grpc::ServerBidiReactor<v1::FrameRequest, v1::FrameResponse>* LaneServiceImpl::StreamFrames(
-    grpc::CallbackServerContext* /*context*/) {
+    grpc::CallbackServerContext* context) {
   auto* stream = new FrameStream(*this);
-  absl::Status reject;
-  {
+  absl::Status reject = CheckBearerToken(*context, options_.auth_tokens);
+  if (reject.ok()) {
     std::lock_guard<std::mutex> lock(mu_);
     if (state_ == State::kServing) {
       streams_.insert(stream);
@@ -178,7 +180,7 @@ grpc::ServerUnaryReactor* LaneServiceImpl::Detect(grpc::CallbackServerContext* c
                                                   const v1::FrameRequest* request,
                                                   v1::FrameResponse* response) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  if (absl::Status s = Admission(); !s.ok()) {
+  if (absl::Status s = Admission(*context); !s.ok()) {
     FinishCall(reactor, "Detect", s);
     return reactor;
   }
@@ -229,6 +231,10 @@ grpc::ServerUnaryReactor* LaneServiceImpl::GetServerInfo(
     grpc::CallbackServerContext* context, const v1::GetServerInfoRequest* /*request*/,
     v1::ServerInfo* response) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  if (absl::Status auth = CheckBearerToken(*context, options_.auth_tokens); !auth.ok()) {
+    FinishCall(reactor, "GetServerInfo", auth);
+    return reactor;
+  }
   const BuildInfo& build = options_.build;
   response->set_version(build.version);
   response->set_build(build.build_type + ", gRPC " + build.grpc_version + ", OpenCV " +

@@ -15,6 +15,7 @@
 #include <mutex>
 #include <string>
 #include <unordered_set>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
@@ -32,6 +33,8 @@ struct ServiceOptions {
   int64_t max_frame_pixels = int64_t{3840} * 2160;
   // Reported by GetServerInfo.
   uint64_t max_receive_message_bytes = 0;
+  // Accepted Bearer tokens (authorization metadata); empty = no auth.
+  std::vector<std::string> auth_tokens;
   BuildInfo build;
 };
 
@@ -87,7 +90,9 @@ class LaneServiceImpl final : public v1::LaneService::CallbackService {
   enum class State { kStarting, kServing, kDraining };
 
   // OK while serving, else UNAVAILABLE.
-  absl::Status Admission() const;
+  // The one check of every call: the Bearer token (auth.h), then the
+  // serving state.
+  absl::Status Admission(const grpc::ServerContextBase& context) const;
   // Finishes a unary call and counts it.
   void FinishCall(grpc::ServerUnaryReactor* reactor, const std::string& method,
                   const absl::Status& status);

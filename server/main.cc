@@ -12,6 +12,8 @@
 #include <opencv2/core.hpp>
 #include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
@@ -19,6 +21,7 @@
 #include "absl/flags/usage_config.h"
 #include "absl/strings/match.h"
 #include "absl/time/time.h"
+#include "auth.h"
 #include "server.h"
 
 ABSL_FLAG(std::string, address, "0.0.0.0:50051", "gRPC listening address (host:port).");
@@ -50,6 +53,18 @@ ABSL_FLAG(absl::Duration, shutdown_deadline, absl::Seconds(10),
 ABSL_FLAG(std::string, default_config, "",
           "JSON config file (format of configs/*.json) for a session created at start-up.");
 ABSL_FLAG(std::string, default_camera_id, "default", "Camera id of the --default_config session.");
+ABSL_FLAG(std::string, tls_cert, "",
+          "PEM certificate chain of the server; with --tls_key, the server speaks TLS only.");
+ABSL_FLAG(std::string, tls_key, "", "PEM private key of --tls_cert.");
+ABSL_FLAG(std::string, tls_client_ca, "",
+          "PEM CA certificates; when set, clients must present a certificate it signed "
+          "(mutual TLS). Needs --tls_cert/--tls_key.");
+ABSL_FLAG(std::string, auth_tokens_file, "",
+          "File of accepted Bearer tokens, one per line ('#' comments). Tokens may also come "
+          "from the environment variable LANE_AUTH_TOKENS (comma-separated); with neither, no "
+          "token is needed. The health service never needs one.");
+ABSL_FLAG(int, max_concurrent_streams, 0,
+          "Calls (HTTP/2 streams) open at once per client connection; 0 = gRPC's default.");
 ABSL_FLAG(int, opencv_threads, 1,
           "OpenCV's own threads per call; 1 because the worker pool already uses every core.");
 
@@ -94,6 +109,24 @@ int main(int argc, char** argv) {
   options.shutdown_deadline = absl::GetFlag(FLAGS_shutdown_deadline);
   options.default_config_path = absl::GetFlag(FLAGS_default_config);
   options.default_camera_id = absl::GetFlag(FLAGS_default_camera_id);
+  options.tls_cert_path = absl::GetFlag(FLAGS_tls_cert);
+  options.tls_key_path = absl::GetFlag(FLAGS_tls_key);
+  options.tls_client_ca_path = absl::GetFlag(FLAGS_tls_client_ca);
+  options.max_concurrent_streams = std::max(0, absl::GetFlag(FLAGS_max_concurrent_streams));
+  // Tokens: never a command-line literal (visible in ps), never logged.
+  if (const std::string path = absl::GetFlag(FLAGS_auth_tokens_file); !path.empty()) {
+    absl::StatusOr<std::vector<std::string>> tokens = lane::server::ReadTokenFile(path);
+    if (!tokens.ok()) {
+      std::cerr << "lane-server: --auth_tokens_file: " << tokens.status().message() << "\n";
+      return 1;
+    }
+    options.auth_tokens = *std::move(tokens);
+  }
+  if (const char* env = std::getenv("LANE_AUTH_TOKENS"); env != nullptr) {
+    for (std::string& token : lane::server::ParseTokenList(env)) {
+      options.auth_tokens.push_back(std::move(token));
+    }
+  }
   options.build = lane::server::CurrentBuildInfo();
 
   auto registry = std::make_shared<prometheus::Registry>();
@@ -109,6 +142,12 @@ int main(int argc, char** argv) {
   if (!options.default_config_path.empty()) {
     std::cerr << ", session '" << options.default_camera_id << "' from "
               << options.default_config_path;
+  }
+  if (!options.tls_cert_path.empty()) {
+    std::cerr << (options.tls_client_ca_path.empty() ? ", TLS" : ", mutual TLS");
+  }
+  if (!options.auth_tokens.empty()) {
+    std::cerr << ", " << options.auth_tokens.size() << " Bearer token(s)";
   }
   std::cerr << std::endl;
 

@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <exception>
+#include <fstream>
 #include <opencv2/core/version.hpp>
+#include <sstream>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
@@ -21,6 +23,41 @@
 
 namespace lane::server {
 namespace {
+
+absl::StatusOr<std::string> ReadPem(const std::string& flag, const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  if (!in || !(text << in.rdbuf())) {
+    return absl::InvalidArgumentError(absl::StrCat(flag, ": cannot read ", path));
+  }
+  return text.str();
+}
+
+absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> MakeCredentials(
+    const ServerOptions& options) {
+  if (options.tls_cert_path.empty() && options.tls_key_path.empty()) {
+    if (!options.tls_client_ca_path.empty()) {
+      return absl::InvalidArgumentError("--tls_client_ca needs --tls_cert and --tls_key");
+    }
+    return grpc::InsecureServerCredentials();
+  }
+  if (options.tls_cert_path.empty() || options.tls_key_path.empty()) {
+    return absl::InvalidArgumentError("--tls_cert and --tls_key go together");
+  }
+  absl::StatusOr<std::string> cert = ReadPem("--tls_cert", options.tls_cert_path);
+  if (!cert.ok()) return cert.status();
+  absl::StatusOr<std::string> key = ReadPem("--tls_key", options.tls_key_path);
+  if (!key.ok()) return key.status();
+  grpc::SslServerCredentialsOptions ssl(GRPC_SSL_DONT_REQUEST_CLIENT_CERTIFICATE);
+  ssl.pem_key_cert_pairs.push_back({*key, *cert});
+  if (!options.tls_client_ca_path.empty()) {
+    absl::StatusOr<std::string> ca = ReadPem("--tls_client_ca", options.tls_client_ca_path);
+    if (!ca.ok()) return ca.status();
+    ssl.pem_root_certs = *ca;
+    ssl.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
+  }
+  return grpc::SslServerCredentials(ssl);
+}
 
 int ToMillis(absl::Duration d) {
   return static_cast<int>(std::min<int64_t>(absl::ToInt64Milliseconds(d), INT32_MAX));
@@ -43,7 +80,10 @@ LaneServer::~LaneServer() { Drain(); }
 
 absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
     const ServerOptions& options, std::shared_ptr<prometheus::Registry> registry) {
-  // Fail fast on a bad default config, before anything listens.
+  // Fail fast on bad TLS files or a bad default config, before anything
+  // listens.
+  absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> credentials = MakeCredentials(options);
+  if (!credentials.ok()) return credentials.status();
   absl::StatusOr<lane::Config> default_config;
   if (!options.default_config_path.empty()) {
     default_config = lane::LoadConfigFile(options.default_config_path);
@@ -78,6 +118,7 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
   service_options.max_frame_pixels = options.max_frame_pixels;
   service_options.max_receive_message_bytes =
       static_cast<uint64_t>(std::max(0, options.max_receive_message_bytes));
+  service_options.auth_tokens = options.auth_tokens;
   service_options.build = options.build;
   server->service_ = std::make_unique<LaneServiceImpl>(service_options, *server->sessions_,
                                                        *server->pool_, *server->metrics_);
@@ -85,7 +126,7 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
-  builder.AddListeningPort(options.address, grpc::InsecureServerCredentials(), &server->port_);
+  builder.AddListeningPort(options.address, *credentials, &server->port_);
   builder.RegisterService(server->service_.get());
   builder.SetMaxReceiveMessageSize(options.max_receive_message_bytes);
   builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, ToMillis(options.keepalive_time));
@@ -94,6 +135,9 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
                              options.keepalive_permit_without_calls ? 1 : 0);
   builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS,
                              ToMillis(options.keepalive_min_client_interval));
+  if (options.max_concurrent_streams > 0) {
+    builder.AddChannelArgument(GRPC_ARG_MAX_CONCURRENT_STREAMS, options.max_concurrent_streams);
+  }
   server->server_ = builder.BuildAndStart();
   if (server->server_ == nullptr || server->port_ == 0) {
     return absl::UnavailableError(absl::StrCat("cannot listen on ", options.address));

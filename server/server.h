@@ -14,6 +14,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
@@ -59,6 +60,16 @@ struct ServerOptions {
   // lane::ParseConfig) under default_camera_id.
   std::string default_config_path;
   std::string default_camera_id = "default";
+  // TLS: PEM files of the server's certificate chain and private key; both
+  // empty = plaintext. With tls_client_ca, clients must present a
+  // certificate signed by that CA (mutual TLS).
+  std::string tls_cert_path;
+  std::string tls_key_path;
+  std::string tls_client_ca_path;
+  // Accepted Bearer tokens; empty = no token needed. Health stays open.
+  std::vector<std::string> auth_tokens;
+  // HTTP/2 streams (calls) open at once per connection; 0 = gRPC's default.
+  int max_concurrent_streams = 0;
   BuildInfo build;
 };
 

@@ -355,9 +355,11 @@ absl::StatusOr<Config> ParseConfig(const std::string& json_text) {
   try {
     doc = Json::parse(json_text, /*cb=*/nullptr, /*allow_exceptions=*/true,
                       /*ignore_comments=*/true);
-  } catch (const Json::parse_error& e) {
-    // e.what() is "[json.exception.parse_error.101] parse error at line L,
-    // column C: ..."; the bracketed id means nothing to a user.
+  } catch (const Json::exception& e) {
+    // A parse_error, or an out_of_range for a number beyond double (found by
+    // fuzz/config_fuzzer: "1e999" used to escape as an exception). e.what()
+    // is "[json.exception.parse_error.101] parse error at line L, column C:
+    // ..."; the bracketed id means nothing to a user.
     std::string what = e.what();
     if (const size_t close = what.find("] "); what.rfind("[json.", 0) == 0 && close != what.npos) {
       what = what.substr(close + 2);

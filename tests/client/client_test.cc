@@ -525,6 +525,55 @@ TEST_F(ClientTest, SessionCommands) {
   EXPECT_EQ(server->sessions().size(), 0u);
 }
 
+TEST(ClientSecurityTest, TakesSecurityOptionsOutOfTheCommandLine) {
+  TempDir dir;
+  const std::string token_file = (dir / "token");
+  std::ofstream(token_file) << "  tok-123 \nignored\n";
+  std::vector<std::string> args = {"list", "--token-file", token_file, "--target",
+                                   "x",    "--",           "--ca",     "y"};
+  absl::StatusOr<Security> security = TakeSecurityOptions(args);
+  ASSERT_TRUE(security.ok()) << security.status();
+  EXPECT_EQ(security->token, "tok-123");
+  EXPECT_TRUE(security->ca_pem.empty());
+  EXPECT_EQ(args, (std::vector<std::string>{"list", "--target", "x", "--", "--ca", "y"}));
+
+  std::vector<std::string> missing = {"--ca=" + (dir / "none.pem")};
+  EXPECT_FALSE(TakeSecurityOptions(missing).ok());
+  std::vector<std::string> no_value = {"--token-file"};
+  EXPECT_FALSE(TakeSecurityOptions(no_value).ok());
+  std::vector<std::string> cert_only = {"--cert", token_file};
+  EXPECT_FALSE(TakeSecurityOptions(cert_only).ok());
+}
+
+TEST(ClientSecurityTest, SendsTheBearerTokenOnEveryCommand) {
+  lane::server::ServerOptions options;
+  options.address = "127.0.0.1:0";
+  options.metrics_address = "";
+  options.workers = 2;
+  options.auth_tokens = {"fleet-token"};
+  options.build = lane::server::CurrentBuildInfo();
+  auto server = lane::server::LaneServer::Start(options, std::make_shared<prometheus::Registry>());
+  ASSERT_TRUE(server.ok()) << server.status();
+  const std::string target = Target(**server);
+  TempDir dir;
+  const std::string good = (dir / "good");
+  const std::string bad = (dir / "bad");
+  std::ofstream(good) << "fleet-token\n";
+  std::ofstream(bad) << "guess\n";
+
+  EXPECT_EQ(RunCommand({"session", "list", "--target", target}), kExitFailure);
+  EXPECT_EQ(RunCommand({"session", "list", "--target", target, "--token-file", bad}), kExitFailure);
+  EXPECT_EQ(RunCommand({"session", "list", "--target", target, "--token-file", good}), kExitOk);
+  EXPECT_EQ(RunCommand({"info", "--token-file=" + good, "--target", target}), kExitOk);
+  // Health needs no token.
+  EXPECT_EQ(RunCommand({"health", "--target", target}), kExitOk);
+  setenv("LANE_TOKEN", "fleet-token", 1);
+  EXPECT_EQ(RunCommand({"session", "list", "--target", target}), kExitOk);
+  unsetenv("LANE_TOKEN");
+  EXPECT_EQ(RunCommand({"info", "--target", target}), kExitFailure);
+  (*server)->Drain();
+}
+
 TEST(ClientUsageTest, BadCommandLinesExitTwo) {
   EXPECT_EQ(RunCommand({}), kExitUsage);
   EXPECT_EQ(RunCommand({"nope"}), kExitUsage);
@@ -532,6 +581,8 @@ TEST(ClientUsageTest, BadCommandLinesExitTwo) {
   EXPECT_EQ(RunCommand({"bench", "--fps", "10", "--inflight", "2"}), kExitUsage);
   EXPECT_EQ(RunCommand({"bench", "--sweep", "1,x"}), kExitUsage);
   EXPECT_EQ(RunCommand({"session", "get"}), kExitUsage);
+  EXPECT_EQ(RunCommand({"info", "--token-file"}), kExitUsage);
+  EXPECT_EQ(RunCommand({"info", "--ca", "/nonexistent/ca.pem"}), kExitUsage);
 }
 
 }  // namespace

@@ -61,6 +61,16 @@ Config NonDefaultConfig() {
   return c;
 }
 
+TEST(ConfigTest, NumberBeyondDoubleIsInvalidArgument) {
+  // Found by fuzz/config_fuzzer: nlohmann throws out_of_range (not
+  // parse_error) for it, which used to escape ParseConfig.
+  for (const char* text : {"{\"camera\": {\"cv\": 256.5e352}}", "[1e999]", "-1e400"}) {
+    SCOPED_TRACE(text);
+    const absl::StatusOr<lane::Config> config = lane::ParseConfig(text);
+    EXPECT_EQ(config.status().code(), absl::StatusCode::kInvalidArgument);
+  }
+}
+
 TEST(ConfigTest, EmptyDocumentGivesTheDefaults) {
   const absl::StatusOr<Config> parsed = ParseConfig("{}");
   ASSERT_TRUE(parsed.ok()) << parsed.status();
