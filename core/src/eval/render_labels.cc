@@ -6,6 +6,7 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
+#include "json_lines.h"
 #include "lane/eval/text_file.h"
 
 namespace lane::eval {
@@ -14,58 +15,52 @@ absl::StatusOr<std::vector<LabelledFrame>> ParseRenderLabels(absl::string_view t
                                                              absl::string_view source) {
   using Json = nlohmann::json;
   std::vector<LabelledFrame> frames;
-  int line_number = 0;
-  for (absl::string_view line : absl::StrSplit(text, '\n')) {
-    ++line_number;
-    line = absl::StripAsciiWhitespace(line);
-    if (line.empty()) continue;
-    const auto error = [&](const std::string& message) {
-      return absl::InvalidArgumentError(absl::StrCat(source, ":", line_number, ": ", message));
-    };
-    const Json j = Json::parse(line.begin(), line.end(), nullptr, /*allow_exceptions=*/false);
-    if (j.is_discarded() || !j.is_object()) return error("not a JSON object");
-    LabelledFrame frame;
-    if (!j.contains("frame") || !j["frame"].is_string()) {
-      return error("\"frame\" must be a string");
-    }
-    frame.name = j["frame"].get<std::string>();
-    for (const char* key : {"width", "height"}) {
-      if (!j.contains(key) || !j[key].is_number_integer() || j[key].get<int>() <= 0) {
-        return error(absl::StrCat("\"", key, "\" must be a positive integer"));
-      }
-    }
-    frame.width = j["width"].get<int>();
-    frame.height = j["height"].get<int>();
-    if (!j.contains("boundaries") || !j["boundaries"].is_array()) {
-      return error("\"boundaries\" must be an array");
-    }
-    for (size_t b = 0; b < j["boundaries"].size(); ++b) {
-      const Json& boundary = j["boundaries"][b];
-      const Json* points =
-          boundary.is_object() && boundary.contains("points") ? &boundary["points"] : nullptr;
-      if (points == nullptr || !points->is_array() || points->size() != 4) {
-        return error(absl::StrCat("boundaries[", b, "].points must hold 4 [x, y] points"));
-      }
-      std::array<Eigen::Vector2d, 4> control;
-      for (size_t i = 0; i < 4; ++i) {
-        const Json& p = (*points)[i];
-        if (!p.is_array() || p.size() != 2 || !p[0].is_number() || !p[1].is_number() ||
-            !std::isfinite(p[0].get<double>()) || !std::isfinite(p[1].get<double>())) {
-          return error(absl::StrCat("boundaries[", b, "].points[", i, "] must be [x, y]"));
+  const absl::Status status = ForEachJsonObjectLine(
+      text, source, [&](const Json& j, const LineError& error) -> absl::Status {
+        LabelledFrame frame;
+        if (!j.contains("frame") || !j["frame"].is_string()) {
+          return error("\"frame\" must be a string");
         }
-        control[i] = {p[0].get<double>(), p[1].get<double>()};
-      }
-      LabelledBoundary label{Curve::FromBezier(control), ""};
-      const bool dashed = boundary.contains("dashed") && boundary["dashed"].is_boolean() &&
-                          boundary["dashed"].get<bool>();
-      const std::string colour = boundary.contains("color") && boundary["color"].is_string()
-                                     ? boundary["color"].get<std::string>()
-                                     : std::string("white");
-      label.type = absl::StrCat(dashed ? "dashed " : "solid ", colour);
-      frame.boundaries.push_back(std::move(label));
-    }
-    frames.push_back(std::move(frame));
-  }
+        frame.name = j["frame"].get<std::string>();
+        for (const char* key : {"width", "height"}) {
+          if (!j.contains(key) || !j[key].is_number_integer() || j[key].get<int>() <= 0) {
+            return error(absl::StrCat("\"", key, "\" must be a positive integer"));
+          }
+        }
+        frame.width = j["width"].get<int>();
+        frame.height = j["height"].get<int>();
+        if (!j.contains("boundaries") || !j["boundaries"].is_array()) {
+          return error("\"boundaries\" must be an array");
+        }
+        for (size_t b = 0; b < j["boundaries"].size(); ++b) {
+          const Json& boundary = j["boundaries"][b];
+          const Json* points =
+              boundary.is_object() && boundary.contains("points") ? &boundary["points"] : nullptr;
+          if (points == nullptr || !points->is_array() || points->size() != 4) {
+            return error(absl::StrCat("boundaries[", b, "].points must hold 4 [x, y] points"));
+          }
+          std::array<Eigen::Vector2d, 4> control;
+          for (size_t i = 0; i < 4; ++i) {
+            const Json& p = (*points)[i];
+            if (!p.is_array() || p.size() != 2 || !p[0].is_number() || !p[1].is_number() ||
+                !std::isfinite(p[0].get<double>()) || !std::isfinite(p[1].get<double>())) {
+              return error(absl::StrCat("boundaries[", b, "].points[", i, "] must be [x, y]"));
+            }
+            control[i] = {p[0].get<double>(), p[1].get<double>()};
+          }
+          LabelledBoundary label{Curve::FromBezier(control), ""};
+          const bool dashed = boundary.contains("dashed") && boundary["dashed"].is_boolean() &&
+                              boundary["dashed"].get<bool>();
+          const std::string colour = boundary.contains("color") && boundary["color"].is_string()
+                                         ? boundary["color"].get<std::string>()
+                                         : std::string("white");
+          label.type = absl::StrCat(dashed ? "dashed " : "solid ", colour);
+          frame.boundaries.push_back(std::move(label));
+        }
+        frames.push_back(std::move(frame));
+        return absl::OkStatus();
+      });
+  if (!status.ok()) return status;
   return frames;
 }
 

@@ -6,6 +6,7 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
+#include "json_lines.h"
 #include "lane/eval/text_file.h"
 
 namespace lane::eval {
@@ -26,52 +27,46 @@ bool IsNumberArray(const Json& j) {
 absl::StatusOr<std::vector<TusimpleFrame>> ParseTusimpleLabels(absl::string_view text,
                                                                absl::string_view source) {
   std::vector<TusimpleFrame> frames;
-  int line_number = 0;
-  for (absl::string_view line : absl::StrSplit(text, '\n')) {
-    ++line_number;
-    line = absl::StripAsciiWhitespace(line);
-    if (line.empty()) continue;
-    const auto error = [&](const std::string& message) {
-      return absl::InvalidArgumentError(absl::StrCat(source, ":", line_number, ": ", message));
-    };
-    const Json j = Json::parse(line.begin(), line.end(), nullptr, /*allow_exceptions=*/false);
-    if (j.is_discarded() || !j.is_object()) return error("not a JSON object");
-    const auto raw_file = j.find("raw_file");
-    if (raw_file == j.end() || !raw_file->is_string() || raw_file->get<std::string>().empty()) {
-      return error("\"raw_file\" must be a non-empty string");
-    }
-    const auto h_samples = j.find("h_samples");
-    if (h_samples == j.end() || !IsNumberArray(*h_samples)) {
-      return error("\"h_samples\" must be an array of numbers");
-    }
-    const auto lanes = j.find("lanes");
-    if (lanes == j.end() || !lanes->is_array()) {
-      return error("\"lanes\" must be an array of arrays of numbers");
-    }
-    TusimpleFrame frame;
-    frame.raw_file = raw_file->get<std::string>();
-    for (size_t k = 0; k < lanes->size(); ++k) {
-      const Json& lane = (*lanes)[k];
-      if (!IsNumberArray(lane)) {
-        return error(absl::StrCat("lanes[", k, "] must be an array of numbers"));
-      }
-      if (lane.size() != h_samples->size()) {
-        return error(absl::StrCat("lanes[", k, "] has ", lane.size(), " values but h_samples has ",
-                                  h_samples->size()));
-      }
-      std::vector<Eigen::Vector2d> points;
-      for (size_t i = 0; i < lane.size(); ++i) {
-        const double x = lane[i].get<double>();
-        const double y = (*h_samples)[i].get<double>();
-        if (!std::isfinite(x) || !std::isfinite(y)) {
-          return error(absl::StrCat("lanes[", k, "][", i, "] is not finite"));
+  const absl::Status status = ForEachJsonObjectLine(
+      text, source, [&](const Json& j, const LineError& error) -> absl::Status {
+        const auto raw_file = j.find("raw_file");
+        if (raw_file == j.end() || !raw_file->is_string() || raw_file->get<std::string>().empty()) {
+          return error("\"raw_file\" must be a non-empty string");
         }
-        if (x >= 0) points.emplace_back(x, y);
-      }
-      if (points.size() >= 2) frame.lanes.push_back(Curve::Polyline(std::move(points)));
-    }
-    frames.push_back(std::move(frame));
-  }
+        const auto h_samples = j.find("h_samples");
+        if (h_samples == j.end() || !IsNumberArray(*h_samples)) {
+          return error("\"h_samples\" must be an array of numbers");
+        }
+        const auto lanes = j.find("lanes");
+        if (lanes == j.end() || !lanes->is_array()) {
+          return error("\"lanes\" must be an array of arrays of numbers");
+        }
+        TusimpleFrame frame;
+        frame.raw_file = raw_file->get<std::string>();
+        for (size_t k = 0; k < lanes->size(); ++k) {
+          const Json& lane = (*lanes)[k];
+          if (!IsNumberArray(lane)) {
+            return error(absl::StrCat("lanes[", k, "] must be an array of numbers"));
+          }
+          if (lane.size() != h_samples->size()) {
+            return error(absl::StrCat("lanes[", k, "] has ", lane.size(),
+                                      " values but h_samples has ", h_samples->size()));
+          }
+          std::vector<Eigen::Vector2d> points;
+          for (size_t i = 0; i < lane.size(); ++i) {
+            const double x = lane[i].get<double>();
+            const double y = (*h_samples)[i].get<double>();
+            if (!std::isfinite(x) || !std::isfinite(y)) {
+              return error(absl::StrCat("lanes[", k, "][", i, "] is not finite"));
+            }
+            if (x >= 0) points.emplace_back(x, y);
+          }
+          if (points.size() >= 2) frame.lanes.push_back(Curve::Polyline(std::move(points)));
+        }
+        frames.push_back(std::move(frame));
+        return absl::OkStatus();
+      });
+  if (!status.ok()) return status;
   return frames;
 }
 
