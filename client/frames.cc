@@ -5,7 +5,6 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -91,13 +90,9 @@ bool FrameSource::Next(ClientFrame* frame) {
         return true;
       case lane_tools::InputEntry::kVideo: {
         if (!video_) {
-          video_ = std::make_unique<cv::VideoCapture>();
+          video_ = lane_tools::OpenVideoQuietly(entry.path);
           video_frame_ = 0;
-          const auto level = cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
-          const bool opened = video_->open(entry.path) && video_->isOpened();
-          cv::utils::logging::setLogLevel(level);
-          if (!opened) {
-            video_.reset();
+          if (!video_) {
             frame->error = absl::StrCat("cannot open video", Where(entry.path, entry.name));
             ++next_;
             return true;

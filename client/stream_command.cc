@@ -166,11 +166,9 @@ int RunStream(const std::vector<std::string>& argv) {
 
   std::ofstream file;
   if (const auto output = args->Get("output")) {
-    const std::filesystem::path parent = std::filesystem::path(*output).parent_path();
-    std::error_code ec;
-    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
-    file.open(*output, std::ios::binary | std::ios::trunc);
-    if (!file) return Failure("stream", absl::StrCat("cannot write ", *output));
+    if (!lane_tools::OpenOutputFile(*output, &file)) {
+      return Failure("stream", absl::StrCat("cannot write ", *output));
+    }
   }
   std::ostream& out = file.is_open() ? static_cast<std::ostream&>(file) : std::cout;
 

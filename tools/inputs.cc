@@ -33,6 +33,24 @@ std::string PathNote(const std::string& path, const std::string& name) {
 
 }  // namespace
 
+std::unique_ptr<cv::VideoCapture> OpenVideoQuietly(const std::string& path) {
+  auto video = std::make_unique<cv::VideoCapture>();
+  // OpenCV logs each backend's failure at length; the caller's message says it.
+  const auto level = cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
+  const bool opened = video->open(path) && video->isOpened();
+  cv::utils::logging::setLogLevel(level);
+  if (!opened) video.reset();
+  return video;
+}
+
+bool OpenOutputFile(const std::string& path, std::ofstream* file) {
+  const fs::path parent = fs::path(path).parent_path();
+  std::error_code ec;
+  if (!parent.empty()) fs::create_directories(parent, ec);
+  file->open(path, std::ios::binary | std::ios::trunc);
+  return static_cast<bool>(*file);
+}
+
 std::string LowerExtension(const std::string& path) {
   return absl::AsciiStrToLower(fs::path(path).extension().string());
 }
@@ -179,14 +197,9 @@ bool FrameReader::Next(InputFrame* frame) {
       }
       case InputEntry::kVideo: {
         if (!video_) {
-          video_ = std::make_unique<cv::VideoCapture>();
+          video_ = OpenVideoQuietly(entry.path);
           video_frame_ = 0;
-          // OpenCV logs each backend's failure at length; our message says it.
-          const auto level = cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
-          const bool opened = video_->open(entry.path) && video_->isOpened();
-          cv::utils::logging::setLogLevel(level);
-          if (!opened) {
-            video_.reset();
+          if (!video_) {
             frame->error = absl::StrCat("cannot open video", PathNote(entry.path, entry.name));
             ++next_;
             return true;

@@ -3,6 +3,7 @@
 #ifndef LANE_TOOLS_INPUTS_H_
 #define LANE_TOOLS_INPUTS_H_
 
+#include <fstream>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
@@ -66,6 +67,14 @@ class FrameReader {
   std::unique_ptr<cv::VideoCapture> video_;
   int video_frame_ = 0;
 };
+
+// Opens a video with OpenCV's backend chatter silenced (our caller reports the
+// failure itself); nullptr when it cannot be opened.
+std::unique_ptr<cv::VideoCapture> OpenVideoQuietly(const std::string& path);
+
+// Opens `path` for writing results (truncating), creating its folder first,
+// as the overlay folders are. False when it cannot be opened.
+bool OpenOutputFile(const std::string& path, std::ofstream* file);
 
 // Lower-case extension with the dot (".png"), or "".
 std::string LowerExtension(const std::string& path);
