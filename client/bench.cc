@@ -58,6 +58,9 @@ struct RunState {
   std::atomic<bool> stopping{false};
 
   bool Measured(Clock::time_point t) const { return t >= measure_start && t < measure_end; }
+  float SinceMeasureStart(Clock::time_point t) const {
+    return std::chrono::duration<float>(t - measure_start).count();
+  }
   int64_t UnixNanos(Clock::time_point t) const {
     return start_unix_ns + std::chrono::duration_cast<std::chrono::nanoseconds>(t - start).count();
   }
@@ -74,6 +77,10 @@ struct CameraStats {
   std::map<std::string, uint64_t> errors;
   std::vector<double> latency_ms;
   std::vector<double> server_ms;
+  // For the timeline: when each latency_ms entry, and each error, arrived,
+  // in seconds since the start of the measured window.
+  std::vector<float> ok_at_s;
+  std::vector<float> error_at_s;
   Clock::time_point last_ok{};
   double max_send_lag_ms = 0;
   uint64_t stream_failures = 0;
@@ -426,14 +433,17 @@ void CameraStream::OnReadDone(bool ok) {
       stats.server_ms.push_back(static_cast<double>(response.server_send_time_unix_ns() -
                                                     response.server_receive_time_unix_ns()) *
                                 1e-6);
+      stats.ok_at_s.push_back(camera_->run().SinceMeasureStart(now));
       stats.last_ok = now;
       ++stats.interval_ok;
       stats.interval_latency_ms += latency;
     } else if (code == v1::FRAME_CODE_DROPPED) {
       ++stats.dropped;
+      stats.error_at_s.push_back(camera_->run().SinceMeasureStart(now));
     } else {
       ++stats.failed;
       ++stats.errors[FrameCodeName(code)];
+      stats.error_at_s.push_back(camera_->run().SinceMeasureStart(now));
     }
   }
   StartRead(&read_buffer_);
@@ -454,6 +464,8 @@ void CameraStream::OnDone(const grpc::Status& status) {
     CameraStats& stats = camera_->stats();
     if (lost > 0) {
       stats.failed += lost;
+      stats.error_at_s.insert(stats.error_at_s.end(), lost,
+                              camera_->run().SinceMeasureStart(Clock::now()));
       const std::string code =
           status.ok() ? std::string("UNKNOWN") : lane::server::GrpcCodeName(status.error_code());
       stats.errors[code] += lost;
@@ -471,6 +483,35 @@ void CameraStream::OnDone(const grpc::Status& status) {
 }
 
 }  // namespace
+
+std::vector<TimelinePoint> Timeline(const std::vector<double>& latency_ms,
+                                    const std::vector<float>& ok_at_s,
+                                    const std::vector<float>& error_at_s, double interval_s,
+                                    double measured_s) {
+  std::vector<TimelinePoint> points;
+  if (interval_s <= 0 || measured_s <= 0) return points;
+  const size_t n = static_cast<size_t>(std::ceil(measured_s / interval_s - 1e-9));
+  points.resize(std::max<size_t>(n, 1));
+  for (size_t i = 0; i < points.size(); ++i) {
+    points[i].start_s = static_cast<double>(i) * interval_s;
+    points[i].end_s = std::min(measured_s, static_cast<double>(i + 1) * interval_s);
+  }
+  // Answers after the window (the drain) count in the last interval.
+  const auto bucket = [&](float t) {
+    const double k = std::floor(std::max(0.0, static_cast<double>(t)) / interval_s);
+    return std::min(points.size() - 1, static_cast<size_t>(k));
+  };
+  std::vector<std::vector<double>> values(points.size());
+  for (size_t i = 0; i < latency_ms.size() && i < ok_at_s.size(); ++i) {
+    values[bucket(ok_at_s[i])].push_back(latency_ms[i]);
+  }
+  for (const float t : error_at_s) ++points[bucket(t)].errors;
+  for (size_t i = 0; i < points.size(); ++i) {
+    points[i].ok = values[i].size();
+    points[i].latency_ms = Summarize(values[i]);
+  }
+  return points;
+}
 
 absl::StatusOr<std::vector<BenchFrame>> SyntheticBenchFrames(const lane::CameraModel& camera,
                                                              int count, bool raw,
@@ -701,6 +742,8 @@ absl::StatusOr<LoadResult> RunLoad(const LoadSpec& spec) {
   result.target_fps = spec.open_loop ? spec.fps * spec.cameras : 0;
   std::vector<double> latency;
   std::vector<double> server;
+  std::vector<float> ok_at_s;
+  std::vector<float> error_at_s;
   Clock::time_point last_ok = run.measure_start;
   for (auto& camera : cameras) {
     std::lock_guard<std::mutex> lock(camera->stats_mu());
@@ -714,6 +757,8 @@ absl::StatusOr<LoadResult> RunLoad(const LoadSpec& spec) {
     for (const auto& [code, n] : s.errors) result.errors[code] += n;
     latency.insert(latency.end(), s.latency_ms.begin(), s.latency_ms.end());
     server.insert(server.end(), s.server_ms.begin(), s.server_ms.end());
+    ok_at_s.insert(ok_at_s.end(), s.ok_at_s.begin(), s.ok_at_s.end());
+    error_at_s.insert(error_at_s.end(), s.error_at_s.begin(), s.error_at_s.end());
     if (s.ok > 0) last_ok = std::max(last_ok, s.last_ok);
     result.max_send_lag_ms = std::max(result.max_send_lag_ms, s.max_send_lag_ms);
     result.stream_failures += s.stream_failures;
@@ -725,6 +770,10 @@ absl::StatusOr<LoadResult> RunLoad(const LoadSpec& spec) {
                                absl::ToDoubleSeconds(spec.duration));
   result.achieved_fps =
       result.measured_s > 0 ? static_cast<double>(result.frames_ok) / result.measured_s : 0;
+  if (spec.timeline_interval > absl::ZeroDuration()) {
+    result.timeline = Timeline(latency, ok_at_s, error_at_s,
+                               absl::ToDoubleSeconds(spec.timeline_interval), result.measured_s);
+  }
   result.latency_ms = Summarize(latency);
   result.server_ms = Summarize(server);
   return result;

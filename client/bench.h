@@ -80,8 +80,21 @@ struct LoadSpec {
   absl::Duration duration = absl::Seconds(10);
   // After the run, how long the answers of the frames sent are waited for.
   absl::Duration drain_timeout = absl::Seconds(10);
+  // Above zero: also summarize the measured window in consecutive intervals
+  // of this length (LoadResult::timeline), e.g. for a soak test.
+  absl::Duration timeline_interval = absl::ZeroDuration();
   const std::vector<BenchFrame>* frames = nullptr;
   ProgressFn progress;  // about every 0.5 s, from the calling thread
+};
+
+// One interval of a run's timeline: the frames whose answer arrived in
+// [start_s, end_s) seconds after the start of the measured window.
+struct TimelinePoint {
+  double start_s = 0;
+  double end_s = 0;
+  uint64_t ok = 0;
+  uint64_t errors = 0;  // answered with an error or dropped, or lost with their stream
+  LatencySummary latency_ms;
 };
 
 struct LoadResult {
@@ -106,11 +119,20 @@ struct LoadResult {
   double max_send_lag_ms = 0;              // open loop: the latest a frame was handed to gRPC
   uint64_t stream_failures = 0;
   std::map<std::string, uint64_t> ok_by_target;
+  std::vector<TimelinePoint> timeline;  // empty unless LoadSpec::timeline_interval > 0
 };
 
 // Creates (or confirms) the sessions, runs the load, waits for the answers.
 // An error only when the sessions cannot be created.
 absl::StatusOr<LoadResult> RunLoad(const LoadSpec& spec);
+
+// The timeline of a run: latency_ms[i] arrived ok_at_s[i] seconds after the
+// start of the measured window, errors at error_at_s. Intervals of
+// interval_s cover [0, measured_s); later arrivals count in the last one.
+std::vector<TimelinePoint> Timeline(const std::vector<double>& latency_ms,
+                                    const std::vector<float>& ok_at_s,
+                                    const std::vector<float>& error_at_s, double interval_s,
+                                    double measured_s);
 
 // Deletes the sessions camera_prefix + 0 .. cameras-1, each through its
 // camera's channel. Best effort.

@@ -52,6 +52,8 @@ constexpr char kUsage[] =
     "  --warmup D           discarded warm-up (default 2s)\n"
     "  --duration D         measured time (default 10s)\n"
     "  --drain-timeout D    wait for the last answers this long (default 10s)\n"
+    "  --timeline D         also report each interval D of the measured time:\n"
+    "                       answers, errors and latency percentiles (for soaks)\n"
     "frames:\n"
     "  --synthetic N        render N synthetic frames (default 50; without INPUT)\n"
     "  --jpeg-quality Q     JPEG quality of the synthetic frames (default 90)\n"
@@ -209,6 +211,19 @@ std::string JsonReport(const Report& r) {
     const std::optional<double> ratio = r.Ratio(run);
     x["service_vs_inprocess"] = ratio ? Json(Round3(*ratio)) : Json();
     x["slo_met"] = r.slo_p99_ms ? Json(r.SloMet(run)) : Json();
+    if (!run.timeline.empty()) {
+      Json timeline = Json::array();
+      for (const TimelinePoint& point : run.timeline) {
+        Json t = Json::object();
+        t["start_s"] = Round3(point.start_s);
+        t["end_s"] = Round3(point.end_s);
+        t["frames_ok"] = point.ok;
+        t["errors"] = point.errors;
+        t["latency_ms"] = LatencyJson(point.latency_ms);
+        timeline.push_back(std::move(t));
+      }
+      x["timeline"] = std::move(timeline);
+    }
     runs.push_back(std::move(x));
   }
   j["runs"] = std::move(runs);
@@ -295,6 +310,15 @@ std::string TextReport(const Report& r) {
       notes.push_back(absl::StrFormat("service/in-process %.1f %%", *ratio * 100));
     }
     out << absl::StrFormat("  %d cameras: ", run.cameras) << absl::StrJoin(notes, "; ") << "\n";
+    if (!run.timeline.empty()) {
+      out << absl::StrFormat("    %15s %8s %8s %8s %8s %8s\n", "interval s", "ok", "errors",
+                             "p50 ms", "p99 ms", "max ms");
+      for (const TimelinePoint& p : run.timeline) {
+        out << absl::StrFormat("    %7.0f-%-7.0f %8d %8d %8.2f %8.2f %8.2f\n", p.start_s, p.end_s,
+                               p.ok, p.errors, p.latency_ms.p50, p.latency_ms.p99,
+                               p.latency_ms.max);
+      }
+    }
   }
   if (r.inprocess) {
     out << absl::StrFormat(
@@ -338,7 +362,7 @@ int RunBench(const std::vector<std::string>& argv) {
   std::vector<lane_tools::OptionSpec> specs = SessionConfigOptionSpecs();
   for (const char* name : {"target", "connections", "cameras", "sweep", "inflight", "fps", "warmup",
                            "duration", "drain-timeout", "synthetic", "jpeg-quality", "max-frames",
-                           "camera-prefix", "workers", "output", "slo-p99-ms"}) {
+                           "camera-prefix", "workers", "output", "slo-p99-ms", "timeline"}) {
     specs.push_back({name});
   }
   for (const char* name : {"raw", "replace", "keep-sessions", "inprocess", "json", "csv"}) {
@@ -365,10 +389,11 @@ int RunBench(const std::vector<std::string>& argv) {
   const auto warmup = GetDuration(*args, "warmup");
   const auto duration = GetDuration(*args, "duration");
   const auto drain = GetDuration(*args, "drain-timeout");
+  const auto timeline = GetDuration(*args, "timeline");
   for (const absl::Status& s :
        {connections.status(), cameras.status(), inflight.status(), synthetic.status(),
         quality.status(), max_frames.status(), workers.status(), fps.status(), slo.status(),
-        warmup.status(), duration.status(), drain.status()}) {
+        warmup.status(), duration.status(), drain.status(), timeline.status()}) {
     if (!s.ok()) return usage_error(s);
   }
   if (args->Has("json") && args->Has("csv")) {
@@ -433,6 +458,10 @@ int RunBench(const std::vector<std::string>& argv) {
     return usage_error(absl::InvalidArgumentError("--duration must be > 0"));
   }
   spec.drain_timeout = drain->value_or(absl::Seconds(10));
+  spec.timeline_interval = timeline->value_or(absl::ZeroDuration());
+  if (timeline->has_value() && spec.timeline_interval <= absl::ZeroDuration()) {
+    return usage_error(absl::InvalidArgumentError("--timeline must be > 0"));
+  }
   spec.frames = &*frames;
 
   Report report;

@@ -16,6 +16,7 @@ PACKAGES=(
   prometheus             # scraped by the metrics integration test
   libmatio-dev           # Caltech Lanes .ccvl label files (MAT v5)
   clang-format
+  clang libclang-rt-14-dev   # fuzz/: libFuzzer targets (scripts/fuzz.sh, a step of the test command)
   openssl                # tests/server/security_test: a test CA made at test time
   python3-yaml           # tests/deploy: parses the compose file and Kubernetes manifests
 )

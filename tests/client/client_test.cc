@@ -24,6 +24,7 @@
 #include "lane/config.h"
 #include "lane/synthetic.h"
 #include "server.h"
+#include "test_ca.h"
 
 namespace lane_client {
 namespace {
@@ -572,6 +573,110 @@ TEST(ClientSecurityTest, SendsTheBearerTokenOnEveryCommand) {
   unsetenv("LANE_TOKEN");
   EXPECT_EQ(RunCommand({"info", "--target", target}), kExitFailure);
   (*server)->Drain();
+}
+
+// TLS end to end: the client's --ca (and --cert/--key for mutual TLS)
+// against lane-server's certificate flags, with a CA made by openssl now.
+TEST_F(ClientTest, StreamAndSessionsOverTls) {
+  const lane::testing::TestCa ca;
+  if (!ca.ok()) GTEST_SKIP() << "no test CA: " << ca.error();
+  for (const bool mutual : {false, true}) {
+    SCOPED_TRACE(mutual ? "mutual TLS" : "TLS");
+    lane::server::ServerOptions options;
+    options.address = "127.0.0.1:0";
+    options.metrics_address = "";
+    options.workers = 2;
+    options.tls_cert_path = ca.Path("server.crt");
+    options.tls_key_path = ca.Path("server.key");
+    if (mutual) options.tls_client_ca_path = ca.Path("ca.crt");
+    options.build = lane::server::CurrentBuildInfo();
+    auto server =
+        lane::server::LaneServer::Start(options, std::make_shared<prometheus::Registry>());
+    ASSERT_TRUE(server.ok()) << server.status();
+    const std::string target = Target(**server);
+    std::vector<std::string> tls = {"--ca", ca.Path("ca.crt")};
+    if (mutual) {
+      tls.insert(tls.end(), {"--cert", ca.Path("client.crt"), "--key", ca.Path("client.key")});
+    }
+    const auto with = [](std::vector<std::string> args, const std::vector<std::string>& extra) {
+      args.insert(args.end(), extra.begin(), extra.end());
+      return args;
+    };
+    // Plaintext, and (mutual) TLS without a client certificate, are refused.
+    EXPECT_EQ(RunCommand({"session", "list", "--target", target}), kExitFailure);
+    if (mutual) {
+      EXPECT_EQ(RunCommand({"session", "list", "--target", target, "--ca", ca.Path("ca.crt")}),
+                kExitFailure);
+    }
+    EXPECT_EQ(RunCommand(with({"session", "list", "--target", target}, tls)), kExitOk);
+    EXPECT_EQ(RunCommand(with({"health", "--target", target}, tls)), kExitOk);
+    TempDir out;
+    EXPECT_EQ(RunCommand(with({"stream", "--target", target, "--camera", "tls-cam", "--config",
+                               kConfig, "--output", out / "results.jsonl", frames_->str()},
+                              tls)),
+              kExitOk);
+    const std::vector<Json> lines = ReadJsonLines(out / "results.jsonl");
+    ASSERT_EQ(lines.size(), static_cast<size_t>(kFrames));
+    for (const Json& line : lines) EXPECT_EQ(line["status"], "OK") << line.dump();
+    EXPECT_EQ(FramesProcessed(**server, "tls-cam"), static_cast<uint64_t>(kFrames));
+    (*server)->Drain();
+  }
+}
+
+// --timeline splits the measured window into intervals that add up to the
+// run's totals.
+TEST_F(ClientTest, BenchTimelineAddsUpToTheRun) {
+  auto server = StartServer("127.0.0.1:0");
+  ASSERT_NE(server, nullptr);
+  TempDir out;
+  const int code = RunCommand({"bench", "--target", Target(*server), "--cameras", "2", "--fps",
+                               "20", "--warmup", "200ms", "--duration", "2s", "--timeline", "500ms",
+                               "--synthetic", "4", "--json", "--output", out / "report.json"});
+  EXPECT_EQ(code, kExitOk);
+  const Json report = ReadJson(out / "report.json");
+  ASSERT_EQ(report["runs"].size(), 1u);
+  const Json& run = report["runs"][0];
+  ASSERT_TRUE(run.contains("timeline")) << run.dump();
+  const Json& timeline = run["timeline"];
+  ASSERT_EQ(timeline.size(), 4u);
+  uint64_t ok = 0, errors = 0;
+  double previous_end = 0;
+  for (const Json& point : timeline) {
+    EXPECT_DOUBLE_EQ(point["start_s"].get<double>(), previous_end);
+    previous_end = point["end_s"].get<double>();
+    ok += point["frames_ok"].get<uint64_t>();
+    errors += point["errors"].get<uint64_t>();
+    EXPECT_GT(point["frames_ok"].get<uint64_t>(), 0u) << point.dump();
+    EXPECT_LE(point["latency_ms"]["p99"].get<double>(), run["latency_ms"]["max"].get<double>());
+  }
+  EXPECT_EQ(ok, run["frames_ok"].get<uint64_t>());
+  EXPECT_EQ(errors, run["errors_total"].get<uint64_t>() + run["dropped"].get<uint64_t>());
+  EXPECT_EQ(RunCommand({"bench", "--timeline", "0s"}), kExitUsage);
+}
+
+TEST(ClientUnitTest, TimelineBucketsByArrival) {
+  // Latencies 1..10 ms arriving at 0.0, 0.1, ... 0.9 s; errors at 0.05 and
+  // 2.5 s (after the window: the last interval).
+  std::vector<double> latency;
+  std::vector<float> at;
+  for (int i = 0; i < 10; ++i) {
+    latency.push_back(i + 1);
+    at.push_back(0.1f * static_cast<float>(i));
+  }
+  const std::vector<TimelinePoint> points = Timeline(latency, at, {0.05f, 2.5f}, 0.5, 1.2);
+  ASSERT_EQ(points.size(), 3u);
+  EXPECT_DOUBLE_EQ(points[2].start_s, 1.0);
+  EXPECT_DOUBLE_EQ(points[2].end_s, 1.2);
+  EXPECT_EQ(points[0].ok, 5u);
+  EXPECT_EQ(points[1].ok, 5u);
+  EXPECT_EQ(points[2].ok, 0u);
+  EXPECT_EQ(points[0].errors, 1u);
+  EXPECT_EQ(points[2].errors, 1u);
+  EXPECT_DOUBLE_EQ(points[0].latency_ms.max, 5);
+  EXPECT_DOUBLE_EQ(points[1].latency_ms.max, 10);
+  EXPECT_GE(points[1].latency_ms.p50, 7);
+  EXPECT_LE(points[1].latency_ms.p50, 8);
+  EXPECT_TRUE(Timeline(latency, at, {}, 0, 1).empty());
 }
 
 TEST(ClientUsageTest, BadCommandLinesExitTwo) {

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "auth.h"
+#include "test_ca.h"
 #include "test_util.h"
 
 namespace lane::server::testing {
@@ -133,45 +134,20 @@ TEST(LimitsTest, MaxConcurrentStreamsServes) {
   for (int i = 0; i < 3; ++i) EXPECT_TRUE(List(server.stub(), "").ok());
 }
 
-// A CA, a server certificate for 127.0.0.1/localhost and a client
-// certificate, made by openssl in a temporary directory.
+// TLS against a test CA (tests/common/test_ca.h), made once for the suite.
 class TlsTest : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    if (std::system("openssl version > /dev/null 2>&1") != 0) return;
-    char pattern[] = "/tmp/lane_tls_XXXXXX";
-    if (mkdtemp(pattern) == nullptr) return;
-    dir_ = new std::string(pattern);
-    const std::string d = *dir_;
-    const std::string key = " -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes";
-    const std::string script =
-        "cd '" + d + "' && " + "openssl req -x509" + key +
-        " -keyout ca.key -out ca.crt -days 2 -subj /CN=lane-test-ca && " + "openssl req" + key +
-        " -keyout server.key -out server.csr -subj /CN=localhost && " +
-        "printf 'subjectAltName=IP:127.0.0.1,DNS:localhost\\n' > server.ext && " +
-        "openssl x509 -req -in server.csr -CA ca.crt -CAkey ca.key -CAcreateserial"
-        " -out server.crt -days 2 -extfile server.ext && " +
-        "openssl req" + key + " -keyout client.key -out client.csr -subj /CN=lane-test-client && " +
-        "openssl x509 -req -in client.csr -CA ca.crt -CAkey ca.key -CAcreateserial"
-        " -out client.crt -days 2";
-    ok_ = std::system(("(" + script + ") > /dev/null 2>&1").c_str()) == 0;
-  }
+  static void SetUpTestSuite() { ca_ = new lane::testing::TestCa(); }
   static void TearDownTestSuite() {
-    if (dir_ != nullptr) std::filesystem::remove_all(*dir_);
-    delete dir_;
-    dir_ = nullptr;
+    delete ca_;
+    ca_ = nullptr;
   }
   void SetUp() override {
-    if (dir_ == nullptr || !ok_) GTEST_SKIP() << "openssl is missing or failed: TLS tests skipped";
+    if (!ca_->ok()) GTEST_SKIP() << "no test CA, TLS tests skipped: " << ca_->error();
   }
 
-  static std::string Path(const std::string& name) { return *dir_ + "/" + name; }
-  static std::string Read(const std::string& name) {
-    std::ifstream in(Path(name));
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-  }
+  static std::string Path(const std::string& name) { return ca_->Path(name); }
+  static std::string Read(const std::string& name) { return ca_->Read(name); }
 
   ServerOptions TlsOptions(bool mutual) {
     ServerOptions options = TestServer::DefaultOptions();
@@ -193,12 +169,10 @@ class TlsTest : public ::testing::Test {
   }
 
   std::shared_ptr<grpc::Channel> channel_;
-  static std::string* dir_;
-  static bool ok_;
+  static lane::testing::TestCa* ca_;
 };
 
-std::string* TlsTest::dir_ = nullptr;
-bool TlsTest::ok_ = false;
+lane::testing::TestCa* TlsTest::ca_ = nullptr;
 
 TEST_F(TlsTest, ClientWithTheCaSucceeds) {
   TestServer server(TlsOptions(false));
