@@ -32,8 +32,16 @@ long ResidentKiB() {
   return -1;
 }
 
+// Sanitizers' quarantines and shadow memory inflate RSS. gcc defines
+// __SANITIZE_*__; clang answers __has_feature.
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-constexpr bool kSanitized = true;  // quarantines and shadow memory inflate RSS
+constexpr bool kSanitized = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
 #else
 constexpr bool kSanitized = false;
 #endif
