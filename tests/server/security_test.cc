@@ -12,6 +12,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "auth.h"
@@ -127,11 +128,82 @@ TEST(AuthTest, WithoutTokensEveryCallIsOpen) {
   EXPECT_TRUE(List(server.stub(), "Bearer anything").ok());
 }
 
-TEST(LimitsTest, MaxConcurrentStreamsServes) {
+// Holds one StreamFrames call open on `stub` (one frame answered, so the
+// HTTP/2 stream is live) until Close().
+class OpenStream {
+ public:
+  OpenStream(v1::LaneService::Stub& stub, const v1::FrameRequest& frame) {
+    context_.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+    stream_ = stub.StreamFrames(&context_);
+    ok_ = stream_->Write(frame);
+    v1::FrameResponse response;
+    ok_ = ok_ && stream_->Read(&response) && response.status().code() == v1::FRAME_CODE_OK;
+  }
+  bool ok() const { return ok_; }
+  grpc::Status Close() {
+    stream_->WritesDone();
+    v1::FrameResponse response;
+    while (stream_->Read(&response)) {
+    }
+    return stream_->Finish();
+  }
+
+ private:
+  grpc::ClientContext context_;
+  std::unique_ptr<grpc::ClientReaderWriter<v1::FrameRequest, v1::FrameResponse>> stream_;
+  bool ok_ = false;
+};
+
+grpc::Status ListWithin(v1::LaneService::Stub& stub, std::chrono::milliseconds timeout) {
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + timeout);
+  v1::ListSessionsResponse response;
+  return stub.ListSessions(&context, v1::ListSessionsRequest(), &response);
+}
+
+// A stub on a connection of its own (a private subchannel pool: channels to
+// the same target otherwise share one connection).
+std::unique_ptr<v1::LaneService::Stub> StubOnItsOwnConnection(const std::string& target) {
+  grpc::ChannelArguments args;
+  args.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
+  return v1::LaneService::NewStub(
+      grpc::CreateCustomChannel(target, grpc::InsecureChannelCredentials(), args));
+}
+
+// --max_concurrent_streams=1: while one stream is open on a connection, a
+// second call on that connection waits (HTTP/2 SETTINGS_MAX_CONCURRENT_STREAMS,
+// enforced by the client's transport); another connection is served; the
+// waiting call goes through once the stream ends. Without the limit the
+// second call is served at once.
+TEST(LimitsTest, MaxConcurrentStreamsHoldsPerConnection) {
+  const lane::CameraModel camera = ScaledCamera(0.5);
+  const v1::FrameRequest frame = JpegRequest("cam", 1, EncodeJpeg(RoadFrame(camera, kLineOffsets)));
+  {
+    TestServer unlimited;
+    unlimited.CreateSession("cam", SessionConfigFor(camera));
+    OpenStream open(unlimited.stub(), frame);
+    ASSERT_TRUE(open.ok());
+    EXPECT_TRUE(ListWithin(unlimited.stub(), std::chrono::seconds(10)).ok());
+    EXPECT_TRUE(open.Close().ok());
+  }
   ServerOptions options = TestServer::DefaultOptions();
   options.max_concurrent_streams = 1;
   TestServer server(options);
-  for (int i = 0; i < 3; ++i) EXPECT_TRUE(List(server.stub(), "").ok());
+  server.CreateSession("cam", SessionConfigFor(camera));
+  OpenStream open(server.stub(), frame);
+  ASSERT_TRUE(open.ok());
+  EXPECT_EQ(ListWithin(server.stub(), std::chrono::milliseconds(1500)).error_code(),
+            grpc::StatusCode::DEADLINE_EXCEEDED)
+      << "a second call on the connection was served while the limit was taken";
+  auto other = StubOnItsOwnConnection(server.target());
+  EXPECT_TRUE(ListWithin(*other, std::chrono::seconds(10)).ok());
+  // A call that waits is served as soon as the open stream ends.
+  grpc::Status waited;
+  std::thread waiter([&] { waited = ListWithin(server.stub(), std::chrono::seconds(20)); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_TRUE(open.Close().ok());
+  waiter.join();
+  EXPECT_TRUE(waited.ok()) << waited.error_message();
 }
 
 // TLS against a test CA (tests/common/test_ca.h), made once for the suite.
