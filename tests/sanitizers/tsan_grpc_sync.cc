@@ -1,0 +1,112 @@
+// Built into every test binary only with LANE_SANITIZE=thread: tells
+// ThreadSanitizer that a gRPC batch's completion happens after the batch was
+// started, the one ordering guarantee of gRPC's API that crosses threads
+// through code TSan cannot see.
+//
+// Debian's libgrpc is not instrumented, and hands a finished batch to the
+// thread that completes it through lock-free queues (the transport's
+// combiner), which no lock model (tsan_absl_sync.cc) covers. So the gRPC code
+// inlined into our binaries (grpcpp's CallOpSet, interceptor state, the
+// message a read deserialises into) is written by the thread that starts a
+// batch and read by the thread that runs its completion with no edge between
+// them.
+//
+// Both ends pass through exported functions, and both carry the same tag:
+//   start  grpc_call_start_batch(call, ops, n, tag, ...)  -> release(tag)
+//   end    callback API: tag->functor_run(tag, ok), i.e. the StaticRun of
+//          CallbackWithSuccessTag / CallbackWithStatusTag -> acquire(tag)
+//          completion queues: grpc_completion_queue_pluck/next returning an
+//          event for tag -> acquire(tag)
+// grpc_call_start_batch and the completion-queue functions are interposed
+// (libgrpc++ calls them across a library boundary) and forwarded with
+// dlsym(RTLD_NEXT). The two StaticRun functions are inline in grpcpp's
+// headers, so every test object file carries a weak copy; the strong
+// definitions here (by their mangled names, which is why this file must not
+// use them itself) replace those copies at link time and do exactly what
+// grpcpp's do, after the acquire.
+#include <dlfcn.h>
+#include <grpc/grpc.h>
+#include <grpcpp/support/callback_common.h>
+#include <sanitizer/tsan_interface.h>
+
+#include <cstdio>
+#include <cstdlib>
+
+namespace {
+
+template <typename F>
+F Real(const char* symbol) {
+  void* f = dlsym(RTLD_NEXT, symbol);
+  if (f == nullptr) {
+    std::fprintf(stderr, "tsan_grpc_sync: cannot find %s\n", symbol);
+    std::abort();
+  }
+  return reinterpret_cast<F>(f);
+}
+
+// Run(bool), the body of both StaticRun functions, is private. An explicit
+// template instantiation may name private members ([temp.explicit]), which
+// is how the member pointers below are taken.
+template <typename Tag, typename Tag::type Member>
+struct PrivateMember {
+  friend typename Tag::type Get(Tag) { return Member; }
+};
+struct SuccessTagRun {
+  using type = void (grpc::internal::CallbackWithSuccessTag::*)(bool);
+  friend type Get(SuccessTagRun);
+};
+struct StatusTagRun {
+  using type = void (grpc::internal::CallbackWithStatusTag::*)(bool);
+  friend type Get(StatusTagRun);
+};
+template struct PrivateMember<SuccessTagRun, &grpc::internal::CallbackWithSuccessTag::Run>;
+template struct PrivateMember<StatusTagRun, &grpc::internal::CallbackWithStatusTag::Run>;
+
+}  // namespace
+
+extern "C" {
+
+grpc_call_error grpc_call_start_batch(grpc_call* call, const grpc_op* ops, size_t nops, void* tag,
+                                      void* reserved) {
+  static const auto real =
+      Real<grpc_call_error (*)(grpc_call*, const grpc_op*, size_t, void*, void*)>(
+          "grpc_call_start_batch");
+  if (tag != nullptr) __tsan_release(tag);
+  return real(call, ops, nops, tag, reserved);
+}
+
+grpc_event grpc_completion_queue_pluck(grpc_completion_queue* cq, void* tag, gpr_timespec deadline,
+                                       void* reserved) {
+  static const auto real = Real<grpc_event (*)(grpc_completion_queue*, void*, gpr_timespec, void*)>(
+      "grpc_completion_queue_pluck");
+  const grpc_event event = real(cq, tag, deadline, reserved);
+  if (event.type == GRPC_OP_COMPLETE && event.tag != nullptr) __tsan_acquire(event.tag);
+  return event;
+}
+
+grpc_event grpc_completion_queue_next(grpc_completion_queue* cq, gpr_timespec deadline,
+                                      void* reserved) {
+  static const auto real = Real<grpc_event (*)(grpc_completion_queue*, gpr_timespec, void*)>(
+      "grpc_completion_queue_next");
+  const grpc_event event = real(cq, deadline, reserved);
+  if (event.type == GRPC_OP_COMPLETE && event.tag != nullptr) __tsan_acquire(event.tag);
+  return event;
+}
+
+// grpc::internal::CallbackWithSuccessTag::StaticRun(grpc_completion_queue_functor*, int)
+void _ZN4grpc8internal22CallbackWithSuccessTag9StaticRunEP29grpc_completion_queue_functori(
+    grpc_completion_queue_functor* cb, int ok) {
+  __tsan_acquire(cb);
+  auto* tag = static_cast<grpc::internal::CallbackWithSuccessTag*>(cb);
+  (tag->*Get(SuccessTagRun()))(static_cast<bool>(ok));
+}
+
+// grpc::internal::CallbackWithStatusTag::StaticRun(grpc_completion_queue_functor*, int)
+void _ZN4grpc8internal21CallbackWithStatusTag9StaticRunEP29grpc_completion_queue_functori(
+    grpc_completion_queue_functor* cb, int ok) {
+  __tsan_acquire(cb);
+  auto* tag = static_cast<grpc::internal::CallbackWithStatusTag*>(cb);
+  (tag->*Get(StatusTagRun()))(static_cast<bool>(ok));
+}
+
+}  // extern "C"
