@@ -21,8 +21,10 @@
 // And one hand-off inside libgrpc++: a server call's OnDone, once its last
 // reference is gone, is sent to gRPC's executor (ServerCallbackCall::
 // ScheduleOnDone), which TSan does not see ordered after the callbacks that
-// dropped the references. ScheduleOnDone is defined here instead: inline
-// OnDone runs inline, as in gRPC; the other kind runs on a thread of its own
+// dropped the references (the last one may be dropped in libgrpc++'s own
+// code). ScheduleOnDone is defined here instead: it acquires the reference
+// counter (every callback releases it), then runs an inline
+// OnDone inline, as gRPC does, and any other on a thread of its own
 // started by this (instrumented) code, an order TSan sees.
 //
 // grpc_call_start_batch and the completion-queue functions are interposed
@@ -125,6 +127,10 @@ void _ZN4grpc8internal21CallbackWithStatusTag9StaticRunEP29grpc_completion_queue
 // libgrpc++; the inline MaybeDone of every test object file calls it.
 namespace grpc::internal {
 void ServerCallbackCall::ScheduleOnDone(bool inline_ondone) {
+  // Called after the last Unref (acq_rel) of callbacks_outstanding_. That
+  // Unref may have run in libgrpc++'s own uninstrumented code; an acquire
+  // load of the counter orders this thread after every instrumented Unref.
+  (void)callbacks_outstanding_.load(std::memory_order_acquire);
   if (inline_ondone) {
     CallOnDone();
     return;
