@@ -14,27 +14,15 @@
 // acquire after taking the mutex, release before giving it up (also around
 // the waits, which give it up and take it back). Nothing is suppressed: the
 // lock is modelled, as an instrumented Abseil would do itself.
-#include <dlfcn.h>
 #include <sanitizer/tsan_interface.h>
-
-#include <cstdio>
-#include <cstdlib>
 
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
+#include "tsan_real.h"
 
 namespace {
 
-// The real function named `symbol` (the next definition after this binary's).
-template <typename F>
-F Real(const char* symbol) {
-  void* f = dlsym(RTLD_NEXT, symbol);
-  if (f == nullptr) {
-    std::fprintf(stderr, "tsan_absl_sync: cannot find %s\n", symbol);
-    std::abort();
-  }
-  return reinterpret_cast<F>(f);
-}
+using lane::tsan::Real;
 
 // A statically initialised pointer to the real member function `symbol`.
 #define LANE_REAL(type, symbol)                \

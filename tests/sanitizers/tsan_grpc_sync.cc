@@ -34,27 +34,18 @@
 // definitions here (by their mangled names, which is why this file must not
 // use them itself) replace those copies at link time and do exactly what
 // grpcpp's do, after the acquire.
-#include <dlfcn.h>
 #include <grpc/grpc.h>
 #include <grpcpp/support/callback_common.h>
 #include <grpcpp/support/server_callback.h>
 #include <sanitizer/tsan_interface.h>
 
-#include <cstdio>
-#include <cstdlib>
 #include <thread>
+
+#include "tsan_real.h"
 
 namespace {
 
-template <typename F>
-F Real(const char* symbol) {
-  void* f = dlsym(RTLD_NEXT, symbol);
-  if (f == nullptr) {
-    std::fprintf(stderr, "tsan_grpc_sync: cannot find %s\n", symbol);
-    std::abort();
-  }
-  return reinterpret_cast<F>(f);
-}
+using lane::tsan::Real;
 
 // Run(bool), the body of both StaticRun functions, is private. An explicit
 // template instantiation may name private members ([temp.explicit]), which
