@@ -8,8 +8,10 @@
 #         report fails the run (UBSan halts on the first error in tests).
 #   tsan: the server and client tests built with -fsanitize=thread in
 #         build-tsan. Debian's gRPC and Abseil are not TSan-instrumented:
-#         absl::Mutex, gRPC's lock, is modelled for TSan by interposition
-#         (tests/sanitizers/tsan_absl_sync.cc), and only the uninstrumented
+#         what TSan cannot see in them (absl::Mutex, gRPC's lock; the order
+#         of a gRPC batch's start and completion; a call's OnDone) is
+#         modelled by interposition (tests/sanitizers/tsan_absl_sync.cc,
+#         tsan_grpc_sync.cc), and only the uninstrumented
 #         libraries' own interceptor calls and a lock cycle inside GDAL are
 #         suppressed (tests/sanitizers/tsan.supp, with the reasoning); any
 #         other report fails the run (TSan exit code 66). A canary with a

@@ -33,9 +33,10 @@ grpc::Status GetInfo(v1::LaneService::Stub& stub, const std::string& authorizati
   return stub.GetServerInfo(&context, v1::GetServerInfoRequest(), &info);
 }
 
-grpc::Status List(v1::LaneService::Stub& stub, const std::string& authorization) {
+grpc::Status List(v1::LaneService::Stub& stub, const std::string& authorization,
+                  std::chrono::milliseconds timeout = std::chrono::seconds(10)) {
   grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+  context.set_deadline(std::chrono::system_clock::now() + timeout);
   if (!authorization.empty()) context.AddMetadata("authorization", authorization);
   v1::ListSessionsResponse response;
   return stub.ListSessions(&context, v1::ListSessionsRequest(), &response);
@@ -154,13 +155,6 @@ class OpenStream {
   bool ok_ = false;
 };
 
-grpc::Status ListWithin(v1::LaneService::Stub& stub, std::chrono::milliseconds timeout) {
-  grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() + timeout);
-  v1::ListSessionsResponse response;
-  return stub.ListSessions(&context, v1::ListSessionsRequest(), &response);
-}
-
 // A stub on a connection of its own (a private subchannel pool: channels to
 // the same target otherwise share one connection).
 std::unique_ptr<v1::LaneService::Stub> StubOnItsOwnConnection(const std::string& target) {
@@ -183,7 +177,7 @@ TEST(LimitsTest, MaxConcurrentStreamsHoldsPerConnection) {
     unlimited.CreateSession("cam", SessionConfigFor(camera));
     OpenStream open(unlimited.stub(), frame);
     ASSERT_TRUE(open.ok());
-    EXPECT_TRUE(ListWithin(unlimited.stub(), std::chrono::seconds(10)).ok());
+    EXPECT_TRUE(List(unlimited.stub(), "").ok());
     EXPECT_TRUE(open.Close().ok());
   }
   ServerOptions options = TestServer::DefaultOptions();
@@ -192,14 +186,14 @@ TEST(LimitsTest, MaxConcurrentStreamsHoldsPerConnection) {
   server.CreateSession("cam", SessionConfigFor(camera));
   OpenStream open(server.stub(), frame);
   ASSERT_TRUE(open.ok());
-  EXPECT_EQ(ListWithin(server.stub(), std::chrono::milliseconds(1500)).error_code(),
+  EXPECT_EQ(List(server.stub(), "", std::chrono::milliseconds(1500)).error_code(),
             grpc::StatusCode::DEADLINE_EXCEEDED)
       << "a second call on the connection was served while the limit was taken";
   auto other = StubOnItsOwnConnection(server.target());
-  EXPECT_TRUE(ListWithin(*other, std::chrono::seconds(10)).ok());
+  EXPECT_TRUE(List(*other, "").ok());
   // A call that waits is served as soon as the open stream ends.
   grpc::Status waited;
-  std::thread waiter([&] { waited = ListWithin(server.stub(), std::chrono::seconds(20)); });
+  std::thread waiter([&] { waited = List(server.stub(), "", std::chrono::seconds(20)); });
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   EXPECT_TRUE(open.Close().ok());
   waiter.join();
