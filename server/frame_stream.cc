@@ -7,6 +7,7 @@
 #include "absl/time/clock.h"
 #include "frame_processor.h"
 #include "lane_service.h"
+#include "raw_call.h"
 #include "status_map.h"
 
 namespace lane::server {
@@ -23,6 +24,7 @@ size_t MaxSlots(uint32_t max_inflight) { return 4 * size_t{max_inflight} + 16; }
 struct FrameStream::Slot {
   std::unique_ptr<v1::FrameRequest> request;  // released once processed
   v1::FrameResponse response;
+  grpc::ByteBuffer wire;  // the response, serialized for the write
   std::string camera_id;
   Arrival arrival;
   std::shared_ptr<const Session> session;  // set at receipt, or by the setup
@@ -36,9 +38,7 @@ struct FrameStream::Slot {
 };
 
 FrameStream::FrameStream(LaneServiceImpl& service)
-    : service_(service),
-      read_buffer_(std::make_unique<v1::FrameRequest>()),
-      max_inflight_(service.sessions().options().default_max_inflight_frames) {}
+    : service_(service), max_inflight_(service.sessions().options().default_max_inflight_frames) {}
 
 FrameStream::~FrameStream() = default;
 
@@ -72,9 +72,20 @@ void FrameStream::OnReadDone(bool ok) {
 
   auto slot = std::make_shared<Slot>();
   slot->arrival = Arrival::Now();
-  slot->request = std::move(read_buffer_);
-  read_buffer_ = std::make_unique<v1::FrameRequest>();
+  slot->request = std::make_unique<v1::FrameRequest>();
   service_.metrics().FrameReceived();
+  if (absl::Status parsed = ParseMessage(read_buffer_, slot->request.get()); !parsed.ok()) {
+    // Nothing after an unreadable message can be trusted to be a frame: end
+    // the stream with the reason, after answering the frames before it.
+    slot->request.reset();
+    slot->stream_error = parsed;
+    slot->done = true;
+    stream_failed_ = true;
+    slots_.push_back(slot);
+    ++inflight_;
+    MaybeWriteLocked();
+    return;
+  }
   const v1::FrameRequest& request = *slot->request;
 
   const bool first = first_request_;
@@ -86,6 +97,8 @@ void FrameStream::OnReadDone(bool ok) {
   bool submit = false;
   if (slot->camera_id.empty()) {
     AnswerLocked(*slot, InvalidRequest("frame without camera_id"));
+  } else if (absl::Status id = SessionRegistry::ValidateCameraId(slot->camera_id); !id.ok()) {
+    AnswerLocked(*slot, id);
   } else if (request.has_session_config()) {
     if (first) {
       slot->setup = true;
@@ -226,7 +239,7 @@ void FrameStream::MaybeReadLocked() {
                         : inflight_ <= max_inflight_ && slots_.size() < MaxSlots(max_inflight_);
   if (!room) return;
   reading_ = true;
-  StartRead(read_buffer_.get());
+  StartRead(&read_buffer_);
 }
 
 void FrameStream::MaybeWriteLocked() {
@@ -243,8 +256,13 @@ void FrameStream::MaybeWriteLocked() {
       continue;
     }
     front.response.set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
+    if (absl::Status s = SerializeMessage(front.response, &front.wire); !s.ok()) {
+      PopFrontLocked();
+      FinishLocked(s);
+      return;
+    }
     writing_ = true;
-    StartWrite(&front.response);
+    StartWrite(&front.wire);
   }
 }
 

@@ -33,7 +33,10 @@ namespace lane::server {
 
 class LaneServiceImpl;
 
-class FrameStream final : public grpc::ServerBidiReactor<v1::FrameRequest, v1::FrameResponse> {
+// Requests and responses are bytes (see raw_call.h): a message that does not
+// parse ends the stream with INVALID_ARGUMENT once the frames before it are
+// answered.
+class FrameStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
  public:
   explicit FrameStream(LaneServiceImpl& service);
 
@@ -79,7 +82,7 @@ class FrameStream final : public grpc::ServerBidiReactor<v1::FrameRequest, v1::F
 
   std::mutex mu_;
   // Everything below is guarded by mu_.
-  std::unique_ptr<v1::FrameRequest> read_buffer_;
+  grpc::ByteBuffer read_buffer_;
   std::deque<std::shared_ptr<Slot>> slots_;  // received, not yet answered, in order
   size_t inflight_ = 0;                      // slots that count against the bound
   uint32_t max_inflight_ = 1;

@@ -7,6 +7,7 @@
 #include "convert.h"
 #include "frame_processor.h"
 #include "frame_stream.h"
+#include "raw_call.h"
 #include "status_map.h"
 
 namespace lane::server {
@@ -85,13 +86,6 @@ absl::Status LaneServiceImpl::Admission(const grpc::ServerContextBase& context) 
   return ServerDraining();
 }
 
-void LaneServiceImpl::FinishCall(grpc::ServerUnaryReactor* reactor, const std::string& method,
-                                 const absl::Status& status) {
-  const grpc::Status grpc_status = ToGrpcStatus(status);
-  metrics_.CountRpc(method, grpc_status.error_code());
-  reactor->Finish(grpc_status);
-}
-
 absl::StatusOr<SessionRegistry::CreateResult> LaneServiceImpl::EnsureSession(
     const std::string& camera_id, const v1::SessionConfig& config, bool replace) {
   absl::StatusOr<SessionSpec> spec = SessionSpecFromProto(config);
@@ -100,67 +94,74 @@ absl::StatusOr<SessionRegistry::CreateResult> LaneServiceImpl::EnsureSession(
 }
 
 grpc::ServerUnaryReactor* LaneServiceImpl::CreateSession(grpc::CallbackServerContext* context,
-                                                         const v1::CreateSessionRequest* request,
-                                                         v1::CreateSessionResponse* response) {
-  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  if (absl::Status s = Admission(*context); !s.ok()) {
-    FinishCall(reactor, "CreateSession", s);
-    return reactor;
-  }
-  // Building a detector is CPU work: on the pool. `request` and `response`
-  // stay valid until Finish.
-  const bool queued = pool_.TrySubmit([this, reactor, request, response] {
-    absl::StatusOr<SessionRegistry::CreateResult> created =
-        EnsureSession(request->camera_id(), request->config(), request->replace());
-    if (created.ok()) {
-      SessionToProto(*created->session, absl::Now(), response->mutable_session());
-      response->set_outcome(OutcomeToProto(created->outcome));
-    }
-    FinishCall(reactor, "CreateSession", created.status());
-  });
-  if (!queued) FinishCall(reactor, "CreateSession", WorkerQueueFull());
-  return reactor;
+                                                         const grpc::ByteBuffer* in,
+                                                         grpc::ByteBuffer* out) {
+  using Call = UnaryCall<v1::CreateSessionRequest, v1::CreateSessionResponse>;
+  return StartUnary<v1::CreateSessionRequest, v1::CreateSessionResponse>(
+      context, in, out, "CreateSession", metrics_, [this](Call* call) {
+        if (absl::Status s = Admission(call->context()); !s.ok()) return call->Reply(s);
+        // Building a detector is CPU work: on the pool.
+        const bool queued = pool_.TrySubmit([this, call] {
+          const v1::CreateSessionRequest& request = call->request();
+          absl::StatusOr<SessionRegistry::CreateResult> created =
+              EnsureSession(request.camera_id(), request.config(), request.replace());
+          if (created.ok()) {
+            SessionToProto(*created->session, absl::Now(), call->response()->mutable_session());
+            call->response()->set_outcome(OutcomeToProto(created->outcome));
+          }
+          call->Reply(created.status());
+        });
+        if (!queued) call->Reply(WorkerQueueFull());
+      });
 }
 
 grpc::ServerUnaryReactor* LaneServiceImpl::GetSession(grpc::CallbackServerContext* context,
-                                                      const v1::GetSessionRequest* request,
-                                                      v1::Session* response) {
-  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  absl::Status status = Admission(*context);
-  if (status.ok()) {
-    absl::StatusOr<SessionRegistry::Entry> entry = sessions_.Get(request->camera_id());
-    if (entry.ok()) SessionToProto(*entry->session, entry->last_used, response);
-    status = entry.status();
-  }
-  FinishCall(reactor, "GetSession", status);
-  return reactor;
+                                                      const grpc::ByteBuffer* in,
+                                                      grpc::ByteBuffer* out) {
+  using Call = UnaryCall<v1::GetSessionRequest, v1::Session>;
+  return StartUnary<v1::GetSessionRequest, v1::Session>(
+      context, in, out, "GetSession", metrics_, [this](Call* call) {
+        absl::Status status = Admission(call->context());
+        if (status.ok()) status = SessionRegistry::ValidateCameraId(call->request().camera_id());
+        if (status.ok()) {
+          absl::StatusOr<SessionRegistry::Entry> entry = sessions_.Get(call->request().camera_id());
+          if (entry.ok()) SessionToProto(*entry->session, entry->last_used, call->response());
+          status = entry.status();
+        }
+        call->Reply(status);
+      });
 }
 
 grpc::ServerUnaryReactor* LaneServiceImpl::ListSessions(grpc::CallbackServerContext* context,
-                                                        const v1::ListSessionsRequest* /*request*/,
-                                                        v1::ListSessionsResponse* response) {
-  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  absl::Status status = Admission(*context);
-  if (status.ok()) {
-    for (const SessionRegistry::Entry& entry : sessions_.List()) {
-      SessionToProto(*entry.session, entry.last_used, response->add_sessions());
-    }
-  }
-  FinishCall(reactor, "ListSessions", status);
-  return reactor;
+                                                        const grpc::ByteBuffer* in,
+                                                        grpc::ByteBuffer* out) {
+  using Call = UnaryCall<v1::ListSessionsRequest, v1::ListSessionsResponse>;
+  return StartUnary<v1::ListSessionsRequest, v1::ListSessionsResponse>(
+      context, in, out, "ListSessions", metrics_, [this](Call* call) {
+        absl::Status status = Admission(call->context());
+        if (status.ok()) {
+          for (const SessionRegistry::Entry& entry : sessions_.List()) {
+            SessionToProto(*entry.session, entry.last_used, call->response()->add_sessions());
+          }
+        }
+        call->Reply(status);
+      });
 }
 
 grpc::ServerUnaryReactor* LaneServiceImpl::DeleteSession(grpc::CallbackServerContext* context,
-                                                         const v1::DeleteSessionRequest* request,
-                                                         v1::DeleteSessionResponse* /*response*/) {
-  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  absl::Status status = Admission(*context);
-  if (status.ok()) status = sessions_.Delete(request->camera_id());
-  FinishCall(reactor, "DeleteSession", status);
-  return reactor;
+                                                         const grpc::ByteBuffer* in,
+                                                         grpc::ByteBuffer* out) {
+  using Call = UnaryCall<v1::DeleteSessionRequest, v1::DeleteSessionResponse>;
+  return StartUnary<v1::DeleteSessionRequest, v1::DeleteSessionResponse>(
+      context, in, out, "DeleteSession", metrics_, [this](Call* call) {
+        absl::Status status = Admission(call->context());
+        if (status.ok()) status = SessionRegistry::ValidateCameraId(call->request().camera_id());
+        if (status.ok()) status = sessions_.Delete(call->request().camera_id());
+        call->Reply(status);
+      });
 }
 
-grpc::ServerBidiReactor<v1::FrameRequest, v1::FrameResponse>* LaneServiceImpl::StreamFrames(
+grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* LaneServiceImpl::StreamFrames(
     grpc::CallbackServerContext* context) {
   auto* stream = new FrameStream(*this);
   absl::Status reject = CheckBearerToken(*context, options_.auth_tokens);
@@ -177,64 +178,69 @@ grpc::ServerBidiReactor<v1::FrameRequest, v1::FrameResponse>* LaneServiceImpl::S
 }
 
 grpc::ServerUnaryReactor* LaneServiceImpl::Detect(grpc::CallbackServerContext* context,
-                                                  const v1::FrameRequest* request,
-                                                  v1::FrameResponse* response) {
-  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  if (absl::Status s = Admission(*context); !s.ok()) {
-    FinishCall(reactor, "Detect", s);
-    return reactor;
-  }
-  const std::string& camera_id = request->camera_id();
-  if (camera_id.empty()) {
-    FinishCall(reactor, "Detect", InvalidRequest("frame without camera_id"));
-    return reactor;
-  }
-  std::shared_ptr<const Session> session;
-  if (!request->has_session_config()) {
-    session = sessions_.Find(camera_id);
-    if (session == nullptr) {
-      FinishCall(reactor, "Detect", NoSessionForFrame(camera_id));
-      return reactor;
-    }
-  }
-  const Arrival arrival = Arrival::Now();
-  metrics_.FrameReceived();
-  const bool queued = pool_.TrySubmit([this, reactor, request, response, arrival,
-                                       session = std::move(session)]() mutable {
-    absl::Status status;
-    if (session == nullptr) {  // the request carries its session config
-      absl::StatusOr<SessionRegistry::CreateResult> created = EnsureSession(
-          request->camera_id(), request->session_config(), request->replace_session());
-      if (created.ok()) {
-        session = std::move(created->session);
-      } else {
-        status = created.status();
-      }
-    }
-    if (session != nullptr) {
-      StartResponse(*request, request->camera_id(), arrival, response);
-      status =
-          ProcessFrame(*request, *session, options_.max_frame_pixels, arrival, metrics_, response);
-      response->set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
-    }
-    metrics_.FrameAnswered();
-    FinishCall(reactor, "Detect", status);
-  });
-  if (!queued) {
-    metrics_.FrameAnswered();
-    FinishCall(reactor, "Detect", WorkerQueueFull());
-  }
-  return reactor;
+                                                  const grpc::ByteBuffer* in,
+                                                  grpc::ByteBuffer* out) {
+  using Call = UnaryCall<v1::FrameRequest, v1::FrameResponse>;
+  return StartUnary<v1::FrameRequest, v1::FrameResponse>(
+      context, in, out, "Detect", metrics_, [this](Call* call) {
+        if (absl::Status s = Admission(call->context()); !s.ok()) return call->Reply(s);
+        const std::string& camera_id = call->request().camera_id();
+        if (camera_id.empty()) return call->Reply(InvalidRequest("frame without camera_id"));
+        if (absl::Status s = SessionRegistry::ValidateCameraId(camera_id); !s.ok()) {
+          return call->Reply(s);
+        }
+        std::shared_ptr<const Session> session;
+        if (!call->request().has_session_config()) {
+          session = sessions_.Find(camera_id);
+          if (session == nullptr) return call->Reply(NoSessionForFrame(camera_id));
+        }
+        const Arrival arrival = Arrival::Now();
+        metrics_.FrameReceived();
+        const bool queued =
+            pool_.TrySubmit([this, call, arrival, session = std::move(session)]() mutable {
+              const v1::FrameRequest& request = call->request();
+              v1::FrameResponse* response = call->response();
+              absl::Status status;
+              if (session == nullptr) {  // the request carries its session config
+                absl::StatusOr<SessionRegistry::CreateResult> created = EnsureSession(
+                    request.camera_id(), request.session_config(), request.replace_session());
+                if (created.ok()) {
+                  session = std::move(created->session);
+                } else {
+                  status = created.status();
+                }
+              }
+              if (session != nullptr) {
+                StartResponse(request, request.camera_id(), arrival, response);
+                status = ProcessFrame(request, *session, options_.max_frame_pixels, arrival,
+                                      metrics_, response);
+                response->set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
+              }
+              metrics_.FrameAnswered();
+              call->Reply(status);
+            });
+        if (!queued) {
+          metrics_.FrameAnswered();
+          call->Reply(WorkerQueueFull());
+        }
+      });
 }
 
-grpc::ServerUnaryReactor* LaneServiceImpl::GetServerInfo(
-    grpc::CallbackServerContext* context, const v1::GetServerInfoRequest* /*request*/,
-    v1::ServerInfo* response) {
-  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  if (absl::Status auth = CheckBearerToken(*context, options_.auth_tokens); !auth.ok()) {
-    FinishCall(reactor, "GetServerInfo", auth);
-    return reactor;
-  }
+grpc::ServerUnaryReactor* LaneServiceImpl::GetServerInfo(grpc::CallbackServerContext* context,
+                                                         const grpc::ByteBuffer* in,
+                                                         grpc::ByteBuffer* out) {
+  using Call = UnaryCall<v1::GetServerInfoRequest, v1::ServerInfo>;
+  return StartUnary<v1::GetServerInfoRequest, v1::ServerInfo>(
+      context, in, out, "GetServerInfo", metrics_, [this](Call* call) {
+        if (absl::Status s = CheckBearerToken(call->context(), options_.auth_tokens); !s.ok()) {
+          return call->Reply(s);
+        }
+        FillServerInfo(call->response());
+        call->Reply(absl::OkStatus());
+      });
+}
+
+void LaneServiceImpl::FillServerInfo(v1::ServerInfo* response) const {
   const BuildInfo& build = options_.build;
   response->set_version(build.version);
   response->set_build(build.build_type + ", gRPC " + build.grpc_version + ", OpenCV " +
@@ -257,8 +263,6 @@ grpc::ServerUnaryReactor* LaneServiceImpl::GetServerInfo(
                        response->mutable_default_config_all());
   DefaultConfigToProto(lane::Mode::kTwo, registry.default_max_inflight_frames,
                        response->mutable_default_config_two());
-  FinishCall(reactor, "GetServerInfo", absl::OkStatus());
-  return reactor;
 }
 
 }  // namespace lane::server

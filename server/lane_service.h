@@ -38,32 +38,44 @@ struct ServiceOptions {
   BuildInfo build;
 };
 
-class LaneServiceImpl final : public v1::LaneService::CallbackService {
+// Every method is registered raw (ByteBuffer in and out) and parses its own
+// requests (raw_call.h): a request that does not parse gets INVALID_ARGUMENT
+// with the reason, not gRPC's bare UNIMPLEMENTED or a stream ended as if
+// half-closed.
+using RawLaneService = v1::LaneService::WithRawCallbackMethod_CreateSession<
+    v1::LaneService::WithRawCallbackMethod_GetSession<
+        v1::LaneService::WithRawCallbackMethod_ListSessions<
+            v1::LaneService::WithRawCallbackMethod_DeleteSession<
+                v1::LaneService::WithRawCallbackMethod_StreamFrames<
+                    v1::LaneService::WithRawCallbackMethod_Detect<
+                        v1::LaneService::WithRawCallbackMethod_GetServerInfo<
+                            v1::LaneService::Service>>>>>>>;
+
+class LaneServiceImpl final : public RawLaneService {
  public:
   LaneServiceImpl(ServiceOptions options, SessionRegistry& sessions, WorkerPool& pool,
                   Metrics& metrics);
   ~LaneServiceImpl() override;
 
+  // The raw methods. Requests: lane.v1 messages as bytes (see the proto).
   grpc::ServerUnaryReactor* CreateSession(grpc::CallbackServerContext* context,
-                                          const v1::CreateSessionRequest* request,
-                                          v1::CreateSessionResponse* response) override;
+                                          const grpc::ByteBuffer* in,
+                                          grpc::ByteBuffer* out) override;
   grpc::ServerUnaryReactor* GetSession(grpc::CallbackServerContext* context,
-                                       const v1::GetSessionRequest* request,
-                                       v1::Session* response) override;
+                                       const grpc::ByteBuffer* in, grpc::ByteBuffer* out) override;
   grpc::ServerUnaryReactor* ListSessions(grpc::CallbackServerContext* context,
-                                         const v1::ListSessionsRequest* request,
-                                         v1::ListSessionsResponse* response) override;
+                                         const grpc::ByteBuffer* in,
+                                         grpc::ByteBuffer* out) override;
   grpc::ServerUnaryReactor* DeleteSession(grpc::CallbackServerContext* context,
-                                          const v1::DeleteSessionRequest* request,
-                                          v1::DeleteSessionResponse* response) override;
-  grpc::ServerBidiReactor<v1::FrameRequest, v1::FrameResponse>* StreamFrames(
+                                          const grpc::ByteBuffer* in,
+                                          grpc::ByteBuffer* out) override;
+  grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* StreamFrames(
       grpc::CallbackServerContext* context) override;
-  grpc::ServerUnaryReactor* Detect(grpc::CallbackServerContext* context,
-                                   const v1::FrameRequest* request,
-                                   v1::FrameResponse* response) override;
+  grpc::ServerUnaryReactor* Detect(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                   grpc::ByteBuffer* out) override;
   grpc::ServerUnaryReactor* GetServerInfo(grpc::CallbackServerContext* context,
-                                          const v1::GetServerInfoRequest* request,
-                                          v1::ServerInfo* response) override;
+                                          const grpc::ByteBuffer* in,
+                                          grpc::ByteBuffer* out) override;
 
   // Lifecycle: calls are refused with UNAVAILABLE until SetServing and after
   // StartDrain. StartDrain also tells every open stream to stop reading,
@@ -93,9 +105,7 @@ class LaneServiceImpl final : public v1::LaneService::CallbackService {
   // The one check of every call: the Bearer token (auth.h), then the
   // serving state.
   absl::Status Admission(const grpc::ServerContextBase& context) const;
-  // Finishes a unary call and counts it.
-  void FinishCall(grpc::ServerUnaryReactor* reactor, const std::string& method,
-                  const absl::Status& status);
+  void FillServerInfo(v1::ServerInfo* response) const;
 
   const ServiceOptions options_;
   SessionRegistry& sessions_;

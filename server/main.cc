@@ -38,8 +38,13 @@ ABSL_FLAG(absl::Duration, session_ttl, absl::Hours(1),
           "Idle sessions are evicted after this long; 'inf' = never.");
 ABSL_FLAG(int64_t, max_frame_pixels, int64_t{3840} * 2160,
           "Largest frame accepted, width * height (checked before decoding).");
-ABSL_FLAG(int, max_receive_message_bytes, 16 * 1024 * 1024,
-          "gRPC maximum receive message size, bytes (a raw 1920x1080 BGR frame is 6220800).");
+ABSL_FLAG(int, max_receive_message_bytes, 32 * 1024 * 1024,
+          "gRPC maximum receive message size, bytes (a raw 1920x1080 BGR frame is 6220800, a "
+          "3840x2160 one 24883200). Sessions whose camera's raw frame cannot fit are refused.");
+ABSL_FLAG(int64_t, max_session_memory_mib, 1024,
+          "Memory all sessions' detectors may hold together, MiB (a 160x120 top view holds "
+          "about 0.5 MiB, a 2048x2048 one about 105 MiB); CreateSession beyond it is "
+          "RESOURCE_EXHAUSTED. 0 = no budget.");
 ABSL_FLAG(absl::Duration, keepalive_time, absl::Seconds(30), "Ping an idle connection this often.");
 ABSL_FLAG(absl::Duration, keepalive_timeout, absl::Seconds(10),
           "Close a connection whose keepalive ping is not answered within this.");
@@ -102,6 +107,9 @@ int main(int argc, char** argv) {
   options.session_ttl = absl::GetFlag(FLAGS_session_ttl);
   options.max_frame_pixels = absl::GetFlag(FLAGS_max_frame_pixels);
   options.max_receive_message_bytes = absl::GetFlag(FLAGS_max_receive_message_bytes);
+  options.max_session_memory_bytes =
+      static_cast<uint64_t>(std::max<int64_t>(0, absl::GetFlag(FLAGS_max_session_memory_mib))) *
+      1024 * 1024;
   options.keepalive_time = absl::GetFlag(FLAGS_keepalive_time);
   options.keepalive_timeout = absl::GetFlag(FLAGS_keepalive_timeout);
   options.keepalive_min_client_interval = absl::GetFlag(FLAGS_keepalive_min_client_interval);

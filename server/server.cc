@@ -103,6 +103,9 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
   registry_options.ttl = options.session_ttl;
   registry_options.default_max_inflight_frames = std::max<uint32_t>(1, options.max_inflight_frames);
   registry_options.max_frame_pixels = options.max_frame_pixels;
+  registry_options.max_receive_message_bytes =
+      static_cast<uint64_t>(std::max(0, options.max_receive_message_bytes));
+  registry_options.max_session_memory_bytes = options.max_session_memory_bytes;
   Metrics* metrics = server->metrics_.get();
   registry_options.on_size_change = [metrics](size_t n) {
     metrics->SetSessions(static_cast<double>(n));
@@ -129,6 +132,10 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
   builder.AddListeningPort(options.address, *credentials, &server->port_);
   builder.RegisterService(server->service_.get());
   builder.SetMaxReceiveMessageSize(options.max_receive_message_bytes);
+  // gRPC sets SO_REUSEPORT by default: a second server on a busy port would
+  // then start and the kernel would split connections between the two. With
+  // it off, a busy port fails here.
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, ToMillis(options.keepalive_time));
   builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, ToMillis(options.keepalive_timeout));
   builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS,
@@ -140,7 +147,9 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
   }
   server->server_ = builder.BuildAndStart();
   if (server->server_ == nullptr || server->port_ == 0) {
-    return absl::UnavailableError(absl::StrCat("cannot listen on ", options.address));
+    return absl::UnavailableError(absl::StrCat(
+        "cannot listen on ", options.address,
+        ": the port is in use by another process (or the address is not this host's)"));
   }
   // Start-up: NOT_SERVING (the lane service answers UNAVAILABLE) until ready.
   server->server_->GetHealthCheckService()->SetServingStatus(false);

@@ -43,8 +43,11 @@ struct ServerOptions {
   absl::Duration session_ttl = absl::Hours(1);
   // Largest frame, width * height.
   int64_t max_frame_pixels = int64_t{3840} * 2160;
-  // 16 MiB: a raw 1920x1080 BGR frame is 6.2 MB; a raw 4K one 24.9 MB.
-  int max_receive_message_bytes = 16 * 1024 * 1024;
+  // 32 MiB: room for a raw BGR frame of max_frame_pixels (3840x2160 is
+  // 24.9 MB). Sessions whose camera's raw frame cannot fit are refused.
+  int max_receive_message_bytes = 32 * 1024 * 1024;
+  // Memory all sessions' detectors may hold together, bytes; 0 = no budget.
+  uint64_t max_session_memory_bytes = uint64_t{1} << 30;
   // HTTP/2 keepalive: ping an idle connection every keepalive_time, drop it
   // when a ping is not answered within keepalive_timeout; accept client pings
   // every keepalive_min_client_interval at most (also without calls when

@@ -1,8 +1,10 @@
 #include "session_registry.h"
 
+#include <algorithm>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "lane/excerpt.h"
 #include "status_map.h"
 
 namespace lane::server {
@@ -10,15 +12,16 @@ namespace lane::server {
 SessionRegistry::SessionRegistry(Options options) : options_(std::move(options)) {}
 
 absl::Status SessionRegistry::ValidateCameraId(absl::string_view camera_id) {
-  if (camera_id.empty() || camera_id.size() > 128) {
-    return InvalidRequest("camera_id must have 1 to 128 characters");
+  if (camera_id.empty() || camera_id.size() > kMaxCameraIdBytes) {
+    return InvalidRequest(absl::StrCat("camera_id must have 1 to ", kMaxCameraIdBytes,
+                                       " characters, got ", camera_id.size()));
   }
   for (const char c : camera_id) {
     const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
                     c == '.' || c == '_' || c == ':' || c == '/' || c == '-';
     if (!ok) {
-      return InvalidRequest(
-          absl::StrCat("camera_id '", camera_id, "' has a character outside [A-Za-z0-9._:/-]"));
+      return InvalidRequest(absl::StrCat("camera_id '", lane::Excerpt(camera_id),
+                                         "' has a character outside [A-Za-z0-9._:/-]"));
     }
   }
   return absl::OkStatus();
@@ -33,6 +36,14 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
     return InvalidRequest(absl::StrCat("session config: the camera's ", camera.image_width, "x",
                                        camera.image_height, " frames exceed --max_frame_pixels ",
                                        options_.max_frame_pixels));
+  }
+  if (options_.max_receive_message_bytes > 0 &&
+      RawFrameRequestBytes(camera) > options_.max_receive_message_bytes) {
+    return InvalidRequest(
+        absl::StrCat("session config: a raw ", camera.image_width, "x", camera.image_height,
+                     " BGR frame of this camera needs a ", RawFrameRequestBytes(camera),
+                     "-byte message, more than --max_receive_message_bytes ",
+                     options_.max_receive_message_bytes, "; raise it on the server"));
   }
   StreamPolicy stream = spec.stream;
   if (stream.max_inflight_frames == 0) {
@@ -73,6 +84,9 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
     return InvalidRequest(absl::StrCat("session config: ", detector.status().message()));
   }
 
+  const uint64_t need = detector->MemoryBytes() + config_json.size();
+
+  std::shared_ptr<const Session> replaced;  // destroyed outside the lock
   std::lock_guard<std::mutex> lock(mu_);
   const absl::Time now = options_.clock();
   // Another call may have changed the entry meanwhile: check again.
@@ -80,11 +94,20 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
   if (!existing.ok()) return existing.status();
   if (*existing != nullptr) return CreateResult{*std::move(existing), Outcome::kUnchanged};
 
+  uint64_t held = memory_bytes_;
+  auto old = sessions_.find(camera_id);
+  if (old != sessions_.end()) held -= SessionBytes(*old->second.session);
+  if (options_.max_session_memory_bytes > 0 && held + need > options_.max_session_memory_bytes) {
+    return SessionMemoryExhausted(need, held, options_.max_session_memory_bytes);
+  }
+  if (old != sessions_.end()) replaced = std::move(old->second.session);
+
   auto session =
       std::make_shared<const Session>(camera_id, next_version_++, spec.config,
                                       std::move(config_json), stream, *std::move(detector), now);
-  auto [it, inserted] = sessions_.insert_or_assign(camera_id, Entry{session, now});
-  (void)it;
+  memory_bytes_ = held + SessionBytes(*session);
+  const bool inserted = replaced == nullptr;
+  sessions_.insert_or_assign(camera_id, Entry{session, now});
   NotifySizeLocked();
   return CreateResult{std::move(session), inserted ? Outcome::kCreated : Outcome::kReplaced};
 }
@@ -119,6 +142,7 @@ absl::Status SessionRegistry::Delete(absl::string_view camera_id) {
   auto it = sessions_.find(camera_id);
   if (it == sessions_.end()) return SessionNotFound(camera_id);
   doomed = std::move(it->second.session);
+  memory_bytes_ -= SessionBytes(*doomed);
   sessions_.erase(it);
   NotifySizeLocked();
   return absl::OkStatus();
@@ -131,6 +155,7 @@ size_t SessionRegistry::EvictIdle() {
   const absl::Time cutoff = options_.clock() - options_.ttl;
   for (auto it = sessions_.begin(); it != sessions_.end();) {
     if (it->second.last_used <= cutoff) {
+      memory_bytes_ -= SessionBytes(*it->second.session);
       doomed.push_back(std::move(it->second.session));
       it = sessions_.erase(it);
     } else {
@@ -139,6 +164,24 @@ size_t SessionRegistry::EvictIdle() {
   }
   if (!doomed.empty()) NotifySizeLocked();
   return doomed.size();
+}
+
+uint64_t SessionRegistry::SessionBytes(const Session& session) {
+  return session.detector.MemoryBytes() + session.config_json.size();
+}
+
+uint64_t SessionRegistry::RawFrameRequestBytes(const lane::CameraModel& camera) {
+  // The pixels, plus room for the request's other fields (ids, times, the raw
+  // image's header and an inline session config of a stream's first frame).
+  constexpr uint64_t kRequestOverhead = 64 * 1024;
+  return uint64_t(std::max(0, camera.image_width)) * uint64_t(std::max(0, camera.image_height)) *
+             3 +
+         kRequestOverhead;
+}
+
+uint64_t SessionRegistry::memory_bytes() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return memory_bytes_;
 }
 
 size_t SessionRegistry::size() const {

@@ -33,6 +33,16 @@ class SessionRegistry {
     uint32_t default_max_inflight_frames = 8;
     // Cameras whose frames are larger than this are refused.
     int64_t max_frame_pixels = int64_t{3840} * 2160;
+    // Largest message the server receives, bytes: cameras whose raw BGR frame
+    // (with the request's other fields) cannot fit are refused, since they
+    // could only ever stream encoded frames. 0 = no check.
+    uint64_t max_receive_message_bytes = 0;
+    // Memory all sessions' detectors may hold together, bytes (a 160x120 top
+    // view holds about 0.5 MB, the largest allowed, 2048x2048, about 110 MB).
+    // A create that would exceed it is RESOURCE_EXHAUSTED. Detectors are built
+    // on the worker pool before this check, so at most one per worker is
+    // held beyond the budget at any moment. 0 = no budget.
+    uint64_t max_session_memory_bytes = uint64_t{1} << 30;
     // Time source (tests inject a fake clock).
     std::function<absl::Time()> clock = [] { return absl::Now(); };
     // Called with the number of sessions after every change, under the
@@ -72,9 +82,18 @@ class SessionRegistry {
   size_t EvictIdle();
 
   size_t size() const;
+  // Bytes held by all sessions' detectors (Detector::MemoryBytes).
+  uint64_t memory_bytes() const;
   const Options& options() const { return options_; }
 
+  // What a session counts against max_session_memory_bytes.
+  static uint64_t SessionBytes(const Session& session);
+  // Bytes of the largest request carrying a raw BGR frame of the camera.
+  static uint64_t RawFrameRequestBytes(const lane::CameraModel& camera);
+
   // OK or INVALID_ARGUMENT: 1 to 128 characters of [A-Za-z0-9._:/-].
+  // Checked before any message quotes an id.
+  static constexpr size_t kMaxCameraIdBytes = 128;
   static absl::Status ValidateCameraId(absl::string_view camera_id);
 
  private:
@@ -84,6 +103,7 @@ class SessionRegistry {
   mutable std::mutex mu_;
   std::map<std::string, Entry, std::less<>> sessions_;  // guarded by mu_
   uint64_t next_version_ = 1;                           // guarded by mu_
+  uint64_t memory_bytes_ = 0;  // sum of SessionBytes over sessions_, guarded by mu_
 };
 
 }  // namespace lane::server

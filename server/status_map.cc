@@ -3,23 +3,33 @@
 #include <string>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "lane/excerpt.h"
 
 namespace lane::server {
 
+namespace {
+
+// A camera id in a message: ids are validated (at most 128 characters of
+// [A-Za-z0-9._:/-]) before they are stored, but a lookup may quote anything.
+std::string Id(absl::string_view camera_id) { return lane::Excerpt(camera_id); }
+
+}  // namespace
+
 absl::Status SessionNotFound(absl::string_view camera_id) {
-  return absl::NotFoundError(absl::StrCat("no session for camera '", camera_id, "'"));
+  return absl::NotFoundError(absl::StrCat("no session for camera '", Id(camera_id), "'"));
 }
 
 absl::Status NoSessionForFrame(absl::string_view camera_id) {
   return absl::FailedPreconditionError(
-      absl::StrCat("no session for camera '", camera_id,
+      absl::StrCat("no session for camera '", Id(camera_id),
                    "': call CreateSession first, or send session_config with the "
                    "stream's first frame"));
 }
 
 absl::Status SessionConfigConflict(absl::string_view camera_id, uint64_t version) {
   return absl::AlreadyExistsError(
-      absl::StrCat("camera '", camera_id, "' already has a session (version ", version,
+      absl::StrCat("camera '", Id(camera_id), "' already has a session (version ", version,
                    ") with a different config; set replace to replace it"));
 }
 
@@ -27,6 +37,15 @@ absl::Status TooManySessions(size_t max_sessions) {
   return absl::ResourceExhaustedError(
       absl::StrCat("the server holds its maximum of ", max_sessions,
                    " sessions (--max_sessions); delete one or wait for idle ones to expire"));
+}
+
+absl::Status SessionMemoryExhausted(uint64_t need_bytes, uint64_t held_bytes,
+                                    uint64_t budget_bytes) {
+  auto mib = [](uint64_t bytes) { return absl::StrFormat("%.1f MiB", bytes / 1048576.0); };
+  return absl::ResourceExhaustedError(
+      absl::StrCat("the session would hold ", mib(need_bytes), " and the server's sessions hold ",
+                   mib(held_bytes), " of their budget of ", mib(budget_bytes),
+                   " (--max_session_memory_mib); delete sessions or use a smaller top view"));
 }
 
 absl::Status WorkerQueueFull() {
@@ -53,7 +72,8 @@ absl::Status InvalidRequest(absl::string_view message) {
 grpc::Status ToGrpcStatus(const absl::Status& status) {
   if (status.ok()) return grpc::Status::OK;
   // The numbering is shared (both follow google.rpc.Code).
-  return grpc::Status(static_cast<grpc::StatusCode>(status.code()), std::string(status.message()));
+  return grpc::Status(static_cast<grpc::StatusCode>(status.code()),
+                      lane::CapMessage(status.message(), kMaxStatusMessageBytes));
 }
 
 v1::FrameCode ToFrameCode(absl::StatusCode code) {
@@ -76,9 +96,11 @@ void ToFrameStatus(const absl::Status& status, v1::FrameStatus* out) {
   if (status.ok()) {
     out->clear_message();
   } else if (code == v1::FRAME_CODE_INTERNAL && status.code() != absl::StatusCode::kInternal) {
-    out->set_message(absl::StrCat(absl::StatusCodeToString(status.code()), ": ", status.message()));
+    out->set_message(lane::CapMessage(
+        absl::StrCat(absl::StatusCodeToString(status.code()), ": ", status.message()),
+        kMaxStatusMessageBytes));
   } else {
-    out->set_message(std::string(status.message()));
+    out->set_message(lane::CapMessage(status.message(), kMaxStatusMessageBytes));
   }
 }
 

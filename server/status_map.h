@@ -29,6 +29,10 @@ absl::Status NoSessionForFrame(absl::string_view camera_id);
 absl::Status SessionConfigConflict(absl::string_view camera_id, uint64_t version);
 // RESOURCE_EXHAUSTED: the session cap is reached.
 absl::Status TooManySessions(size_t max_sessions);
+// RESOURCE_EXHAUSTED: a new session's detector would take the sessions'
+// memory beyond --max_session_memory_mib.
+absl::Status SessionMemoryExhausted(uint64_t need_bytes, uint64_t held_bytes,
+                                    uint64_t budget_bytes);
 // RESOURCE_EXHAUSTED: the worker pool's queue is full (unary Detect).
 absl::Status WorkerQueueFull();
 // UNAVAILABLE: the server is starting or draining.
@@ -41,6 +45,12 @@ absl::Status InvalidFrame(absl::string_view message);
 absl::Status InvalidRequest(absl::string_view message);
 
 // ---- Conversions ----------------------------------------------------------
+
+// Every status message leaving the server is cut to this many bytes: a
+// default gRPC client refuses status metadata beyond about 8 kB, and then
+// reports RESOURCE_EXHAUSTED instead of the real code. Messages that quote
+// client input quote a short excerpt (lane/excerpt.h); this is the backstop.
+inline constexpr size_t kMaxStatusMessageBytes = 1024;
 
 // Stream-level and unary statuses: the same code and message.
 grpc::Status ToGrpcStatus(const absl::Status& status);

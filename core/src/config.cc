@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "lane/excerpt.h"
 
 namespace lane {
 namespace {
@@ -188,13 +189,17 @@ struct EnumTraits<Interpolation> {
 // ---------------------------------------------------------------------------
 // Reading.
 
+// Keys of the field lists (ours) and paths built from them.
 std::string Quoted(const std::string& key) { return absl::StrCat("\"", key, "\""); }
 
-// `"abc"`, `1.5`, `{...}`: the offending value, shortened.
+// `string "abc"`, `number 1.5`, `array of 3 elements`: the offending value
+// described in a bounded number of characters. Arrays and objects are never
+// dumped: dumping recurses over client data of any depth and size.
 std::string Describe(const Json& j) {
-  std::string text = j.dump();
-  if (text.size() > 40) text = text.substr(0, 37) + "...";
-  return absl::StrCat(j.type_name(), " ", text);
+  if (j.is_array()) return absl::StrCat("an array of ", j.size(), " elements");
+  if (j.is_object()) return absl::StrCat("an object of ", j.size(), " keys");
+  if (j.is_string()) return absl::StrCat("string ", QuotedExcerpt(j.get_ref<const std::string&>()));
+  return absl::StrCat(j.type_name(), " ", Excerpt(j.dump()));
 }
 
 absl::Status WrongType(const std::string& key, const char* expected, const Json& j) {
@@ -259,8 +264,10 @@ class Reader {
       bool known = false;
       for (const char* name : known_) known = known || item.key() == name;
       if (!known) {
+        // The key is the client's: quoted as a bounded excerpt.
         return absl::InvalidArgumentError(
-            absl::StrCat("unknown key ", Quoted(Key(item.key().c_str()))));
+            absl::StrCat("unknown key \"", path_.empty() ? "" : absl::StrCat(path_, "."),
+                         Excerpt(item.key()), "\""));
       }
     }
     return status_;
@@ -350,7 +357,45 @@ absl::Status Config::Validate() const {
   return detector.Validate();
 }
 
+namespace {
+
+// Checks the document's size and nesting before anything parses or walks it:
+// nothing downstream then recurses deeper than kMaxConfigDepth. Comments and
+// strings are skipped, as the parser skips them.
+absl::Status CheckConfigShape(const std::string& text) {
+  if (text.size() > kMaxConfigBytes) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "the config is ", text.size(), " bytes, more than the limit of ", kMaxConfigBytes));
+  }
+  int depth = 0;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '"') {
+      for (++i; i < text.size() && text[i] != '"'; ++i) {
+        if (text[i] == '\\') ++i;
+      }
+    } else if (c == '/' && i + 1 < text.size() && text[i + 1] == '/') {
+      while (i < text.size() && text[i] != '\n') ++i;
+    } else if (c == '/' && i + 1 < text.size() && text[i + 1] == '*') {
+      const size_t end = text.find("*/", i + 2);
+      i = end == std::string::npos ? text.size() : end + 1;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxConfigDepth) {
+        return absl::InvalidArgumentError(
+            absl::StrCat("the config nests deeper than ", kMaxConfigDepth,
+                         " levels (its schema has 3: sections, subsections, values)"));
+      }
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
 absl::StatusOr<Config> ParseConfig(const std::string& json_text) {
+  if (absl::Status s = CheckConfigShape(json_text); !s.ok()) return s;
   Json doc;
   try {
     doc = Json::parse(json_text, /*cb=*/nullptr, /*allow_exceptions=*/true,
@@ -364,7 +409,8 @@ absl::StatusOr<Config> ParseConfig(const std::string& json_text) {
     if (const size_t close = what.find("] "); what.rfind("[json.", 0) == 0 && close != what.npos) {
       what = what.substr(close + 2);
     }
-    return absl::InvalidArgumentError(absl::StrCat("malformed JSON: ", what));
+    // The parser quotes the last token it read, which is the client's.
+    return absl::InvalidArgumentError(absl::StrCat("malformed JSON: ", Excerpt(what, 160)));
   }
   return ConfigFromJson(doc);
 }

@@ -154,6 +154,11 @@ absl::StatusOr<Detector> Detector::Create(const CameraModel& camera, const IpmOp
   return Detector(*std::move(mapping), options, std::move(kernels));
 }
 
+size_t Detector::MemoryBytes() const {
+  return sizeof(*this) + ipm_.MemoryBytes() + kernels_.kx.total() * kernels_.kx.elemSize() +
+         kernels_.ky.total() * kernels_.ky.elemSize();
+}
+
 cv::Mat Detector::ExtractChannel(const cv::Mat& frame) const {
   if (frame.channels() == 1) return frame;
   cv::Mat out;

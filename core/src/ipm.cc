@@ -160,4 +160,10 @@ Eigen::Vector2d IpmMapping::ImageToIpm(const Eigen::Vector2d& image) const {
   return GroundToIpm(camera_.ImageToGround(image));
 }
 
+size_t IpmMapping::MemoryBytes() const {
+  return src_x_.capacity() * sizeof(int) + src_y_.capacity() * sizeof(int) +
+         weights_.capacity() * sizeof(weights_[0]) + valid_.total() * valid_.elemSize() +
+         invalid_.total() * invalid_.elemSize();
+}
+
 }  // namespace lane

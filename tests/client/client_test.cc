@@ -299,6 +299,14 @@ void RunRestart(const std::string& list, const std::vector<std::string>& names, 
                        "--inflight", "16", "--retry-timeout", "60s", "--output",
                        out / "results.jsonl", list});
   });
+  // A failed ASSERT returns early: the client thread is joined first (a
+  // joinable std::thread's destructor would terminate the whole binary).
+  struct Joiner {
+    std::thread& thread;
+    ~Joiner() {
+      if (thread.joinable()) thread.join();
+    }
+  } joiner{client};
   ASSERT_TRUE(PollUntil([&] { return FramesProcessed(*first, "cam") >= 40; }));
   first->Drain();
   const uint64_t by_first = FramesProcessed(*first, "cam");

@@ -71,6 +71,52 @@ TEST(ConfigTest, NumberBeyondDoubleIsInvalidArgument) {
   }
 }
 
+// Client data of any depth or length never reaches a recursive walk or a
+// message whole (hardening, round 2: 100,000 nested arrays used to crash the
+// server through the error path's dump of the value).
+TEST(ConfigTest, DeepOrHugeDocumentsAreRefusedBeforeParsing) {
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  const std::string deep_value =
+      "{\"camera\": {\"fu\": " + std::string(100000, '[') + std::string(100000, ']') + "}}";
+  const std::string huge = "{\"camera\": {}, \"x\": \"" + std::string(2 << 20, 'a') + "\"}";
+  for (const std::string* text : {&deep, &deep_value, &huge}) {
+    const absl::StatusOr<Config> parsed = ParseConfig(*text);
+    EXPECT_EQ(parsed.status().code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_LT(parsed.status().message().size(), 200u) << parsed.status().message().substr(0, 300);
+  }
+  EXPECT_TRUE(Contains(ParseConfig(deep).status().message(), "nests deeper than 16"));
+  EXPECT_TRUE(Contains(ParseConfig(huge).status().message(), "more than the limit of"));
+  // Brackets inside strings and comments do not count as nesting.
+  const absl::StatusOr<Config> quoted =
+      ParseConfig("{\"detector\": {\"mode\": \"all\"} /* " + std::string(100, '[') +
+                  " */}\n// {{{{{{{{{{{{{{{{{{{\n");
+  EXPECT_TRUE(quoted.ok()) << quoted.status();
+  // Within the limit, a wrong value of any size is described, not dumped.
+  const std::string nested =
+      "{\"camera\": {\"fu\": " + std::string(12, '[') + std::string(12, ']') + "}}";
+  const absl::StatusOr<Config> wrong = ParseConfig(nested);
+  ASSERT_EQ(wrong.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_TRUE(Contains(wrong.status().message(), "\"camera.fu\" must be a number, got an array"));
+}
+
+TEST(ConfigTest, LongKeysAndValuesAreQuotedAsShortEscapedExcerpts) {
+  const std::string key(10000, 'k');
+  const absl::StatusOr<Config> unknown = ParseConfig("{\"camera\": {\"" + key + "\": 1}}");
+  ASSERT_EQ(unknown.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_LT(unknown.status().message().size(), 200u);
+  EXPECT_TRUE(Contains(unknown.status().message(), "unknown key \"camera.kkkk"));
+  EXPECT_TRUE(Contains(unknown.status().message(), "(10000 bytes)"));
+  const absl::StatusOr<Config> value =
+      ParseConfig("{\"detector\": {\"mode\": \"\\u0001" + std::string(10000, 'v') + "\"}}");
+  ASSERT_EQ(value.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_LT(value.status().message().size(), 200u);
+  EXPECT_TRUE(Contains(value.status().message(), "\\x01vvv")) << value.status().message();
+  // A malformed document's message quotes the parser's last token, cut too.
+  const absl::StatusOr<Config> malformed = ParseConfig("{\"a\": tru" + std::string(10000, 'e'));
+  ASSERT_EQ(malformed.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_LT(malformed.status().message().size(), 300u);
+}
+
 TEST(ConfigTest, EmptyDocumentGivesTheDefaults) {
   const absl::StatusOr<Config> parsed = ParseConfig("{}");
   ASSERT_TRUE(parsed.ok()) << parsed.status();

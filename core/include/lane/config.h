@@ -4,6 +4,7 @@
 #ifndef LANE_CONFIG_H_
 #define LANE_CONFIG_H_
 
+#include <cstddef>
 #include <string>
 
 #include "absl/status/statusor.h"
@@ -21,7 +22,14 @@ struct Config {
   absl::Status Validate() const;
 };
 
-// Parses a JSON document. `mode` in the document (if present) selects the
+// Limits on a config document, checked before it is parsed: configs are a few
+// kB and nest 3 levels deep (sections, subsections, values), so these leave
+// ample room while keeping every walk of client data shallow and short.
+inline constexpr size_t kMaxConfigBytes = size_t{1} << 20;
+inline constexpr int kMaxConfigDepth = 16;
+
+// Parses a JSON document. Larger or deeper documents than the limits above
+// are INVALID_ARGUMENT before parsing. `mode` in the document (if present) selects the
 // mode's defaults before the other detector keys are applied. Unknown keys
 // are an error (they are usually typos). INVALID_ARGUMENT names the key.
 absl::StatusOr<Config> ParseConfig(const std::string& json_text);

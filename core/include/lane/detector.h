@@ -130,6 +130,9 @@ class Detector {
   const IpmMapping& ipm() const { return ipm_; }
   const DetectorOptions& options() const { return options_; }
   const FilterKernels& kernels() const { return kernels_; }
+  // Bytes this detector holds between frames (its precomputed mapping and
+  // kernels); each Detect call allocates its working images on top.
+  size_t MemoryBytes() const;
 
   // The single channel the detector reads from a frame, as a copy.
   cv::Mat ExtractChannel(const cv::Mat& frame) const;

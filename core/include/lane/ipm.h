@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cstddef>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -80,6 +81,9 @@ class IpmMapping {
   const cv::Mat& valid_mask() const { return valid_; }
   // Its complement.
   const cv::Mat& invalid_mask() const { return invalid_; }
+
+  // Bytes held by the precomputed mapping (grows with the top view's size).
+  size_t MemoryBytes() const;
 
  private:
   IpmMapping() = default;
