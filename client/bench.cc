@@ -21,14 +21,14 @@
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "common.h"
-#include "convert.h"
-#include "frame_decoder.h"
 #include "frames.h"
 #include "lane/detector.h"
 #include "lane/synthetic.h"
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "results.h"
-#include "status_map.h"
+#include "wire/config_proto.h"
+#include "wire/frame_decoder.h"
+#include "wire/status_map.h"
 
 namespace lane_client {
 namespace {
@@ -467,7 +467,7 @@ void CameraStream::OnDone(const grpc::Status& status) {
       stats.error_at_s.insert(stats.error_at_s.end(), lost,
                               camera_->run().SinceMeasureStart(Clock::now()));
       const std::string code =
-          status.ok() ? std::string("UNKNOWN") : lane::server::GrpcCodeName(status.error_code());
+          status.ok() ? std::string("UNKNOWN") : lane::wire::GrpcCodeName(status.error_code());
       stats.errors[code] += lost;
     }
     if (!status.ok() && !camera_->run().stopping.load()) ++stats.stream_failures;
@@ -797,12 +797,12 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
                                              absl::Duration warmup, absl::Duration duration,
                                              const ProgressFn& progress) {
   if (frames.empty()) return absl::InvalidArgumentError("no frames");
-  absl::StatusOr<lane::Config> config = lane::server::ConfigFromProto(session);
+  absl::StatusOr<lane::Config> config = lane::wire::ConfigFromProto(session);
   if (!config.ok()) return config.status();
   absl::StatusOr<lane::Detector> detector =
       lane::Detector::Create(config->camera, config->ipm, config->detector);
   if (!detector.ok()) return detector.status();
-  lane::server::DecodeOptions decode;
+  lane::wire::DecodeOptions decode;
   decode.width = config->camera.image_width;
   decode.height = config->camera.image_height;
   decode.max_pixels = std::numeric_limits<int64_t>::max();
@@ -825,7 +825,7 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
         const Clock::time_point t0 = Clock::now();
         if (t0 >= end) break;
         const BenchFrame& frame = frames[next.fetch_add(1) % frames.size()];
-        absl::StatusOr<cv::Mat> image = lane::server::DecodeFrame(frame.request, decode);
+        absl::StatusOr<cv::Mat> image = lane::wire::DecodeFrame(frame.request, decode);
         absl::Status status = image.status();
         if (image.ok()) status = detector->Detect(*image).status();
         const Clock::time_point t1 = Clock::now();

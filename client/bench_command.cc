@@ -20,10 +20,10 @@
 #include "bench.h"
 #include "commands.h"
 #include "common.h"
-#include "convert.h"
-#include "frame_decoder.h"
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "session_config.h"
+#include "wire/config_proto.h"
+#include "wire/frame_decoder.h"
 
 namespace lane_client {
 namespace {
@@ -121,9 +121,8 @@ FramesInfo DescribeFrames(const std::vector<BenchFrame>& frames, const std::stri
     if (frame.request.has_raw()) {
       info.width = static_cast<int>(frame.request.raw().width());
       info.height = static_cast<int>(frame.request.raw().height());
-    } else if (auto header = lane::server::ReadEncodedHeader(frame.request.encoded());
-               header.ok()) {
-      kind = header->format == lane::server::EncodedFormat::kJpeg ? "jpeg" : "png";
+    } else if (auto header = lane::wire::ReadEncodedHeader(frame.request.encoded()); header.ok()) {
+      kind = header->format == lane::wire::EncodedFormat::kJpeg ? "jpeg" : "png";
       info.width = header->width;
       info.height = header->height;
     }
@@ -418,7 +417,7 @@ int RunBench(const std::vector<std::string>& argv) {
   }
   absl::StatusOr<std::optional<v1::SessionConfig>> session = SessionConfigFromArgs(*args, true);
   if (!session.ok()) return Failure("bench", std::string(session.status().message()));
-  const absl::StatusOr<lane::Config> config = lane::server::ConfigFromProto(**session);
+  const absl::StatusOr<lane::Config> config = lane::wire::ConfigFromProto(**session);
   if (!config.ok()) return Failure("bench", std::string(config.status().message()));
 
   // The server runs OpenCV single-threaded (--opencv_threads=1); so does the

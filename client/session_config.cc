@@ -3,8 +3,8 @@
 #include <string>
 
 #include "cli_config.h"
-#include "convert.h"
 #include "lane/config.h"
+#include "wire/config_proto.h"
 
 namespace lane_client {
 
@@ -30,7 +30,7 @@ absl::StatusOr<std::optional<lane::v1::SessionConfig>> SessionConfigFromArgs(
   absl::StatusOr<lane::Config> config = lane_tools::LoadEffectiveConfig(path, *mode);
   if (!config.ok()) return config.status();
   lane::v1::SessionConfig proto;
-  lane::server::ConfigToProto(*config, &proto);
+  lane::wire::ConfigToProto(*config, &proto);
   lane::v1::StreamOptions* stream = proto.mutable_stream();
   if (*backpressure) {
     stream->set_backpressure(**backpressure == "drop_oldest" ? lane::v1::BACKPRESSURE_DROP_OLDEST

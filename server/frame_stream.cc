@@ -8,7 +8,7 @@
 #include "frame_processor.h"
 #include "lane_service.h"
 #include "raw_call.h"
-#include "status_map.h"
+#include "wire/status_map.h"
 
 namespace lane::server {
 namespace {
@@ -96,7 +96,7 @@ void FrameStream::OnReadDone(bool ok) {
 
   bool submit = false;
   if (slot->camera_id.empty()) {
-    AnswerLocked(*slot, InvalidRequest("frame without camera_id"));
+    AnswerLocked(*slot, wire::InvalidRequest("frame without camera_id"));
   } else if (absl::Status id = SessionRegistry::ValidateCameraId(slot->camera_id); !id.ok()) {
     AnswerLocked(*slot, id);
   } else if (request.has_session_config()) {
@@ -105,13 +105,13 @@ void FrameStream::OnReadDone(bool ok) {
       awaiting_setup_ = true;  // later frames need the session: read them after
       submit = true;
     } else {
-      AnswerLocked(*slot, InvalidRequest("session_config is only accepted on a stream's "
-                                         "first request"));
+      AnswerLocked(*slot, wire::InvalidRequest("session_config is only accepted on a stream's "
+                                               "first request"));
     }
   } else {
     slot->session = service_.sessions().Find(slot->camera_id);
     if (slot->session == nullptr) {
-      slot->stream_error = NoSessionForFrame(slot->camera_id);
+      slot->stream_error = wire::NoSessionForFrame(slot->camera_id);
       slot->done = true;
       stream_failed_ = true;
     } else {
@@ -128,7 +128,7 @@ void FrameStream::OnReadDone(bool ok) {
       // Only after the pool has shut down, i.e. never while serving.
       refs_.fetch_sub(1, std::memory_order_relaxed);  // gRPC's ref remains
       awaiting_setup_ = false;
-      AnswerLocked(*slot, ServerDraining());
+      AnswerLocked(*slot, wire::ServerDraining());
     } else if (backpressure_ == Backpressure::kDropOldest && inflight_ > max_inflight_) {
       DropOldestQueuedLocked();
     }
@@ -158,7 +158,7 @@ void FrameStream::Process(const std::shared_ptr<Slot>& slot) {
     }
     if (slot->session != nullptr) {
       // A bad frame's status is in its response; the stream goes on.
-      ProcessFrame(request, *slot->session, service_.options().max_frame_pixels, slot->arrival,
+      ProcessFrame(request, *slot->session, service_.options().frame_limits, slot->arrival,
                    service_.metrics(), &slot->response)
           .IgnoreError();
     }
@@ -272,7 +272,7 @@ void FrameStream::MaybeFinishLocked() {
     FinishLocked(absl::OkStatus());
   } else if (draining_) {
     // A read may still be outstanding: Finish ends it (it completes with !ok).
-    FinishLocked(ServerDraining());
+    FinishLocked(wire::ServerDraining());
   }
 }
 
@@ -282,7 +282,7 @@ void FrameStream::FinishLocked(const absl::Status& status) {
   abandoned_.store(true, std::memory_order_release);
   // Only cancellation gets here with frames unanswered; their workers skip.
   while (!slots_.empty()) PopFrontLocked();
-  const grpc::Status grpc_status = ToGrpcStatus(status);
+  const grpc::Status grpc_status = wire::ToGrpcStatus(status);
   service_.metrics().CountRpc("StreamFrames", grpc_status.error_code());
   Finish(grpc_status);
 }
@@ -305,7 +305,7 @@ bool FrameStream::DropOldestQueuedLocked() {
       slot->in_bound = false;
       --inflight_;
       slot->request.reset();
-      AnswerLocked(*slot, FrameDropped(max_inflight_));
+      AnswerLocked(*slot, wire::FrameDropped(max_inflight_));
       return true;
     }
   }

@@ -19,6 +19,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
+#include "frame_processor.h"
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "metrics.h"
 #include "session_registry.h"
@@ -29,8 +30,8 @@ namespace lane::server {
 class FrameStream;
 
 struct ServiceOptions {
-  // Largest frame accepted, width * height.
-  int64_t max_frame_pixels = int64_t{3840} * 2160;
+  // Largest frame accepted and the decode deadline.
+  FrameLimits frame_limits;
   // Reported by GetServerInfo.
   uint64_t max_receive_message_bytes = 0;
   // Accepted Bearer tokens (authorization metadata); empty = no auth.
