@@ -88,13 +88,6 @@ absl::Status LaneServiceImpl::Admission(const grpc::ServerContextBase& context) 
   return wire::ServerDraining();
 }
 
-absl::StatusOr<SessionRegistry::CreateResult> LaneServiceImpl::EnsureSession(
-    const std::string& camera_id, const v1::SessionConfig& config, bool replace) {
-  absl::StatusOr<SessionSpec> spec = SessionSpecFromProto(config);
-  if (!spec.ok()) return spec.status();
-  return sessions_.Create(camera_id, *spec, replace);
-}
-
 grpc::ServerUnaryReactor* LaneServiceImpl::CreateSession(grpc::CallbackServerContext* context,
                                                          const grpc::ByteBuffer* in,
                                                          grpc::ByteBuffer* out) {
@@ -105,8 +98,8 @@ grpc::ServerUnaryReactor* LaneServiceImpl::CreateSession(grpc::CallbackServerCon
         // Building a detector is CPU work: on the pool.
         const bool queued = pool_.TrySubmit([this, call] {
           const v1::CreateSessionRequest& request = call->request();
-          absl::StatusOr<SessionRegistry::CreateResult> created =
-              EnsureSession(request.camera_id(), request.config(), request.replace());
+          absl::StatusOr<SessionRegistry::CreateResult> created = CreateSessionFromProto(
+              sessions_, request.camera_id(), request.config(), request.replace());
           if (created.ok()) {
             SessionToProto(*created->session, absl::Now(), call->response()->mutable_session());
             call->response()->set_outcome(OutcomeToProto(created->outcome));
@@ -165,9 +158,12 @@ grpc::ServerUnaryReactor* LaneServiceImpl::DeleteSession(grpc::CallbackServerCon
 
 grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* LaneServiceImpl::StreamFrames(
     grpc::CallbackServerContext* context) {
-  auto* stream = new FrameStream(*this);
   absl::Status reject = CheckBearerToken(*context, options_.auth_tokens);
-  if (reject.ok()) {
+  const bool admitted = reject.ok();
+  StreamDeps deps{sessions_, pool_, metrics_, options_.frame_limits, nullptr};
+  if (admitted) deps.on_done = [this](FrameStream* stream) { Unregister(stream); };
+  auto* stream = new FrameStream(std::move(deps));
+  if (admitted) {
     std::lock_guard<std::mutex> lock(mu_);
     if (state_ == State::kServing) {
       streams_.insert(stream);
@@ -175,7 +171,7 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* LaneServiceImpl::St
       reject = state_ == State::kStarting ? wire::ServerStarting() : wire::ServerDraining();
     }
   }
-  stream->Start(reject, reject.ok());
+  stream->Start(reject);
   return stream;
 }
 
@@ -204,8 +200,9 @@ grpc::ServerUnaryReactor* LaneServiceImpl::Detect(grpc::CallbackServerContext* c
               v1::FrameResponse* response = call->response();
               absl::Status status;
               if (session == nullptr) {  // the request carries its session config
-                absl::StatusOr<SessionRegistry::CreateResult> created = EnsureSession(
-                    request.camera_id(), request.session_config(), request.replace_session());
+                absl::StatusOr<SessionRegistry::CreateResult> created =
+                    CreateSessionFromProto(sessions_, request.camera_id(), request.session_config(),
+                                           request.replace_session());
                 if (created.ok()) {
                   session = std::move(created->session);
                 } else {

@@ -87,18 +87,6 @@ class LaneServiceImpl final : public RawLaneService {
   bool WaitForStreams(absl::Time deadline);
   size_t open_streams() const;
 
-  // For FrameStream.
-  SessionRegistry& sessions() { return sessions_; }
-  WorkerPool& pool() { return pool_; }
-  Metrics& metrics() { return metrics_; }
-  const ServiceOptions& options() const { return options_; }
-  // Creates or confirms the session described by a request (on a worker:
-  // it may build a detector).
-  absl::StatusOr<SessionRegistry::CreateResult> EnsureSession(const std::string& camera_id,
-                                                              const v1::SessionConfig& config,
-                                                              bool replace);
-  void Unregister(FrameStream* stream);
-
  private:
   enum class State { kStarting, kServing, kDraining };
 
@@ -107,6 +95,8 @@ class LaneServiceImpl final : public RawLaneService {
   // serving state.
   absl::Status Admission(const grpc::ServerContextBase& context) const;
   void FillServerInfo(v1::ServerInfo* response) const;
+  // Drops a finished stream from streams_ (its on_done callback).
+  void Unregister(FrameStream* stream);
 
   const ServiceOptions options_;
   SessionRegistry& sessions_;

@@ -43,6 +43,14 @@ absl::StatusOr<SessionSpec> SessionSpecFromProto(const v1::SessionConfig& proto)
   return SessionSpec{*std::move(config), *stream, decode};
 }
 
+absl::StatusOr<SessionRegistry::CreateResult> CreateSessionFromProto(
+    SessionRegistry& sessions, const std::string& camera_id, const v1::SessionConfig& config,
+    bool replace) {
+  absl::StatusOr<SessionSpec> spec = SessionSpecFromProto(config);
+  if (!spec.ok()) return spec.status();
+  return sessions.Create(camera_id, *spec, replace);
+}
+
 void SessionToProto(const Session& session, absl::Time last_used, v1::Session* out) {
   out->set_camera_id(session.camera_id);
   out->set_version(session.version);
