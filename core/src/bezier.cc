@@ -127,20 +127,25 @@ std::optional<Bezier> FitBezier(const std::vector<Eigen::Vector2d>& pts) {
   return b;
 }
 
+std::vector<double> NearestPointDistances(const std::vector<Eigen::Vector2d>& from,
+                                          const std::vector<Eigen::Vector2d>& to) {
+  std::vector<double> out;
+  out.reserve(from.size());
+  for (const auto& p : from) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& q : to) best = std::min(best, (p - q).squaredNorm());
+    out.push_back(std::sqrt(best));
+  }
+  return out;
+}
+
 double CurveDistance(const Bezier& a, const Bezier& b, int n) {
   const auto pa = a.Sample(n);
   const auto pb = b.Sample(n);
-  auto directed = [](const std::vector<Eigen::Vector2d>& from,
-                     const std::vector<Eigen::Vector2d>& to) {
-    double worst = 0;
-    for (const auto& p : from) {
-      double best = std::numeric_limits<double>::infinity();
-      for (const auto& q : to) best = std::min(best, (p - q).squaredNorm());
-      worst = std::max(worst, best);
-    }
-    return std::sqrt(worst);
-  };
-  return std::max(directed(pa, pb), directed(pb, pa));
+  double worst = 0;
+  for (const double d : NearestPointDistances(pa, pb)) worst = std::max(worst, d);
+  for (const double d : NearestPointDistances(pb, pa)) worst = std::max(worst, d);
+  return worst;
 }
 
 }  // namespace lane

@@ -26,6 +26,18 @@ double AngleFromVerticalDeg(const IpmLine& line) {
   return std::atan2(std::abs(d.x()), std::abs(d.y())) * kRadToDeg;
 }
 
+// The line through `top` with unit normal n: distance |n . p - n . top|.
+struct NormalForm {
+  explicit NormalForm(const IpmLine& line) {
+    const Eigen::Vector2d d = (line.bottom - line.top).normalized();
+    n = Eigen::Vector2d(d.y(), -d.x());
+    offset = n.dot(line.top);
+  }
+  double Distance(const Eigen::Vector2d& p) const { return std::abs(n.dot(p) - offset); }
+  Eigen::Vector2d n;
+  double offset = 0;
+};
+
 // RANSAC estimator: 4 weighted samples, total least squares, scored by the
 // sum of the responses of the pixels within the inlier distance.
 class LineEstimator {
@@ -47,16 +59,23 @@ class LineEstimator {
   }
 
   double Score(const IpmLine& line) const {
-    // Distance to the line through `top` with unit normal n: |n . (p - top)|.
-    const Eigen::Vector2d d = (line.bottom - line.top).normalized();
-    const Eigen::Vector2d n(d.y(), -d.x());
-    const double offset = n.dot(line.top);
+    const NormalForm normal(line);
     const double tol = options_.inlier_distance_px;
     double score = 0;
     for (size_t i = 0; i < pts_.points.size(); ++i) {
-      if (std::abs(n.dot(pts_.points[i]) - offset) <= tol) score += pts_.weights[i];
+      if (normal.Distance(pts_.points[i]) <= tol) score += pts_.weights[i];
     }
     return score;
+  }
+
+  // The inliers the refit uses. The same test as Score's, computed as
+  // IpmLine::Distance: the two forms differ only in rounding, for points
+  // exactly at the tolerance (which pixel centres often are, for lines fitted
+  // through pixel centres). Kept as the refit always had it, so that moving
+  // the mask into the RANSAC report left the output byte-identical (one form
+  // for both changes 1-6 % of frames, at such ties).
+  bool IsInlier(const IpmLine& line, size_t i) const {
+    return line.Distance(pts_.points[i]) <= options_.inlier_distance_px;
   }
 
  private:
@@ -132,13 +151,14 @@ std::optional<IpmLine> FitLineInWindow(const cv::Mat& thresholded, double x_cent
       thresholded, [x_center](double) { return x_center; }, half_width_px);
   if (static_cast<int>(pts.points.size()) < options.min_inliers) return std::nullopt;
   const LineEstimator estimator(pts, thresholded.rows, options);
-  const auto report = Ransac(estimator, pts.points, pts.weights, options.iterations, rng);
+  const auto report =
+      Ransac(estimator, pts.points, pts.weights, RansacOptions{options.iterations}, rng);
   if (!report.model) return std::nullopt;
 
-  // Refit on the inliers, weighted by their response.
+  // Refit on the inliers the score counted, weighted by their response.
   WeightedPoints inliers;
   for (size_t i = 0; i < pts.points.size(); ++i) {
-    if (report.model->Distance(pts.points[i]) <= options.inlier_distance_px) {
+    if (report.inlier_mask[i]) {
       inliers.points.push_back(pts.points[i]);
       inliers.weights.push_back(pts.weights[i]);
     }

@@ -11,13 +11,7 @@ namespace {
 // point of `to`.
 std::pair<double, double> Directed(const std::vector<Eigen::Vector2d>& from,
                                    const std::vector<Eigen::Vector2d>& to) {
-  std::vector<double> d;
-  d.reserve(from.size());
-  for (const auto& p : from) {
-    double best = std::numeric_limits<double>::infinity();
-    for (const auto& q : to) best = std::min(best, (p - q).squaredNorm());
-    d.push_back(std::sqrt(best));
-  }
+  std::vector<double> d = NearestPointDistances(from, to);
   double mean = 0;
   for (double v : d) mean += v;
   mean /= d.size();

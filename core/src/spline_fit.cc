@@ -159,7 +159,8 @@ std::optional<SplineFit> FitSplineAroundLine(const cv::Mat& thresholded, const I
   const WindowedRaster raster(thresholded, &line, half_width_px, options.jitter_px);
   const SplineEstimator estimator(raster, options);
   const Bezier initial = Bezier::Line(line.top, line.bottom);
-  const auto report = Ransac(estimator, pts.points, pts.weights, options.iterations, rng, initial);
+  const auto report =
+      Ransac(estimator, pts.points, pts.weights, RansacOptions{options.iterations}, rng, initial);
   if (!report.model || !(report.score > 0)) return std::nullopt;
   return SplineFit{*report.model, report.score};
 }

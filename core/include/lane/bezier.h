@@ -34,6 +34,13 @@ std::optional<std::vector<double>> ChordLengthParams(const std::vector<Eigen::Ve
 // pseudo-inverse P = (T M)^+ Q. Needs >= 4 points that are not all equal.
 std::optional<Bezier> FitBezier(const std::vector<Eigen::Vector2d>& pts);
 
+// For each point of `from`, the distance to the nearest point of `to`: the
+// one curve-distance loop of the project (Hausdorff distances, the paper's
+// matching rule and the detector's duplicate test are all built on it).
+// Infinity for every point when `to` is empty.
+std::vector<double> NearestPointDistances(const std::vector<Eigen::Vector2d>& from,
+                                          const std::vector<Eigen::Vector2d>& to);
+
 // Max over samples of one curve of the distance to the nearest sample of the
 // other, both ways (symmetric Hausdorff on n samples each).
 double CurveDistance(const Bezier& a, const Bezier& b, int n = 101);
