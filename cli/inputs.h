@@ -1,7 +1,7 @@
 // Frames from the command line's INPUT arguments: image files, directories of
 // images, list files and videos.
-#ifndef LANE_TOOLS_INPUTS_H_
-#define LANE_TOOLS_INPUTS_H_
+#ifndef LANE_CLI_INPUTS_H_
+#define LANE_CLI_INPUTS_H_
 
 #include <fstream>
 #include <memory>
@@ -83,4 +83,4 @@ bool IsVideoExtension(const std::string& ext);
 
 }  // namespace lane_tools
 
-#endif  // LANE_TOOLS_INPUTS_H_
+#endif  // LANE_CLI_INPUTS_H_

@@ -1,7 +1,7 @@
 // Pictures of a detection for people: the frame with the lanes drawn on it,
 // and the detector's top view with the lanes drawn in it.
-#ifndef LANE_TOOLS_OVERLAY_H_
-#define LANE_TOOLS_OVERLAY_H_
+#ifndef LANE_CLI_OVERLAY_H_
+#define LANE_CLI_OVERLAY_H_
 
 #include <opencv2/core.hpp>
 
@@ -27,4 +27,4 @@ cv::Mat DrawIpmView(const cv::Mat& frame, const lane::Detection& detection,
 
 }  // namespace lane_tools
 
-#endif  // LANE_TOOLS_OVERLAY_H_
+#endif  // LANE_CLI_OVERLAY_H_

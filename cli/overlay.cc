@@ -1,4 +1,4 @@
-#include "overlay.h"
+#include "cli/overlay.h"
 
 #include <algorithm>
 #include <array>
