@@ -76,9 +76,22 @@ class HelpFormatter final : public CLI::Formatter {
     out << make_usage(app, name);
     const std::string description = make_description(app);
     if (!description.empty()) out << '\n' << description;
-    out << make_positionals(app) << make_groups(app, mode) << make_subcommands(app, mode) << '\n'
+    out << make_positionals(app) << OptionGroups(app) << make_subcommands(app, mode) << '\n'
         << make_footer(app);
     return out.str();
+  }
+
+  // The option groups, one blank line between them.
+  std::string OptionGroups(const CLI::App* app) const {
+    std::string out;
+    for (const std::string& group : app->get_groups()) {
+      const std::vector<const CLI::Option*> options =
+          app->get_options([&group](const CLI::Option* opt) {
+            return opt->get_group() == group && opt->nonpositional();
+          });
+      if (!group.empty() && !options.empty()) out += make_group(group, false, options);
+    }
+    return out;
   }
 
   std::string make_option_name(const CLI::Option* opt, bool positional) const override {
@@ -160,9 +173,25 @@ std::optional<int> ParseCommandLine(CLI::App& app, const std::vector<std::string
     std::printf("%s\n", e.what());
     return kExitOk;
   } catch (const CLI::Error& e) {
-    return UsageError(DeepestCommand(app), e.what());
+    const CLI::App& command = DeepestCommand(app);
+    // "lane frobnicate", "lane": CLI11 only says a subcommand is required.
+    if (dynamic_cast<const CLI::RequiredError*>(&e) != nullptr &&
+        !command.get_subcommands({}).empty()) {
+      const std::vector<std::string> rest = app.remaining(true);
+      return UsageError(command, rest.empty()
+                                     ? std::string("no COMMAND given")
+                                     : absl::StrCat("unknown command \"", rest.front(), "\""));
+    }
+    return UsageError(command, e.what());
   }
   return std::nullopt;
+}
+
+int RunChosen(const std::vector<Command>& commands) {
+  for (const Command& command : commands) {
+    if (command.app->parsed()) return command.run();
+  }
+  return kExitUsage;
 }
 
 std::string CommandPath(const CLI::App& command) {

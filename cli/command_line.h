@@ -12,6 +12,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <type_traits>
@@ -28,6 +29,17 @@ inline constexpr int kExitUsage = 2;    // a bad command line
 // "0.1.0 (git fa9daa6)": CMake's project version and `git describe --always
 // --dirty` at configure time ("unknown" outside a checkout).
 std::string VersionString();
+
+// A (sub)command on the command line, and what runs it once the command
+// line is parsed: a function that returns the exit status.
+struct Command {
+  CLI::App* app = nullptr;
+  std::function<int()> run;
+};
+
+// Runs the first command of `commands` that the parse chose; kExitUsage
+// when there is none.
+int RunChosen(const std::vector<Command>& commands);
 
 // Sets up a program's top-level app: the help formatter, -h/--help,
 // --version, and exactly one subcommand required.

@@ -5,18 +5,12 @@
 #ifndef LANE_TOOLS_COMMANDS_H_
 #define LANE_TOOLS_COMMANDS_H_
 
-#include <functional>
 #include <string>
 #include <vector>
 
 #include "cli/command_line.h"
 
 namespace lane_tools {
-
-struct Command {
-  CLI::App* app = nullptr;
-  std::function<int()> run;
-};
 
 Command AddDetectCommand(CLI::App& lane);
 Command AddRenderCommand(CLI::App& lane);

@@ -14,11 +14,8 @@ int main(int argc, char** argv) {
   const std::vector<std::string> eval_args =
       args.size() > 1 ? std::vector<std::string>(args.begin() + 1, args.end())
                       : std::vector<std::string>();
-  const Command commands[] = {AddDetectCommand(app), AddRenderCommand(app), AddConfigCommand(app),
-                              AddEvalCommand(app, eval_args)};
+  const std::vector<Command> commands = {AddDetectCommand(app), AddRenderCommand(app),
+                                         AddConfigCommand(app), AddEvalCommand(app, eval_args)};
   if (const std::optional<int> exit_code = ParseCommandLine(app, args)) return *exit_code;
-  for (const Command& command : commands) {
-    if (command.app->parsed()) return command.run();
-  }
-  return kExitUsage;  // not reached: a command is required
+  return RunChosen(commands);
 }
