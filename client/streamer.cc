@@ -1,7 +1,6 @@
 #include "streamer.h"
 
 #include <algorithm>
-#include <random>
 #include <thread>
 #include <utility>
 
@@ -83,8 +82,7 @@ grpc::Status Streamer::PrepareSession(bool first_connection) {
 }
 
 absl::Status Streamer::Run(const Source& source, const Sink& sink) {
-  std::mt19937_64 rng(std::random_device{}());
-  absl::Duration backoff = options_.initial_backoff;
+  ReconnectBackoff backoff(options_.reconnect);
   auto last_progress = Clock::now();
   bool first_connection = true;
   while (true) {
@@ -107,7 +105,7 @@ absl::Status Streamer::Run(const Source& source, const Sink& sink) {
       status = grpc::Status(grpc::StatusCode::UNKNOWN, "the stream ended with frames unanswered");
     }
     if (progress) {
-      backoff = options_.initial_backoff;
+      backoff.Reset();
       last_progress = Clock::now();
     }
     const std::string why = StatusText(status);
@@ -125,13 +123,11 @@ absl::Status Streamer::Run(const Source& source, const Sink& sink) {
       std::lock_guard<std::mutex> lock(mu_);
       unanswered = unanswered_;
     }
-    std::uniform_real_distribution<double> jitter(0.8, 1.2);
-    const absl::Duration wait = backoff * jitter(rng);
+    const absl::Duration wait = backoff.Next();
     Log(absl::StrCat(why, "; reconnecting in ",
                      absl::FormatDuration(absl::Trunc(wait, absl::Milliseconds(1))), " (",
                      unanswered, " frames to resend)"));
     std::this_thread::sleep_for(absl::ToChronoNanoseconds(wait));
-    backoff = std::min(backoff * 2, options_.max_backoff);
   }
 }
 
