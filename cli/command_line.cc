@@ -141,7 +141,9 @@ void SetUpProgram(CLI::App& app) {
   app.set_version_flag("--version", absl::StrCat(app.get_name(), " ", VersionString()),
                        "print the version and exit");
   app.require_subcommand(1);
-  app.option_defaults()->always_capture_default();
+  // An option given twice: the last value counts, as before CLI11.
+  app.option_defaults()->always_capture_default()->multi_option_policy(
+      CLI::MultiOptionPolicy::TakeLast);
 }
 
 CLI::App* AddCommand(CLI::App& parent, const std::string& name, const std::string& summary,

@@ -49,7 +49,10 @@ struct SessionFlags {
 grpc::Status CallSession(const SessionFlags& flags, const v1::SessionConfig* config,
                          v1::LaneService::Stub& stub, grpc::ClientContext* context,
                          std::string* json) {
-  grpc::Status status;
+  const auto answer = [json](const grpc::Status& status, const google::protobuf::Message& reply) {
+    *json = ToJson(reply);
+    return status;
+  };
   switch (flags.action) {
     case Action::kCreate: {
       v1::CreateSessionRequest request;
@@ -57,34 +60,26 @@ grpc::Status CallSession(const SessionFlags& flags, const v1::SessionConfig* con
       *request.mutable_config() = *config;
       request.set_replace(flags.replace);
       v1::CreateSessionResponse response;
-      status = stub.CreateSession(context, request, &response);
-      *json = ToJson(response);
-      break;
+      return answer(stub.CreateSession(context, request, &response), response);
     }
     case Action::kGet: {
       v1::GetSessionRequest request;
       request.set_camera_id(flags.camera);
       v1::Session response;
-      status = stub.GetSession(context, request, &response);
-      *json = ToJson(response);
-      break;
+      return answer(stub.GetSession(context, request, &response), response);
     }
     case Action::kList: {
       v1::ListSessionsResponse response;
-      status = stub.ListSessions(context, v1::ListSessionsRequest(), &response);
-      *json = ToJson(response);
-      break;
+      return answer(stub.ListSessions(context, v1::ListSessionsRequest(), &response), response);
     }
-    case Action::kDelete: {
-      v1::DeleteSessionRequest request;
-      request.set_camera_id(flags.camera);
-      v1::DeleteSessionResponse response;
-      status = stub.DeleteSession(context, request, &response);
-      *json = absl::StrCat("{\"deleted\":\"", flags.camera, "\"}");
+    case Action::kDelete:
       break;
-    }
   }
-  return status;
+  v1::DeleteSessionRequest request;
+  request.set_camera_id(flags.camera);
+  v1::DeleteSessionResponse response;
+  *json = absl::StrCat("{\"deleted\":\"", flags.camera, "\"}");
+  return stub.DeleteSession(context, request, &response);
 }
 
 int RunSession(const CLI::App& app, const SessionFlags& flags) {

@@ -147,6 +147,28 @@ void Streamer::EmitLocalErrors(const Sink& sink) {
   }
 }
 
+std::string Streamer::TakeAnswered(uint64_t frame_id, Clock::time_point now,
+                                   std::vector<std::shared_ptr<StreamItem>>* ready) {
+  std::lock_guard<std::mutex> lock(mu_);
+  while (!pending_.empty() && pending_.front()->request == nullptr && passed_ > 0) {
+    ready->push_back(std::move(pending_.front()));
+    pending_.pop_front();
+    --passed_;
+  }
+  if (pending_.empty() || passed_ == 0 || written_ == 0 || pending_.front()->frame_id != frame_id) {
+    return absl::StrCat(
+        "response for frame_id ", frame_id, " but the oldest unanswered frame is ",
+        pending_.empty() ? std::string("none") : absl::StrCat(pending_.front()->frame_id));
+  }
+  ready->push_back(std::move(pending_.front()));
+  pending_.pop_front();
+  --passed_;
+  --unanswered_;
+  --written_;
+  last_activity_ = now;
+  return "";
+}
+
 grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* progress) {
   grpc::ClientContext context;
   std::unique_ptr<Stream> stream = stub_->StreamFrames(&context);
@@ -168,27 +190,7 @@ grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* 
   while (stream->Read(&response)) {
     const auto now = Clock::now();
     std::vector<std::shared_ptr<StreamItem>> ready;
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      while (!pending_.empty() && pending_.front()->request == nullptr && passed_ > 0) {
-        ready.push_back(std::move(pending_.front()));
-        pending_.pop_front();
-        --passed_;
-      }
-      if (pending_.empty() || passed_ == 0 || written_ == 0 ||
-          pending_.front()->frame_id != response.frame_id()) {
-        protocol_error = absl::StrCat(
-            "response for frame_id ", response.frame_id(), " but the oldest unanswered frame is ",
-            pending_.empty() ? std::string("none") : absl::StrCat(pending_.front()->frame_id));
-      } else {
-        ready.push_back(std::move(pending_.front()));
-        pending_.pop_front();
-        --passed_;
-        --unanswered_;
-        --written_;
-        last_activity_ = now;
-      }
-    }
+    protocol_error = TakeAnswered(response.frame_id(), now, &ready);
     cv_.notify_all();
     if (!protocol_error.empty()) break;
     for (size_t i = 0; i < ready.size(); ++i) {

@@ -104,6 +104,11 @@ class Streamer {
   grpc::Status PrepareSession(bool first_connection);
   // One StreamFrames call. `progress`: some frame was answered.
   grpc::Status RunAttempt(const Source& source, const Sink& sink, bool* progress);
+  // Moves the frames a response for `frame_id` answers (local errors before
+  // it, then its own) from pending_ to `ready`; a protocol error message
+  // when it answers no frame in flight, else "".
+  std::string TakeAnswered(uint64_t frame_id, Clock::time_point now,
+                           std::vector<std::shared_ptr<StreamItem>>* ready);
   void WriterLoop(Stream* stream, const Source& source);
   void WatchdogLoop(grpc::ClientContext* context);
   void EmitLocalErrors(const Sink& sink);

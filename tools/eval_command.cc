@@ -229,7 +229,7 @@ absl::Status MakeDetector(lane::eval::EvalOptions* options, EvalSource* source) 
   return absl::OkStatus();
 }
 
-// The files written while frames are scored (--out, --overlays), the
+// The files written while frames are scored (--output, --overlay), the
 // progress bar and the problems met on the way.
 class EvalOutputs {
  public:
@@ -274,7 +274,7 @@ class EvalOutputs {
 
   void ClearProgress() { progress_.Clear(); }
 
-  // Closes the results files and writes the tables to --out.
+  // Closes the results files and writes the tables to --output.
   void Finish(const lane::eval::EvalReport& report, const std::string& markdown) {
     if (out_dir_.empty()) return;
     jsonl_.close();
