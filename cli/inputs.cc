@@ -98,6 +98,12 @@ std::string MakeStem(const std::string& name) {
   return stem.empty() ? std::string("frame") : stem;
 }
 
+std::string UniqueStem(const std::string& stem, std::set<std::string>& used) {
+  std::string candidate = stem;
+  for (int i = 2; !used.insert(candidate).second; ++i) candidate = absl::StrCat(stem, "-", i);
+  return candidate;
+}
+
 FrameReader::FrameReader(const std::vector<std::string>& inputs) : entries_(ExpandInputs(inputs)) {}
 
 FrameReader::~FrameReader() = default;

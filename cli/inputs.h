@@ -7,6 +7,7 @@
 #include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,10 @@ std::vector<InputEntry> ExpandInputs(const std::vector<std::string>& inputs);
 // component dropped ("video.mp4#000012" -> "video_000012"), '/', '\', '#',
 // ':' and ' ' -> '_', leading '.' and '_' removed; "frame" if nothing is left.
 std::string MakeStem(const std::string& name);
+
+// A stem not used yet in this run: "name", "name-2", "name-3", ...; the one
+// returned is added to `used`.
+std::string UniqueStem(const std::string& stem, std::set<std::string>& used);
 
 // Expands the INPUT arguments:
 //  * an existing directory: its .jpg/.jpeg/.png files (not recursive), sorted

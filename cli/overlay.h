@@ -3,7 +3,9 @@
 #ifndef LANE_CLI_OVERLAY_H_
 #define LANE_CLI_OVERLAY_H_
 
+#include <filesystem>
 #include <opencv2/core.hpp>
+#include <string>
 
 #include "lane/detector.h"
 
@@ -24,6 +26,12 @@ cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
 // with each lane's IPM Bezier drawn in its colour.
 cv::Mat DrawIpmView(const cv::Mat& frame, const lane::Detection& detection,
                     const lane::Detector& detector, int scale = 4);
+
+// Writes DIR/STEM.png (DrawLanesOnImage) and DIR/STEM_ipm.png
+// (DrawIpmView); an error message or "".
+std::string WriteOverlays(const std::filesystem::path& dir, const std::string& stem,
+                          const cv::Mat& frame, const lane::Detection& detection,
+                          const lane::Detector& detector);
 
 }  // namespace lane_tools
 

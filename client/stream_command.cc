@@ -60,12 +60,6 @@ struct StreamFlags {
   std::vector<std::string> inputs;
 };
 
-std::string UniqueStem(const std::string& stem, std::set<std::string>& used) {
-  std::string candidate = stem;
-  for (int i = 2; !used.insert(candidate).second; ++i) candidate = absl::StrCat(stem, "-", i);
-  return candidate;
-}
-
 // Draws the overlays of one answered frame with a detector built from the
 // session's resolved config (the ROI, the horizon and the top view).
 class OverlayWriter {
@@ -88,20 +82,8 @@ class OverlayWriter {
     const cv::Mat frame = DecodeRequestImage(*item.request);
     if (frame.empty()) return "cannot decode the frame for the overlay";
     const lane::Detection detection = DetectionFromResponse(response);
-    const std::string stem = UniqueStem(item.stem, used_);
-    const std::string image_path = (dir_ / (stem + ".png")).string();
-    const std::string ipm_path = (dir_ / (stem + "_ipm.png")).string();
-    try {
-      if (!cv::imwrite(image_path, lane_tools::DrawLanesOnImage(frame, detection, *detector_))) {
-        return absl::StrCat("cannot write ", image_path);
-      }
-      if (!cv::imwrite(ipm_path, lane_tools::DrawIpmView(frame, detection, *detector_))) {
-        return absl::StrCat("cannot write ", ipm_path);
-      }
-    } catch (const cv::Exception& e) {
-      return absl::StrCat("cannot write overlay ", image_path, ": ", e.what());
-    }
-    return "";
+    return lane_tools::WriteOverlays(dir_, lane_tools::UniqueStem(item.stem, used_), frame,
+                                     detection, *detector_);
   }
 
  private:

@@ -48,32 +48,6 @@ struct DetectFlags {
   std::vector<std::string> inputs;
 };
 
-// A stem not used yet in this run: "name", "name-2", "name-3", ...
-std::string UniqueStem(const std::string& stem, std::set<std::string>& used) {
-  std::string candidate = stem;
-  for (int i = 2; !used.insert(candidate).second; ++i) candidate = absl::StrCat(stem, "-", i);
-  return candidate;
-}
-
-// Writes both overlay pictures; an error message or "".
-std::string WriteOverlays(const std::filesystem::path& dir, const std::string& stem,
-                          const cv::Mat& frame, const lane::Detection& detection,
-                          const lane::Detector& detector) {
-  const std::string image_path = (dir / (stem + ".png")).string();
-  const std::string ipm_path = (dir / (stem + "_ipm.png")).string();
-  try {
-    if (!cv::imwrite(image_path, DrawLanesOnImage(frame, detection, detector))) {
-      return absl::StrCat("cannot write ", image_path);
-    }
-    if (!cv::imwrite(ipm_path, DrawIpmView(frame, detection, detector))) {
-      return absl::StrCat("cannot write ", ipm_path);
-    }
-  } catch (const cv::Exception& e) {
-    return absl::StrCat("cannot write overlay ", image_path, ": ", e.what());
-  }
-  return "";
-}
-
 double Median(std::vector<double> values) {
   if (values.empty()) return 0;
   const size_t mid = values.size() / 2;
