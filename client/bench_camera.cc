@@ -5,7 +5,7 @@
 
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "results.h"
-#include "status_map.h"
+#include "wire/status_map.h"
 
 namespace lane_client::load {
 
@@ -138,7 +138,7 @@ void CameraStream::OnDone(const grpc::Status& status) {
       stats.error_at_s.insert(stats.error_at_s.end(), lost,
                               camera_->run().SinceMeasureStart(Clock::now()));
       const std::string code =
-          status.ok() ? std::string("UNKNOWN") : lane::server::GrpcCodeName(status.error_code());
+          status.ok() ? std::string("UNKNOWN") : lane::wire::GrpcCodeName(status.error_code());
       stats.errors[code] += lost;
     }
     if (!status.ok() && !camera_->run().stopping.load()) ++stats.stream_failures;

@@ -17,9 +17,9 @@
 #include "bench_report.h"
 #include "commands.h"
 #include "common.h"
-#include "convert.h"
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "session_config.h"
+#include "wire/config_proto.h"
 
 namespace lane_client {
 namespace {
@@ -217,7 +217,7 @@ int RunBench(const CLI::App& app, const BenchFlags& flags) {
   absl::StatusOr<std::optional<v1::SessionConfig>> session =
       SessionConfigFromFlags(flags.session, true);
   if (!session.ok()) return Failure("bench", std::string(session.status().message()));
-  const absl::StatusOr<lane::Config> config = lane::server::ConfigFromProto(**session);
+  const absl::StatusOr<lane::Config> config = lane::wire::ConfigFromProto(**session);
   if (!config.ok()) return Failure("bench", std::string(config.status().message()));
 
   // The server runs OpenCV single-threaded (--opencv_threads=1); so does the

@@ -11,9 +11,9 @@
 
 #include "absl/strings/str_cat.h"
 #include "bench.h"
-#include "convert.h"
-#include "frame_decoder.h"
 #include "lane/detector.h"
+#include "wire/config_proto.h"
+#include "wire/frame_decoder.h"
 
 namespace lane_client {
 namespace {
@@ -30,12 +30,12 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
                                              absl::Duration warmup, absl::Duration duration,
                                              const ProgressFn& progress) {
   if (frames.empty()) return absl::InvalidArgumentError("no frames");
-  absl::StatusOr<lane::Config> config = lane::server::ConfigFromProto(session);
+  absl::StatusOr<lane::Config> config = lane::wire::ConfigFromProto(session);
   if (!config.ok()) return config.status();
   absl::StatusOr<lane::Detector> detector =
       lane::Detector::Create(config->camera, config->ipm, config->detector);
   if (!detector.ok()) return detector.status();
-  lane::server::DecodeOptions decode;
+  lane::wire::DecodeOptions decode;
   decode.width = config->camera.image_width;
   decode.height = config->camera.image_height;
   decode.max_pixels = std::numeric_limits<int64_t>::max();
@@ -58,7 +58,7 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
         const Clock::time_point t0 = Clock::now();
         if (t0 >= end) break;
         const BenchFrame& frame = frames[next.fetch_add(1) % frames.size()];
-        absl::StatusOr<cv::Mat> image = lane::server::DecodeFrame(frame.request, decode);
+        absl::StatusOr<cv::Mat> image = lane::wire::DecodeFrame(frame.request, decode);
         absl::Status status = image.status();
         if (image.ok()) status = detector->Detect(*image).status();
         const Clock::time_point t1 = Clock::now();

@@ -8,7 +8,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
-#include "frame_decoder.h"
+#include "wire/frame_decoder.h"
 
 namespace lane_client {
 namespace {
@@ -46,9 +46,8 @@ FramesInfo DescribeFrames(const std::vector<BenchFrame>& frames, const std::stri
     if (frame.request.has_raw()) {
       info.width = static_cast<int>(frame.request.raw().width());
       info.height = static_cast<int>(frame.request.raw().height());
-    } else if (auto header = lane::server::ReadEncodedHeader(frame.request.encoded());
-               header.ok()) {
-      kind = header->format == lane::server::EncodedFormat::kJpeg ? "jpeg" : "png";
+    } else if (auto header = lane::wire::ReadEncodedHeader(frame.request.encoded()); header.ok()) {
+      kind = header->format == lane::wire::EncodedFormat::kJpeg ? "jpeg" : "png";
       info.width = header->width;
       info.height = header->height;
     }

@@ -16,7 +16,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
-#include "status_map.h"
+#include "wire/status_map.h"
 
 namespace lane_client {
 
@@ -214,7 +214,7 @@ void SetDeadline(grpc::ClientContext* context, absl::Duration timeout) {
 }
 
 std::string StatusText(const grpc::Status& status) {
-  const char* name = lane::server::GrpcCodeName(status.error_code());
+  const char* name = lane::wire::GrpcCodeName(status.error_code());
   if (status.ok() || status.error_message().empty()) return name;
   return absl::StrCat(name, ": ", status.error_message());
 }

@@ -3,8 +3,8 @@
 #include <string>
 
 #include "cli/cli_config.h"
-#include "convert.h"
 #include "lane/config.h"
+#include "wire/config_proto.h"
 
 namespace lane_client {
 
@@ -42,7 +42,7 @@ absl::StatusOr<std::optional<lane::v1::SessionConfig>> SessionConfigFromFlags(
   absl::StatusOr<lane::Config> config = lane_tools::LoadEffectiveConfig(flags.config, flags.mode);
   if (!config.ok()) return config.status();
   lane::v1::SessionConfig proto;
-  lane::server::ConfigToProto(*config, &proto);
+  lane::wire::ConfigToProto(*config, &proto);
   lane::v1::StreamOptions* stream = proto.mutable_stream();
   if (flags.backpressure) {
     stream->set_backpressure(*flags.backpressure == "drop_oldest"

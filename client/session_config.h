@@ -27,7 +27,7 @@ void AddSessionConfigOptions(CLI::App* app, SessionConfigFlags* flags);
 
 // The SessionConfig the options describe: the config file (or the defaults)
 // loaded with lane::LoadConfigFile and converted field by field
-// (lane::server::ConfigToProto), plus the stream options. nullopt when none
+// (lane::wire::ConfigToProto), plus the stream options. nullopt when none
 // of the options is given and `required` is false.
 absl::StatusOr<std::optional<lane::v1::SessionConfig>> SessionConfigFromFlags(
     const SessionConfigFlags& flags, bool required);

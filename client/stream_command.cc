@@ -17,12 +17,12 @@
 #include "cli/overlay.h"
 #include "commands.h"
 #include "common.h"
-#include "convert.h"
 #include "frames.h"
 #include "lane/detector.h"
 #include "results.h"
 #include "session_config.h"
 #include "streamer.h"
+#include "wire/config_proto.h"
 
 namespace lane_client {
 namespace {
@@ -71,7 +71,7 @@ class OverlayWriter {
                     const std::optional<v1::Session>& session) {
     if (!detector_ || version_ != response.calibration_version()) {
       if (!session) return "no session to draw with";
-      absl::StatusOr<lane::Config> config = lane::server::ConfigFromProto(session->config());
+      absl::StatusOr<lane::Config> config = lane::wire::ConfigFromProto(session->config());
       if (!config.ok()) return std::string(config.status().message());
       absl::StatusOr<lane::Detector> detector =
           lane::Detector::Create(config->camera, config->ipm, config->detector);

@@ -6,10 +6,12 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "convert.h"
 #include "frame_processor.h"
 #include "fuzz_common.h"
 #include "metrics.h"
+#include "session_proto.h"
+#include "wire/config_proto.h"
+#include "wire/detection_proto.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const auto session = lane::fuzz::SyntheticSession();
@@ -24,7 +26,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   lane::v1::FrameResponse response;
   const lane::server::Arrival arrival = lane::server::Arrival::Now();
   lane::server::StartResponse(request, request.camera_id(), arrival, &response);
-  (void)lane::server::ProcessFrame(request, *session, int64_t{1920} * 1080, arrival, *metrics,
-                                   &response);
+  (void)lane::server::ProcessFrame(
+      request, *session, lane::server::FrameLimits{int64_t{1920} * 1080, absl::Milliseconds(500)},
+      arrival, *metrics, &response);
   return 0;
 }

@@ -6,6 +6,8 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake ninja-build pkg-config git ca-certificates curl
   libopencv-dev          # image decoding, IPM remap, filtering, drawing, video input
+  libjpeg62-turbo-dev    # decode/: JPEG frames decoded with bounded work (scan limit, deadline)
+  libpng-dev zlib1g-dev  # decode/: PNG frames inflated only as far as their rows need
   libeigen3-dev          # linear algebra: Bezier least squares, TLS line fits
   libabsl-dev            # absl::Status/StatusOr, flags, strings
   libcli11-dev           # command lines of lane and lane-client (header-only, CLI11 2.1)

@@ -4,9 +4,11 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
-#include "convert.h"
-#include "frame_decoder.h"
-#include "status_map.h"
+#include "session_proto.h"
+#include "wire/config_proto.h"
+#include "wire/detection_proto.h"
+#include "wire/frame_decoder.h"
+#include "wire/status_map.h"
 
 namespace lane::server {
 namespace {
@@ -34,7 +36,7 @@ void StartResponse(const v1::FrameRequest& request, const std::string& camera_id
 }
 
 absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& session,
-                          int64_t max_frame_pixels, const Arrival& arrival, Metrics& metrics,
+                          const FrameLimits& limits, const Arrival& arrival, Metrics& metrics,
                           v1::FrameResponse* response) {
   const SteadyTime start = std::chrono::steady_clock::now();
   const double queue_wait_ms = MillisecondsBetween(arrival.steady, start);
@@ -43,15 +45,17 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
   v1::StageTimings* timings = response->mutable_timings();
   timings->set_queue_wait_ms(queue_wait_ms);
 
-  DecodeOptions decode;
+  wire::DecodeOptions decode;
   decode.width = session.config.camera.image_width;
   decode.height = session.config.camera.image_height;
-  decode.max_pixels = max_frame_pixels;
+  decode.max_pixels = limits.max_frame_pixels;
   decode.gray = session.config.detector.channel == lane::Channel::kGray;
+  decode.accept_damaged = session.decode.accept_damaged_frames;
+  decode.deadline = limits.decode_deadline;
 
   absl::Status status;
   try {
-    absl::StatusOr<cv::Mat> frame = DecodeFrame(request, decode);
+    absl::StatusOr<cv::Mat> frame = wire::DecodeFrame(request, decode);
     const SteadyTime decoded = std::chrono::steady_clock::now();
     const double decode_ms = MillisecondsBetween(start, decoded);
     timings->set_decode_ms(decode_ms);
@@ -61,8 +65,8 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
     } else {
       absl::StatusOr<lane::Detection> detection = session.detector.Detect(*frame);
       if (detection.ok()) {
-        LanesToProto(*detection, response);
-        TimingsToProto(detection->timings, timings);
+        wire::LanesToProto(*detection, response);
+        wire::TimingsToProto(detection->timings, timings);
         metrics.ObserveDetectorStages(detection->timings);
         session.frames_processed.fetch_add(1, std::memory_order_relaxed);
       } else {
@@ -75,15 +79,15 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
     status = absl::InternalError(absl::StrCat("detector failed: ", e.what()));
   }
   if (!status.ok()) response->clear_lanes();
-  ToFrameStatus(status, response->mutable_status());
-  metrics.CountFrame(ToFrameResult(response->status().code()));
+  wire::ToFrameStatus(status, response->mutable_status());
+  metrics.CountFrame(wire::ToFrameResult(response->status().code()));
   metrics.ObserveFrameLatency(SecondsSince(arrival.steady));
   return status;
 }
 
 void AnswerUnprocessed(const absl::Status& status, Metrics& metrics, v1::FrameResponse* response) {
-  ToFrameStatus(status, response->mutable_status());
-  metrics.CountFrame(ToFrameResult(response->status().code()));
+  wire::ToFrameStatus(status, response->mutable_status());
+  metrics.CountFrame(wire::ToFrameResult(response->status().code()));
 }
 
 }  // namespace lane::server

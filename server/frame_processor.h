@@ -8,6 +8,7 @@
 #include <string>
 
 #include "absl/status/status.h"
+#include "absl/time/time.h"
 #include "lane/v1/lane_service.pb.h"
 #include "metrics.h"
 #include "session.h"
@@ -30,13 +31,23 @@ double SecondsSince(SteadyTime start);
 void StartResponse(const v1::FrameRequest& request, const std::string& camera_id,
                    const Arrival& arrival, v1::FrameResponse* response);
 
+// Server-wide bounds on one frame's work.
+struct FrameLimits {
+  // Largest frame accepted, width * height (checked on the header).
+  int64_t max_frame_pixels = int64_t{3840} * 2160;
+  // Wall-clock budget of one frame's decode (lane::decode::DecodeOptions):
+  // beyond it the frame is FRAME_CODE_RESOURCE_EXHAUSTED and the worker is
+  // free again.
+  absl::Duration decode_deadline = absl::Milliseconds(500);
+};
+
 // Decodes and detects `request`'s frame with the session's detector and fills
 // `response` (status, lanes, timings, calibration version). A bad frame is
 // not an error of the call: its status goes into the response and is also
 // returned. Records queue wait, stage durations, frame latency and the
 // frame's result in `metrics`.
 absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& session,
-                          int64_t max_frame_pixels, const Arrival& arrival, Metrics& metrics,
+                          const FrameLimits& limits, const Arrival& arrival, Metrics& metrics,
                           v1::FrameResponse* response);
 
 // Answers a frame without processing it (dropped, or refused before

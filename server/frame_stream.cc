@@ -6,9 +6,9 @@
 
 #include "absl/time/clock.h"
 #include "frame_processor.h"
-#include "lane_service.h"
 #include "raw_call.h"
-#include "status_map.h"
+#include "session_proto.h"
+#include "wire/status_map.h"
 
 namespace lane::server {
 namespace {
@@ -37,104 +37,100 @@ struct FrameStream::Slot {
   std::optional<absl::Status> stream_error;  // end the stream here instead
 };
 
-FrameStream::FrameStream(LaneServiceImpl& service)
-    : service_(service), max_inflight_(service.sessions().options().default_max_inflight_frames) {}
+FrameStream::FrameStream(StreamDeps deps)
+    : deps_(std::move(deps)), max_inflight_(deps_.sessions.options().default_max_inflight_frames) {}
 
 FrameStream::~FrameStream() = default;
 
-void FrameStream::Start(const absl::Status& reject, bool registered) {
+void FrameStream::Start(const absl::Status& reject) {
   std::lock_guard<std::mutex> lock(mu_);
-  registered_ = registered;
-  started_ = true;
   if (!reject.ok()) {
     FinishLocked(reject);
     return;
   }
+  if (phase_ == Phase::kCreated) phase_ = Phase::kOpen;  // else a drain came first
   MaybeReadLocked();
-  MaybeFinishLocked();  // a drain may have come before Start
+  MaybeFinishLocked();
 }
 
 void FrameStream::BeginDrain() {
   std::lock_guard<std::mutex> lock(mu_);
-  draining_ = true;
-  if (started_) MaybeFinishLocked();
+  if (phase_ != Phase::kCreated && phase_ != Phase::kOpen) return;
+  const bool started = phase_ == Phase::kOpen;
+  phase_ = Phase::kDraining;
+  if (started) MaybeFinishLocked();
 }
 
 void FrameStream::OnReadDone(bool ok) {
   std::lock_guard<std::mutex> lock(mu_);
   reading_ = false;
   if (!ok) {
-    read_done_ = true;
+    // The client half-closed (or the read side failed). A drain gives way to
+    // it: the client has sent everything, so the stream can end OK.
+    if (phase_ == Phase::kOpen || phase_ == Phase::kDraining) phase_ = Phase::kHalfClosed;
     MaybeFinishLocked();
     return;
   }
-  if (finished_) return;  // a read that completed as the stream ended
+  if (phase_ == Phase::kFinished || phase_ == Phase::kCancelled) return;  // read as it ended
+  ReceiveLocked();
+  MaybeWriteLocked();
+  MaybeReadLocked();
+}
 
+void FrameStream::ReceiveLocked() {
   auto slot = std::make_shared<Slot>();
   slot->arrival = Arrival::Now();
   slot->request = std::make_unique<v1::FrameRequest>();
-  service_.metrics().FrameReceived();
+  deps_.metrics.FrameReceived();
+  slots_.push_back(slot);
+  ++inflight_;
   if (absl::Status parsed = ParseMessage(read_buffer_, slot->request.get()); !parsed.ok()) {
     // Nothing after an unreadable message can be trusted to be a frame: end
     // the stream with the reason, after answering the frames before it.
     slot->request.reset();
-    slot->stream_error = parsed;
-    slot->done = true;
-    stream_failed_ = true;
-    slots_.push_back(slot);
-    ++inflight_;
-    MaybeWriteLocked();
+    FailLocked(slot, parsed);
     return;
   }
   const v1::FrameRequest& request = *slot->request;
-
   const bool first = first_request_;
   first_request_ = false;
   if (camera_id_.empty()) camera_id_ = request.camera_id();
   slot->camera_id = request.camera_id().empty() ? camera_id_ : request.camera_id();
   StartResponse(request, slot->camera_id, slot->arrival, &slot->response);
 
-  bool submit = false;
   if (slot->camera_id.empty()) {
-    AnswerLocked(*slot, InvalidRequest("frame without camera_id"));
-  } else if (absl::Status id = SessionRegistry::ValidateCameraId(slot->camera_id); !id.ok()) {
+    AnswerLocked(*slot, wire::InvalidRequest("frame without camera_id"));
+    return;
+  }
+  if (absl::Status id = SessionRegistry::ValidateCameraId(slot->camera_id); !id.ok()) {
     AnswerLocked(*slot, id);
-  } else if (request.has_session_config()) {
-    if (first) {
-      slot->setup = true;
-      awaiting_setup_ = true;  // later frames need the session: read them after
-      submit = true;
-    } else {
-      AnswerLocked(*slot, InvalidRequest("session_config is only accepted on a stream's "
-                                         "first request"));
+    return;
+  }
+  if (request.has_session_config()) {
+    if (!first) {
+      AnswerLocked(*slot, wire::InvalidRequest("session_config is only accepted on a stream's "
+                                               "first request"));
+      return;
     }
+    slot->setup = true;
+    awaiting_setup_ = true;  // later frames need the session: read them after
   } else {
-    slot->session = service_.sessions().Find(slot->camera_id);
+    slot->session = deps_.sessions.Find(slot->camera_id);
     if (slot->session == nullptr) {
-      slot->stream_error = NoSessionForFrame(slot->camera_id);
-      slot->done = true;
-      stream_failed_ = true;
-    } else {
-      ApplyPolicyLocked(*slot->session);
-      submit = true;
+      FailLocked(slot, wire::NoSessionForFrame(slot->camera_id));
+      return;
     }
+    ApplyPolicyLocked(*slot->session);
   }
-
-  slots_.push_back(slot);
-  ++inflight_;
-  if (submit) {
-    Ref();
-    if (!service_.pool().Submit([this, slot] { Process(slot); })) {
-      // Only after the pool has shut down, i.e. never while serving.
-      refs_.fetch_sub(1, std::memory_order_relaxed);  // gRPC's ref remains
-      awaiting_setup_ = false;
-      AnswerLocked(*slot, ServerDraining());
-    } else if (backpressure_ == Backpressure::kDropOldest && inflight_ > max_inflight_) {
-      DropOldestQueuedLocked();
-    }
+  Ref();
+  if (!deps_.pool.Submit([this, slot] { Process(slot); })) {
+    // Only after the pool has shut down, i.e. never while serving.
+    refs_.fetch_sub(1, std::memory_order_relaxed);  // gRPC's ref remains
+    awaiting_setup_ = false;
+    AnswerLocked(*slot, wire::ServerDraining());
+  } else if (backpressure_ == Backpressure::kDropOldest && inflight_ > max_inflight_) {
+    DropOldestQueuedLocked();
   }
-  MaybeWriteLocked();
-  MaybeReadLocked();
 }
 
 void FrameStream::Process(const std::shared_ptr<Slot>& slot) {
@@ -148,8 +144,8 @@ void FrameStream::Process(const std::shared_ptr<Slot>& slot) {
   if (!abandon) {
     const v1::FrameRequest& request = *slot->request;
     if (slot->setup) {
-      absl::StatusOr<SessionRegistry::CreateResult> created = service_.EnsureSession(
-          slot->camera_id, request.session_config(), request.replace_session());
+      absl::StatusOr<SessionRegistry::CreateResult> created = CreateSessionFromProto(
+          deps_.sessions, slot->camera_id, request.session_config(), request.replace_session());
       if (created.ok()) {
         slot->session = std::move(created->session);
       } else {
@@ -158,8 +154,8 @@ void FrameStream::Process(const std::shared_ptr<Slot>& slot) {
     }
     if (slot->session != nullptr) {
       // A bad frame's status is in its response; the stream goes on.
-      ProcessFrame(request, *slot->session, service_.options().max_frame_pixels, slot->arrival,
-                   service_.metrics(), &slot->response)
+      ProcessFrame(request, *slot->session, deps_.limits, slot->arrival, deps_.metrics,
+                   &slot->response)
           .IgnoreError();
     }
   }
@@ -171,8 +167,7 @@ void FrameStream::Process(const std::shared_ptr<Slot>& slot) {
     if (slot->setup) {
       awaiting_setup_ = false;
       if (!setup_error.ok()) {
-        slot->stream_error = setup_error;
-        stream_failed_ = true;
+        FailLocked(slot, setup_error);
       } else if (slot->session != nullptr) {
         ApplyPolicyLocked(*slot->session);
       }
@@ -188,7 +183,7 @@ void FrameStream::OnWriteDone(bool ok) {
   std::lock_guard<std::mutex> lock(mu_);
   writing_ = false;
   if (!slots_.empty()) PopFrontLocked();  // the slot just written
-  if (!ok || cancelled_) {
+  if (!ok || phase_ == Phase::kCancelled) {
     FinishLocked(absl::CancelledError("the stream was cancelled or the client went away"));
     return;
   }
@@ -199,19 +194,15 @@ void FrameStream::OnWriteDone(bool ok) {
 
 void FrameStream::OnCancel() {
   std::lock_guard<std::mutex> lock(mu_);
-  cancelled_ = true;
+  if (phase_ == Phase::kFinished) return;
+  phase_ = Phase::kCancelled;
   abandoned_.store(true, std::memory_order_release);
   // With a write outstanding, OnWriteDone finishes.
   if (!writing_) FinishLocked(absl::CancelledError("the stream was cancelled"));
 }
 
 void FrameStream::OnDone() {
-  bool registered;
-  {
-    std::lock_guard<std::mutex> lock(mu_);
-    registered = registered_;
-  }
-  if (registered) service_.Unregister(this);
+  if (deps_.on_done) deps_.on_done(this);
   Unref();
 }
 
@@ -225,15 +216,20 @@ void FrameStream::ApplyPolicyLocked(const Session& session) {
 }
 
 void FrameStream::AnswerLocked(Slot& slot, const absl::Status& status) {
-  AnswerUnprocessed(status, service_.metrics(), &slot.response);
+  AnswerUnprocessed(status, deps_.metrics, &slot.response);
   slot.done = true;
 }
 
-void FrameStream::MaybeReadLocked() {
-  if (reading_ || read_done_ || finished_ || cancelled_ || draining_ || stream_failed_ ||
-      awaiting_setup_ || !started_) {
-    return;
+void FrameStream::FailLocked(const std::shared_ptr<Slot>& slot, const absl::Status& error) {
+  slot->stream_error = error;
+  slot->done = true;
+  if (phase_ == Phase::kOpen || phase_ == Phase::kDraining || phase_ == Phase::kHalfClosed) {
+    phase_ = Phase::kFailing;
   }
+}
+
+void FrameStream::MaybeReadLocked() {
+  if (phase_ != Phase::kOpen || reading_ || awaiting_setup_) return;
   const bool room = backpressure_ == Backpressure::kBlock
                         ? inflight_ < max_inflight_
                         : inflight_ <= max_inflight_ && slots_.size() < MaxSlots(max_inflight_);
@@ -243,7 +239,7 @@ void FrameStream::MaybeReadLocked() {
 }
 
 void FrameStream::MaybeWriteLocked() {
-  while (!writing_ && !finished_ && !slots_.empty() && slots_.front()->done) {
+  while (!writing_ && phase_ != Phase::kFinished && !slots_.empty() && slots_.front()->done) {
     Slot& front = *slots_.front();
     if (front.stream_error.has_value()) {
       const absl::Status error = *front.stream_error;
@@ -267,30 +263,30 @@ void FrameStream::MaybeWriteLocked() {
 }
 
 void FrameStream::MaybeFinishLocked() {
-  if (finished_ || writing_ || !slots_.empty()) return;
-  if (read_done_) {
+  if (writing_ || !slots_.empty()) return;
+  if (phase_ == Phase::kHalfClosed) {
     FinishLocked(absl::OkStatus());
-  } else if (draining_) {
+  } else if (phase_ == Phase::kDraining) {
     // A read may still be outstanding: Finish ends it (it completes with !ok).
-    FinishLocked(ServerDraining());
+    FinishLocked(wire::ServerDraining());
   }
 }
 
 void FrameStream::FinishLocked(const absl::Status& status) {
-  if (finished_) return;
-  finished_ = true;
+  if (phase_ == Phase::kFinished) return;
+  phase_ = Phase::kFinished;
   abandoned_.store(true, std::memory_order_release);
   // Only cancellation gets here with frames unanswered; their workers skip.
   while (!slots_.empty()) PopFrontLocked();
-  const grpc::Status grpc_status = ToGrpcStatus(status);
-  service_.metrics().CountRpc("StreamFrames", grpc_status.error_code());
+  const grpc::Status grpc_status = wire::ToGrpcStatus(status);
+  deps_.metrics.CountRpc("StreamFrames", grpc_status.error_code());
   Finish(grpc_status);
 }
 
 void FrameStream::PopFrontLocked() {
   if (slots_.front()->in_bound) --inflight_;
   slots_.pop_front();
-  service_.metrics().FrameAnswered();
+  deps_.metrics.FrameAnswered();
 }
 
 bool FrameStream::DropOldestQueuedLocked() {
@@ -305,7 +301,7 @@ bool FrameStream::DropOldestQueuedLocked() {
       slot->in_bound = false;
       --inflight_;
       slot->request.reset();
-      AnswerLocked(*slot, FrameDropped(max_inflight_));
+      AnswerLocked(*slot, wire::FrameDropped(max_inflight_));
       return true;
     }
   }

@@ -21,29 +21,45 @@
 #include <atomic>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
 
 #include "absl/status/status.h"
+#include "frame_processor.h"
 #include "lane/v1/lane_service.grpc.pb.h"
+#include "metrics.h"
 #include "session.h"
+#include "session_registry.h"
+#include "worker_pool.h"
 
 namespace lane::server {
 
-class LaneServiceImpl;
+class FrameStream;
+
+// What a stream needs from the server, handed over once.
+struct StreamDeps {
+  SessionRegistry& sessions;
+  WorkerPool& pool;
+  Metrics& metrics;
+  FrameLimits limits;
+  // Called once from OnDone, before the stream deletes itself (the service
+  // unregisters it there). May be empty.
+  std::function<void(FrameStream*)> on_done;
+};
 
 // Requests and responses are bytes (see raw_call.h): a message that does not
 // parse ends the stream with INVALID_ARGUMENT once the frames before it are
 // answered.
 class FrameStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
  public:
-  explicit FrameStream(LaneServiceImpl& service);
+  explicit FrameStream(StreamDeps deps);
 
   // Starts reading, or finishes at once with `reject` when it is not OK.
-  // Called once, by the service, after it has registered the stream (or
-  // decided not to).
-  void Start(const absl::Status& reject, bool registered);
+  // Called once, after the service has registered the stream (or decided
+  // not to).
+  void Start(const absl::Status& reject);
   // The server drains: stop reading, answer what was received, end with
   // UNAVAILABLE.
   void BeginDrain();
@@ -56,16 +72,31 @@ class FrameStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc:
  private:
   struct Slot;
 
+  // The stream's lifecycle. Reads happen only while kOpen; every other state
+  // but kFinished answers the frames already received and then finishes with
+  // the state's status.
+  enum class Phase {
+    kCreated,     // Start not called yet
+    kOpen,        // reading frames
+    kHalfClosed,  // the client half-closed (or the read side failed): then OK
+    kFailing,     // a stream-level error is queued behind earlier frames: then it
+    kDraining,    // the server drains: then UNAVAILABLE
+    kCancelled,   // cancelled or the client went away: nothing more is written
+    kFinished,    // Finish was called
+  };
+
   ~FrameStream() override;
 
   // Runs on a worker.
   void Process(const std::shared_ptr<Slot>& slot);
 
+  void ReceiveLocked();
   void ApplyPolicyLocked(const Session& session);
   void MaybeReadLocked();
   void MaybeWriteLocked();
   void MaybeFinishLocked();
   void FinishLocked(const absl::Status& status);
+  void FailLocked(const std::shared_ptr<Slot>& slot, const absl::Status& error);
   void PopFrontLocked();
   bool DropOldestQueuedLocked();
   void AnswerLocked(Slot& slot, const absl::Status& status);
@@ -73,7 +104,7 @@ class FrameStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc:
   void Ref() { refs_.fetch_add(1, std::memory_order_relaxed); }
   void Unref();
 
-  LaneServiceImpl& service_;
+  StreamDeps deps_;
   // One for gRPC (released in OnDone) and one per task on the pool.
   std::atomic<int> refs_{1};
   // Set when the answers are no longer wanted (cancelled or finished):
@@ -82,23 +113,17 @@ class FrameStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc:
 
   std::mutex mu_;
   // Everything below is guarded by mu_.
+  Phase phase_ = Phase::kCreated;
   grpc::ByteBuffer read_buffer_;
   std::deque<std::shared_ptr<Slot>> slots_;  // received, not yet answered, in order
   size_t inflight_ = 0;                      // slots that count against the bound
   uint32_t max_inflight_ = 1;
   Backpressure backpressure_ = Backpressure::kBlock;
-  std::string camera_id_;  // the first camera id seen on the stream
-  bool registered_ = false;
-  bool started_ = false;
-  bool first_request_ = true;
-  bool reading_ = false;
-  bool writing_ = false;
-  bool read_done_ = false;       // the client half-closed (or the read side failed)
+  std::string camera_id_;        // the first camera id seen on the stream
+  bool first_request_ = true;    // no request received yet
+  bool reading_ = false;         // a read is outstanding
+  bool writing_ = false;         // a write is outstanding
   bool awaiting_setup_ = false;  // the first frame's session is being created
-  bool stream_failed_ = false;   // a stream-level error is queued
-  bool draining_ = false;
-  bool cancelled_ = false;
-  bool finished_ = false;
 };
 
 }  // namespace lane::server

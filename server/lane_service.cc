@@ -4,11 +4,13 @@
 
 #include "absl/time/clock.h"
 #include "auth.h"
-#include "convert.h"
 #include "frame_processor.h"
 #include "frame_stream.h"
 #include "raw_call.h"
-#include "status_map.h"
+#include "session_proto.h"
+#include "wire/config_proto.h"
+#include "wire/detection_proto.h"
+#include "wire/status_map.h"
 
 namespace lane::server {
 namespace {
@@ -28,7 +30,7 @@ v1::CreateOutcome OutcomeToProto(SessionRegistry::Outcome outcome) {
 void DefaultConfigToProto(lane::Mode mode, uint32_t max_inflight, v1::SessionConfig* out) {
   lane::Config config;
   config.detector = lane::DetectorOptions::ForMode(mode);
-  ConfigToProto(config, out);
+  wire::ConfigToProto(config, out);
   StreamPolicy stream;
   stream.max_inflight_frames = max_inflight;
   StreamPolicyToProto(stream, out->mutable_stream());
@@ -77,20 +79,13 @@ absl::Status LaneServiceImpl::Admission(const grpc::ServerContextBase& context) 
   std::lock_guard<std::mutex> lock(mu_);
   switch (state_) {
     case State::kStarting:
-      return ServerStarting();
+      return wire::ServerStarting();
     case State::kServing:
       return absl::OkStatus();
     case State::kDraining:
-      return ServerDraining();
+      return wire::ServerDraining();
   }
-  return ServerDraining();
-}
-
-absl::StatusOr<SessionRegistry::CreateResult> LaneServiceImpl::EnsureSession(
-    const std::string& camera_id, const v1::SessionConfig& config, bool replace) {
-  absl::StatusOr<SessionSpec> spec = SessionSpecFromProto(config);
-  if (!spec.ok()) return spec.status();
-  return sessions_.Create(camera_id, *spec, replace);
+  return wire::ServerDraining();
 }
 
 grpc::ServerUnaryReactor* LaneServiceImpl::CreateSession(grpc::CallbackServerContext* context,
@@ -103,15 +98,15 @@ grpc::ServerUnaryReactor* LaneServiceImpl::CreateSession(grpc::CallbackServerCon
         // Building a detector is CPU work: on the pool.
         const bool queued = pool_.TrySubmit([this, call] {
           const v1::CreateSessionRequest& request = call->request();
-          absl::StatusOr<SessionRegistry::CreateResult> created =
-              EnsureSession(request.camera_id(), request.config(), request.replace());
+          absl::StatusOr<SessionRegistry::CreateResult> created = CreateSessionFromProto(
+              sessions_, request.camera_id(), request.config(), request.replace());
           if (created.ok()) {
             SessionToProto(*created->session, absl::Now(), call->response()->mutable_session());
             call->response()->set_outcome(OutcomeToProto(created->outcome));
           }
           call->Reply(created.status());
         });
-        if (!queued) call->Reply(WorkerQueueFull());
+        if (!queued) call->Reply(wire::WorkerQueueFull());
       });
 }
 
@@ -163,17 +158,20 @@ grpc::ServerUnaryReactor* LaneServiceImpl::DeleteSession(grpc::CallbackServerCon
 
 grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* LaneServiceImpl::StreamFrames(
     grpc::CallbackServerContext* context) {
-  auto* stream = new FrameStream(*this);
   absl::Status reject = CheckBearerToken(*context, options_.auth_tokens);
-  if (reject.ok()) {
+  const bool admitted = reject.ok();
+  StreamDeps deps{sessions_, pool_, metrics_, options_.frame_limits, nullptr};
+  if (admitted) deps.on_done = [this](FrameStream* stream) { Unregister(stream); };
+  auto* stream = new FrameStream(std::move(deps));
+  if (admitted) {
     std::lock_guard<std::mutex> lock(mu_);
     if (state_ == State::kServing) {
       streams_.insert(stream);
     } else {
-      reject = state_ == State::kStarting ? ServerStarting() : ServerDraining();
+      reject = state_ == State::kStarting ? wire::ServerStarting() : wire::ServerDraining();
     }
   }
-  stream->Start(reject, reject.ok());
+  stream->Start(reject);
   return stream;
 }
 
@@ -185,14 +183,14 @@ grpc::ServerUnaryReactor* LaneServiceImpl::Detect(grpc::CallbackServerContext* c
       context, in, out, "Detect", metrics_, [this](Call* call) {
         if (absl::Status s = Admission(call->context()); !s.ok()) return call->Reply(s);
         const std::string& camera_id = call->request().camera_id();
-        if (camera_id.empty()) return call->Reply(InvalidRequest("frame without camera_id"));
+        if (camera_id.empty()) return call->Reply(wire::InvalidRequest("frame without camera_id"));
         if (absl::Status s = SessionRegistry::ValidateCameraId(camera_id); !s.ok()) {
           return call->Reply(s);
         }
         std::shared_ptr<const Session> session;
         if (!call->request().has_session_config()) {
           session = sessions_.Find(camera_id);
-          if (session == nullptr) return call->Reply(NoSessionForFrame(camera_id));
+          if (session == nullptr) return call->Reply(wire::NoSessionForFrame(camera_id));
         }
         const Arrival arrival = Arrival::Now();
         metrics_.FrameReceived();
@@ -202,8 +200,9 @@ grpc::ServerUnaryReactor* LaneServiceImpl::Detect(grpc::CallbackServerContext* c
               v1::FrameResponse* response = call->response();
               absl::Status status;
               if (session == nullptr) {  // the request carries its session config
-                absl::StatusOr<SessionRegistry::CreateResult> created = EnsureSession(
-                    request.camera_id(), request.session_config(), request.replace_session());
+                absl::StatusOr<SessionRegistry::CreateResult> created =
+                    CreateSessionFromProto(sessions_, request.camera_id(), request.session_config(),
+                                           request.replace_session());
                 if (created.ok()) {
                   session = std::move(created->session);
                 } else {
@@ -212,8 +211,8 @@ grpc::ServerUnaryReactor* LaneServiceImpl::Detect(grpc::CallbackServerContext* c
               }
               if (session != nullptr) {
                 StartResponse(request, request.camera_id(), arrival, response);
-                status = ProcessFrame(request, *session, options_.max_frame_pixels, arrival,
-                                      metrics_, response);
+                status = ProcessFrame(request, *session, options_.frame_limits, arrival, metrics_,
+                                      response);
                 response->set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
               }
               metrics_.FrameAnswered();
@@ -221,7 +220,7 @@ grpc::ServerUnaryReactor* LaneServiceImpl::Detect(grpc::CallbackServerContext* c
             });
         if (!queued) {
           metrics_.FrameAnswered();
-          call->Reply(WorkerQueueFull());
+          call->Reply(wire::WorkerQueueFull());
         }
       });
 }
@@ -253,7 +252,7 @@ void LaneServiceImpl::FillServerInfo(v1::ServerInfo* response) const {
   const SessionRegistry::Options& registry = sessions_.options();
   v1::ServerLimits* limits = response->mutable_limits();
   limits->set_max_receive_message_bytes(options_.max_receive_message_bytes);
-  limits->set_max_frame_pixels(static_cast<uint64_t>(options_.max_frame_pixels));
+  limits->set_max_frame_pixels(static_cast<uint64_t>(options_.frame_limits.max_frame_pixels));
   limits->set_max_sessions(static_cast<uint32_t>(registry.max_sessions));
   limits->set_session_ttl_seconds(
       registry.ttl == absl::InfiniteDuration() ? 0.0 : absl::ToDoubleSeconds(registry.ttl));

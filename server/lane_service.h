@@ -19,6 +19,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
+#include "frame_processor.h"
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "metrics.h"
 #include "session_registry.h"
@@ -29,8 +30,8 @@ namespace lane::server {
 class FrameStream;
 
 struct ServiceOptions {
-  // Largest frame accepted, width * height.
-  int64_t max_frame_pixels = int64_t{3840} * 2160;
+  // Largest frame accepted and the decode deadline.
+  FrameLimits frame_limits;
   // Reported by GetServerInfo.
   uint64_t max_receive_message_bytes = 0;
   // Accepted Bearer tokens (authorization metadata); empty = no auth.
@@ -86,18 +87,6 @@ class LaneServiceImpl final : public RawLaneService {
   bool WaitForStreams(absl::Time deadline);
   size_t open_streams() const;
 
-  // For FrameStream.
-  SessionRegistry& sessions() { return sessions_; }
-  WorkerPool& pool() { return pool_; }
-  Metrics& metrics() { return metrics_; }
-  const ServiceOptions& options() const { return options_; }
-  // Creates or confirms the session described by a request (on a worker:
-  // it may build a detector).
-  absl::StatusOr<SessionRegistry::CreateResult> EnsureSession(const std::string& camera_id,
-                                                              const v1::SessionConfig& config,
-                                                              bool replace);
-  void Unregister(FrameStream* stream);
-
  private:
   enum class State { kStarting, kServing, kDraining };
 
@@ -106,6 +95,8 @@ class LaneServiceImpl final : public RawLaneService {
   // serving state.
   absl::Status Admission(const grpc::ServerContextBase& context) const;
   void FillServerInfo(v1::ServerInfo* response) const;
+  // Drops a finished stream from streams_ (its on_done callback).
+  void Unregister(FrameStream* stream);
 
   const ServiceOptions options_;
   SessionRegistry& sessions_;

@@ -38,6 +38,10 @@ ABSL_FLAG(absl::Duration, session_ttl, absl::Hours(1),
           "Idle sessions are evicted after this long; 'inf' = never.");
 ABSL_FLAG(int64_t, max_frame_pixels, int64_t{3840} * 2160,
           "Largest frame accepted, width * height (checked before decoding).");
+ABSL_FLAG(absl::Duration, decode_deadline, absl::Milliseconds(500),
+          "Wall-clock budget of one frame's decode; beyond it the frame gets "
+          "FRAME_CODE_RESOURCE_EXHAUSTED and the worker is free again (a noisy 4K progressive "
+          "JPEG takes about 300 ms on a loaded 2-core machine).");
 ABSL_FLAG(int, max_receive_message_bytes, 32 * 1024 * 1024,
           "gRPC maximum receive message size, bytes (a raw 1920x1080 BGR frame is 6220800, a "
           "3840x2160 one 24883200). Sessions whose camera's raw frame cannot fit are refused.");
@@ -106,6 +110,7 @@ int main(int argc, char** argv) {
   options.max_sessions = static_cast<size_t>(std::max(1, absl::GetFlag(FLAGS_max_sessions)));
   options.session_ttl = absl::GetFlag(FLAGS_session_ttl);
   options.max_frame_pixels = absl::GetFlag(FLAGS_max_frame_pixels);
+  options.decode_deadline = absl::GetFlag(FLAGS_decode_deadline);
   options.max_receive_message_bytes = absl::GetFlag(FLAGS_max_receive_message_bytes);
   options.max_session_memory_bytes =
       static_cast<uint64_t>(std::max<int64_t>(0, absl::GetFlag(FLAGS_max_session_memory_mib))) *

@@ -68,8 +68,8 @@ Metrics::Metrics(prometheus::Registry& registry, const BuildInfo& build)
                      .Name("lanesvc_frames_total")
                      .Help("Frames answered, by result: ok, invalid, dropped, error.")
                      .Register(registry);
-  for (FrameResult r : kAllFrameResults) {
-    frames_[static_cast<int>(r)] = &frames.Add({{"result", FrameResultLabel(r)}});
+  for (wire::FrameResult r : wire::kAllFrameResults) {
+    frames_[static_cast<int>(r)] = &frames.Add({{"result", wire::FrameResultLabel(r)}});
   }
   prometheus::BuildGauge()
       .Name("lanesvc_build_info")
@@ -93,7 +93,7 @@ void Metrics::ObserveDetectorStages(const lane::StageTimings& t) {
 
 void Metrics::CountRpc(const std::string& method, grpc::StatusCode code) {
   // Family::Add returns the existing counter for known labels.
-  rpcs_.Add({{"grpc_method", method}, {"grpc_code", GrpcCodeName(code)}}).Increment();
+  rpcs_.Add({{"grpc_method", method}, {"grpc_code", wire::GrpcCodeName(code)}}).Increment();
 }
 
 }  // namespace lane::server

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "lane/detector.h"
-#include "status_map.h"
+#include "wire/status_map.h"
 
 namespace lane::server {
 
@@ -54,7 +54,7 @@ class Metrics {
   // lanesvc_queue_wait_seconds: from receiving a frame to a worker starting it.
   void ObserveQueueWait(double seconds) { queue_wait_.Observe(seconds); }
   // lanesvc_frames_total{result}.
-  void CountFrame(FrameResult result) { frames_[static_cast<int>(result)]->Increment(); }
+  void CountFrame(wire::FrameResult result) { frames_[static_cast<int>(result)]->Increment(); }
   // lanesvc_frames_received_total, and lanesvc_inflight_frames: received and
   // not yet answered.
   void FrameReceived() {

@@ -64,11 +64,11 @@ absl::Status ParseMessage(grpc::ByteBuffer& bytes, google::protobuf::Message* me
   if (parsed) return absl::OkStatus();
   const std::string type = message->GetDescriptor()->full_name();
   if (log.empty()) {
-    return InvalidRequest(absl::StrCat("the request (", size, " bytes) is not a valid ", type,
-                                       " message: malformed protobuf"));
+    return wire::InvalidRequest(absl::StrCat("the request (", size, " bytes) is not a valid ", type,
+                                             " message: malformed protobuf"));
   }
-  return InvalidRequest(absl::StrCat("the request (", size, " bytes) is not a valid ", type,
-                                     " message: ", lane::Excerpt(FirstSentence(log), 200)));
+  return wire::InvalidRequest(absl::StrCat("the request (", size, " bytes) is not a valid ", type,
+                                           " message: ", lane::Excerpt(FirstSentence(log), 200)));
 }
 
 absl::Status SerializeMessage(const google::protobuf::Message& message, grpc::ByteBuffer* out) {

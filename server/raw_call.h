@@ -16,7 +16,7 @@
 
 #include "absl/status/status.h"
 #include "metrics.h"
-#include "status_map.h"
+#include "wire/status_map.h"
 
 namespace lane::server {
 
@@ -44,7 +44,7 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
   // Serializes the response (when OK), finishes the call and counts it.
   void Reply(absl::Status status) {
     if (status.ok()) status = SerializeMessage(response_, out_);
-    const grpc::Status grpc_status = ToGrpcStatus(status);
+    const grpc::Status grpc_status = wire::ToGrpcStatus(status);
     metrics_.CountRpc(method_, grpc_status.error_code());
     Finish(grpc_status);
   }

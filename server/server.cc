@@ -118,7 +118,8 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
   server->pool_ = std::make_unique<WorkerPool>(pool_options);
 
   ServiceOptions service_options;
-  service_options.max_frame_pixels = options.max_frame_pixels;
+  service_options.frame_limits.max_frame_pixels = options.max_frame_pixels;
+  service_options.frame_limits.decode_deadline = options.decode_deadline;
   service_options.max_receive_message_bytes =
       static_cast<uint64_t>(std::max(0, options.max_receive_message_bytes));
   service_options.auth_tokens = options.auth_tokens;
@@ -168,7 +169,8 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
 
   if (default_config.ok() && !options.default_config_path.empty()) {
     absl::StatusOr<SessionRegistry::CreateResult> created = server->sessions_->Create(
-        options.default_camera_id, SessionSpec{*default_config, StreamPolicy{}}, false);
+        options.default_camera_id, SessionSpec{*default_config, StreamPolicy{}, DecodePolicy{}},
+        false);
     if (!created.ok()) {
       return absl::InvalidArgumentError(absl::StrCat(
           "--default_config ", options.default_config_path, ": ", created.status().message()));

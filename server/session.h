@@ -34,21 +34,34 @@ struct StreamPolicy {
   bool operator!=(const StreamPolicy& o) const { return !(*this == o); }
 };
 
+// How a camera's encoded frames are decoded (DecodeOptions in the proto).
+struct DecodePolicy {
+  // Accept JPEGs that decode only with libjpeg's corrupt-data warnings.
+  bool accept_damaged_frames = false;
+
+  bool operator==(const DecodePolicy& o) const {
+    return accept_damaged_frames == o.accept_damaged_frames;
+  }
+  bool operator!=(const DecodePolicy& o) const { return !(*this == o); }
+};
+
 // What CreateSession (or a stream's first frame) asks for.
 struct SessionSpec {
   lane::Config config;
   StreamPolicy stream;
+  DecodePolicy decode;
 };
 
 struct Session {
   Session(std::string camera_id_in, uint64_t version_in, lane::Config config_in,
-          std::string config_json_in, StreamPolicy stream_in, lane::Detector detector_in,
-          absl::Time create_time_in)
+          std::string config_json_in, StreamPolicy stream_in, DecodePolicy decode_in,
+          lane::Detector detector_in, absl::Time create_time_in)
       : camera_id(std::move(camera_id_in)),
         version(version_in),
         config(std::move(config_in)),
         config_json(std::move(config_json_in)),
         stream(stream_in),
+        decode(decode_in),
         detector(std::move(detector_in)),
         create_time(create_time_in) {}
 
@@ -60,6 +73,7 @@ struct Session {
   const std::string config_json;
   // Resolved: max_inflight_frames > 0.
   const StreamPolicy stream;
+  const DecodePolicy decode;
   const lane::Detector detector;
   const absl::Time create_time;
   // Frames processed with this session.

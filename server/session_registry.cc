@@ -5,7 +5,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "lane/excerpt.h"
-#include "status_map.h"
+#include "wire/status_map.h"
 
 namespace lane::server {
 
@@ -13,15 +13,15 @@ SessionRegistry::SessionRegistry(Options options) : options_(std::move(options))
 
 absl::Status SessionRegistry::ValidateCameraId(absl::string_view camera_id) {
   if (camera_id.empty() || camera_id.size() > kMaxCameraIdBytes) {
-    return InvalidRequest(absl::StrCat("camera_id must have 1 to ", kMaxCameraIdBytes,
-                                       " characters, got ", camera_id.size()));
+    return wire::InvalidRequest(absl::StrCat("camera_id must have 1 to ", kMaxCameraIdBytes,
+                                             " characters, got ", camera_id.size()));
   }
   for (const char c : camera_id) {
     const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
                     c == '.' || c == '_' || c == ':' || c == '/' || c == '-';
     if (!ok) {
-      return InvalidRequest(absl::StrCat("camera_id '", lane::Excerpt(camera_id),
-                                         "' has a character outside [A-Za-z0-9._:/-]"));
+      return wire::InvalidRequest(absl::StrCat("camera_id '", lane::Excerpt(camera_id),
+                                               "' has a character outside [A-Za-z0-9._:/-]"));
     }
   }
   return absl::OkStatus();
@@ -33,13 +33,13 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
   if (absl::Status s = ValidateCameraId(camera_id); !s.ok()) return s;
   const lane::CameraModel& camera = spec.config.camera;
   if (int64_t{camera.image_width} * camera.image_height > options_.max_frame_pixels) {
-    return InvalidRequest(absl::StrCat("session config: the camera's ", camera.image_width, "x",
-                                       camera.image_height, " frames exceed --max_frame_pixels ",
-                                       options_.max_frame_pixels));
+    return wire::InvalidRequest(
+        absl::StrCat("session config: the camera's ", camera.image_width, "x", camera.image_height,
+                     " frames exceed --max_frame_pixels ", options_.max_frame_pixels));
   }
   if (options_.max_receive_message_bytes > 0 &&
       RawFrameRequestBytes(camera) > options_.max_receive_message_bytes) {
-    return InvalidRequest(
+    return wire::InvalidRequest(
         absl::StrCat("session config: a raw ", camera.image_width, "x", camera.image_height,
                      " BGR frame of this camera needs a ", RawFrameRequestBytes(camera),
                      "-byte message, more than --max_receive_message_bytes ",
@@ -50,7 +50,7 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
     stream.max_inflight_frames = options_.default_max_inflight_frames;
   }
   if (stream.max_inflight_frames > 4096) {
-    return InvalidRequest("stream.max_inflight_frames must be at most 4096");
+    return wire::InvalidRequest("stream.max_inflight_frames must be at most 4096");
   }
   std::string config_json = lane::ConfigToJson(spec.config);
 
@@ -59,13 +59,14 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
     auto it = sessions_.find(camera_id);
     if (it != sessions_.end()) {
       const Session& existing = *it->second.session;
-      if (existing.config_json == config_json && existing.stream == stream) {
+      if (existing.config_json == config_json && existing.stream == stream &&
+          existing.decode == spec.decode) {
         it->second.last_used = now;
         return it->second.session;
       }
-      if (!replace) return SessionConfigConflict(camera_id, existing.version);
+      if (!replace) return wire::SessionConfigConflict(camera_id, existing.version);
     } else if (sessions_.size() >= options_.max_sessions) {
-      return TooManySessions(options_.max_sessions);
+      return wire::TooManySessions(options_.max_sessions);
     }
     return nullptr;
   };
@@ -81,7 +82,7 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
   absl::StatusOr<lane::Detector> detector =
       lane::Detector::Create(spec.config.camera, spec.config.ipm, spec.config.detector);
   if (!detector.ok()) {
-    return InvalidRequest(absl::StrCat("session config: ", detector.status().message()));
+    return wire::InvalidRequest(absl::StrCat("session config: ", detector.status().message()));
   }
 
   const uint64_t need = detector->MemoryBytes() + config_json.size();
@@ -98,13 +99,13 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
   auto old = sessions_.find(camera_id);
   if (old != sessions_.end()) held -= SessionBytes(*old->second.session);
   if (options_.max_session_memory_bytes > 0 && held + need > options_.max_session_memory_bytes) {
-    return SessionMemoryExhausted(need, held, options_.max_session_memory_bytes);
+    return wire::SessionMemoryExhausted(need, held, options_.max_session_memory_bytes);
   }
   if (old != sessions_.end()) replaced = std::move(old->second.session);
 
-  auto session =
-      std::make_shared<const Session>(camera_id, next_version_++, spec.config,
-                                      std::move(config_json), stream, *std::move(detector), now);
+  auto session = std::make_shared<const Session>(camera_id, next_version_++, spec.config,
+                                                 std::move(config_json), stream, spec.decode,
+                                                 *std::move(detector), now);
   memory_bytes_ = held + SessionBytes(*session);
   const bool inserted = replaced == nullptr;
   sessions_.insert_or_assign(camera_id, Entry{session, now});
@@ -123,7 +124,7 @@ std::shared_ptr<const Session> SessionRegistry::Find(absl::string_view camera_id
 absl::StatusOr<SessionRegistry::Entry> SessionRegistry::Get(absl::string_view camera_id) {
   std::lock_guard<std::mutex> lock(mu_);
   auto it = sessions_.find(camera_id);
-  if (it == sessions_.end()) return SessionNotFound(camera_id);
+  if (it == sessions_.end()) return wire::SessionNotFound(camera_id);
   it->second.last_used = options_.clock();
   return it->second;
 }
@@ -140,7 +141,7 @@ absl::Status SessionRegistry::Delete(absl::string_view camera_id) {
   std::shared_ptr<const Session> doomed;  // destroyed outside the lock
   std::lock_guard<std::mutex> lock(mu_);
   auto it = sessions_.find(camera_id);
-  if (it == sessions_.end()) return SessionNotFound(camera_id);
+  if (it == sessions_.end()) return wire::SessionNotFound(camera_id);
   doomed = std::move(it->second.session);
   memory_bytes_ -= SessionBytes(*doomed);
   sessions_.erase(it);

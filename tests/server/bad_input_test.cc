@@ -14,8 +14,8 @@
 #include <utility>
 #include <vector>
 
-#include "status_map.h"
 #include "test_util.h"
+#include "wire/status_map.h"
 
 namespace lane::server::testing {
 namespace {
@@ -86,7 +86,7 @@ class BadInputTest : public ::testing::Test {
 
   grpc::Status CreateLogged(const v1::SessionConfig& config) {
     const grpc::Status status = Create("bad", config);
-    std::cout << "[bad-input] " << GrpcCodeName(status.error_code()) << ": "
+    std::cout << "[bad-input] " << wire::GrpcCodeName(status.error_code()) << ": "
               << status.error_message() << "\n";
     return status;
   }
@@ -190,8 +190,8 @@ TEST_F(BadInputTest, SessionDeletedMidStream) {
   while (stream->Read(&response)) {
   }
   const grpc::Status status = stream->Finish();
-  std::cout << "[bad-input] " << GrpcCodeName(status.error_code()) << ": " << status.error_message()
-            << "\n";
+  std::cout << "[bad-input] " << wire::GrpcCodeName(status.error_code()) << ": "
+            << status.error_message() << "\n";
   EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
   server_->CreateSession("cam", config_);
   ExpectStillServing();
@@ -262,17 +262,19 @@ TEST_F(BadInputTest, BadRoiAndIpmSizeAreInvalidArgument) {
 
 TEST_F(BadInputTest, MessageOverTheSizeLimit) {
   ServerOptions options = TestServer::DefaultOptions();
-  options.max_receive_message_bytes = 256 * 1024;
+  // Room for the camera's raw 320x240 BGR frame (sessions whose raw frames
+  // cannot fit are refused), not for the 320 KiB messages below.
+  options.max_receive_message_bytes = 300 * 1024;
   Start(options);
   grpc::ClientContext context;
   v1::FrameResponse response;
   const grpc::Status status = server_->stub().Detect(
-      &context, JpegRequest("cam", 1, std::string(300 * 1024, 'x')), &response);
-  std::cout << "[bad-input] " << GrpcCodeName(status.error_code()) << ": " << status.error_message()
-            << "\n";
+      &context, JpegRequest("cam", 1, std::string(320 * 1024, 'x')), &response);
+  std::cout << "[bad-input] " << wire::GrpcCodeName(status.error_code()) << ": "
+            << status.error_message() << "\n";
   EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
   StreamResult result =
-      RunStream(server_->stub(), {JpegRequest("cam", 2, std::string(300 * 1024, 'x'))});
+      RunStream(server_->stub(), {JpegRequest("cam", 2, std::string(320 * 1024, 'x'))});
   EXPECT_EQ(result.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
   ExpectStillServing();
 }

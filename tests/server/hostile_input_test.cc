@@ -11,13 +11,16 @@
 #include <chrono>
 #include <iostream>
 #include <memory>
+#include <opencv2/imgproc.hpp>
+#include <random>
 #include <string>
 #include <thread>
 #include <utility>
 #include <vector>
 
-#include "status_map.h"
+#include "hostile_frames.h"
 #include "test_util.h"
+#include "wire/status_map.h"
 
 namespace lane::server::testing {
 namespace {
@@ -58,8 +61,8 @@ class HealthyStream {
 
   void Check(int frames = 40) {
     thread_.join();
-    EXPECT_TRUE(result_.status.ok())
-        << GrpcCodeName(result_.status.error_code()) << ": " << result_.status.error_message();
+    EXPECT_TRUE(result_.status.ok()) << wire::GrpcCodeName(result_.status.error_code()) << ": "
+                                     << result_.status.error_message();
     ASSERT_EQ(result_.responses.size(), static_cast<size_t>(frames));
     for (int i = 0; i < frames; ++i) {
       const v1::FrameResponse& r = result_.responses[static_cast<size_t>(i)];
@@ -130,7 +133,7 @@ RawStreamResult RawStream(grpc::Channel& channel, const std::vector<std::string>
 }
 
 void Log(const char* what, const grpc::Status& status) {
-  std::cout << "[hostile] " << what << ": " << GrpcCodeName(status.error_code()) << " ("
+  std::cout << "[hostile] " << what << ": " << wire::GrpcCodeName(status.error_code()) << " ("
             << status.error_message().size() << " bytes): " << status.error_message().substr(0, 200)
             << "\n";
 }
@@ -192,6 +195,85 @@ TEST_F(HostileInputTest, DeepConfigIsRefusedWithoutRecursion) {
   v1::FrameResponse response;
   const grpc::Status detect = server_->stub().Detect(&context, unary, &response);
   EXPECT_EQ(detect.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  healthy.Check();
+}
+
+// Class 2: decompression bombs at the camera's own size pass the header check
+// but must not hold a worker: a progressive JPEG of ~146,000 scans, a valid
+// one of 2,090 scans, a PNG whose data inflates 1 GiB past its image. Each
+// gets an in-band error within a second, and the healthy stream beside them
+// loses nothing (with 2 workers, two stalled frames used to stall everyone).
+TEST_F(HostileInputTest, DecompressionBombsCostMilliseconds) {
+  const lane::CameraModel vga = ScaledCamera(1.0);
+  server_->CreateSession("vga", SessionConfigFor(vga));
+  HealthyStream healthy(server_->channel(), jpeg_);
+  cv::Mat rgb;
+  cv::cvtColor(lane::testing::Frame(640, 480), rgb, cv::COLOR_BGR2RGB);
+  const std::vector<std::pair<const char*, std::string>> bombs = {
+      {"146,000-scan JPEG", lane::testing::RepeatedScanBomb(146000)},
+      {"2,090-scan JPEG",
+       lane::testing::LibjpegEncode(rgb, JCS_RGB, lane::testing::ManyScansScript())},
+      {"PNG, 1 GiB past the image", lane::testing::PngBomb(lane::testing::Frame(640, 480), 1024)},
+  };
+  std::vector<v1::FrameRequest> requests;
+  for (size_t i = 0; i < bombs.size(); ++i)
+    requests.push_back(JpegRequest("vga", i, bombs[i].second));
+  requests.push_back(JpegRequest("vga", 9, EncodeJpeg(RoadFrame(vga, kLineOffsets, 1))));
+  const auto start = steady_clock::now();
+  const StreamResult r = RunStream(server_->stub(), requests);
+  const double seconds = std::chrono::duration<double>(steady_clock::now() - start).count();
+  EXPECT_TRUE(r.status.ok()) << r.status.error_message();
+  ASSERT_EQ(r.responses.size(), requests.size());
+  for (size_t i = 0; i < bombs.size(); ++i) {
+    const v1::FrameResponse& response = r.responses[i];
+    std::cout << "[hostile] " << bombs[i].first << " (" << bombs[i].second.size()
+              << " bytes): code " << response.status().code() << " after "
+              << response.timings().decode_ms() << " ms: " << response.status().message() << "\n";
+    EXPECT_EQ(response.status().code(), v1::FRAME_CODE_INVALID_ARGUMENT) << bombs[i].first;
+    EXPECT_LT(response.timings().decode_ms(), 1000.0) << bombs[i].first;
+    EXPECT_LT(response.status().message().size(), kMaxMessage);
+  }
+  EXPECT_EQ(r.responses.back().status().code(), v1::FRAME_CODE_OK);
+  EXPECT_LT(seconds, 10.0);
+  healthy.Check();
+}
+
+// Class 5: corrupt or truncated JPEGs are refused (libjpeg's warnings are
+// errors), unless the session accepts damaged frames.
+TEST_F(HostileInputTest, DamagedJpegsAreRefusedUnlessTheSessionAcceptsThem) {
+  HealthyStream healthy(server_->channel(), jpeg_);
+  const std::string whole = EncodeJpeg(RoadFrame(camera_, kLineOffsets, 3));
+  const std::string half = whole.substr(0, whole.size() / 2);
+  std::string scrambled = whole;
+  // Randomise 2 kB of entropy-coded data after the first scan's header.
+  const size_t sos = scrambled.find("\xFF\xDA");
+  ASSERT_NE(sos, std::string::npos);
+  std::mt19937 rng(5);
+  for (size_t i = sos + 64; i < sos + 64 + 2048 && i + 2 < scrambled.size(); ++i) {
+    scrambled[i] = static_cast<char>(rng() & 0x7F);  // no 0xFF: no markers
+  }
+  const StreamResult strict =
+      RunStream(server_->stub(), {JpegRequest("cam", 0, half), JpegRequest("cam", 1, scrambled),
+                                  JpegRequest("cam", 2, whole)});
+  ASSERT_EQ(strict.responses.size(), 3u);
+  for (int i = 0; i < 2; ++i) {
+    const v1::FrameStatus& status = strict.responses[static_cast<size_t>(i)].status();
+    std::cout << "[hostile] damaged frame " << i << ": " << status.message() << "\n";
+    EXPECT_EQ(status.code(), v1::FRAME_CODE_INVALID_ARGUMENT);
+    EXPECT_NE(status.message().find("damaged JPEG frame"), std::string::npos);
+    EXPECT_EQ(strict.responses[static_cast<size_t>(i)].lanes_size(), 0);
+  }
+  EXPECT_EQ(strict.responses[2].status().code(), v1::FRAME_CODE_OK);
+
+  v1::SessionConfig lenient = config_;
+  lenient.mutable_decode()->set_accept_damaged_frames(true);
+  server_->CreateSession("lenient", lenient);
+  const StreamResult accepted = RunStream(
+      server_->stub(), {JpegRequest("lenient", 0, half), JpegRequest("lenient", 1, scrambled)});
+  ASSERT_EQ(accepted.responses.size(), 2u);
+  for (const v1::FrameResponse& response : accepted.responses) {
+    EXPECT_EQ(response.status().code(), v1::FRAME_CODE_OK) << response.status().message();
+  }
   healthy.Check();
 }
 

@@ -56,7 +56,7 @@ TEST(MetricsTest, Records) {
   lane::StageTimings timings;
   timings.ipm_ms = 1;
   metrics.ObserveDetectorStages(timings);
-  metrics.CountFrame(FrameResult::kDropped);
+  metrics.CountFrame(wire::FrameResult::kDropped);
   metrics.FrameReceived();
   metrics.FrameReceived();
   metrics.FrameAnswered();

@@ -16,31 +16,19 @@
 
 #include "lane/camera.h"
 #include "lane/v1/lane_service.grpc.pb.h"
+#include "road_frames.h"
 #include "server.h"
 
 namespace lane::server::testing {
 
-// The Caltech camera scaled by `scale` (frame size, focal lengths and optical
-// centre), pitched `pitch_deg` down.
-lane::CameraModel ScaledCamera(double scale, double pitch_deg = 14.0);
-
-// A session config for the camera: its calibration, the default IPM with the
-// ROI scaled like the camera, the default detector.
-v1::SessionConfig SessionConfigFor(const lane::CameraModel& camera);
-
-// Lateral offsets (metres) of the painted lines in RoadFrame.
-inline const std::vector<double> kLineOffsets = {-5.4, -1.8, 1.8, 5.4};
-
-// A grey road with white markings 15 cm wide at `offsets` metres, from 2 m to
-// 60 m ahead, seen by the camera (BGR). `seed` adds a little noise.
-cv::Mat RoadFrame(const lane::CameraModel& camera, const std::vector<double>& offsets,
-                  int seed = 0);
-
-std::string EncodeJpeg(const cv::Mat& image, int quality = 90);
-std::string EncodePng(const cv::Mat& image);
-
-v1::FrameRequest JpegRequest(const std::string& camera_id, uint64_t frame_id,
-                             const std::string& jpeg);
+// Synthetic frames and session configs (tests/common/road_frames.h).
+using lane::testing::EncodeJpeg;
+using lane::testing::EncodePng;
+using lane::testing::JpegRequest;
+using lane::testing::kLineOffsets;
+using lane::testing::RoadFrame;
+using lane::testing::ScaledCamera;
+using lane::testing::SessionConfigFor;
 
 // A LaneServer on 127.0.0.1 (port chosen by the system) and a stub to it.
 class TestServer {

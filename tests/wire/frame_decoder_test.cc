@@ -1,16 +1,16 @@
-#include "frame_decoder.h"
+#include "wire/frame_decoder.h"
 
 #include <gtest/gtest.h>
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "test_util.h"
+#include "road_frames.h"
 
-namespace lane::server {
+namespace lane::wire {
 namespace {
 
-using testing::EncodeJpeg;
-using testing::EncodePng;
+using lane::testing::EncodeJpeg;
+using lane::testing::EncodePng;
 
 cv::Mat Pattern(int w, int h) {
   cv::Mat m(h, w, CV_8UC3);
@@ -74,7 +74,7 @@ TEST(FrameDecoderTest, RefusesWrongSizeAndHugeFramesBeforeDecoding) {
   bomb[sof + 7] = static_cast<char>(0xEA);
   bomb[sof + 8] = 0x60;
   request.set_encoded(bomb);
-  DecodeOptions options = For(60000, 60000);
+  DecodeOptions options = For(64, 48);
   options.max_pixels = 1920 * 1080;
   absl::StatusOr<cv::Mat> refused = DecodeFrame(request, options);
   EXPECT_EQ(refused.status().code(), absl::StatusCode::kInvalidArgument);
@@ -139,4 +139,4 @@ TEST(FrameDecoderTest, RawFramesWithStrides) {
 }
 
 }  // namespace
-}  // namespace lane::server
+}  // namespace lane::wire

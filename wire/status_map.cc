@@ -1,4 +1,4 @@
-#include "status_map.h"
+#include "wire/status_map.h"
 
 #include <string>
 
@@ -6,7 +6,7 @@
 #include "absl/strings/str_format.h"
 #include "lane/excerpt.h"
 
-namespace lane::server {
+namespace lane::wire {
 
 namespace {
 
@@ -83,6 +83,8 @@ v1::FrameCode ToFrameCode(absl::StatusCode code) {
     case absl::StatusCode::kInvalidArgument:
     case absl::StatusCode::kOutOfRange:
       return v1::FRAME_CODE_INVALID_ARGUMENT;
+    case absl::StatusCode::kResourceExhausted:
+      return v1::FRAME_CODE_RESOURCE_EXHAUSTED;
     case absl::StatusCode::kAborted:
       return v1::FRAME_CODE_DROPPED;
     default:
@@ -110,6 +112,8 @@ absl::Status FromFrameStatus(const v1::FrameStatus& status) {
       return absl::OkStatus();
     case v1::FRAME_CODE_INVALID_ARGUMENT:
       return absl::InvalidArgumentError(status.message());
+    case v1::FRAME_CODE_RESOURCE_EXHAUSTED:
+      return absl::ResourceExhaustedError(status.message());
     case v1::FRAME_CODE_DROPPED:
       return absl::AbortedError(status.message());
     default:
@@ -122,6 +126,7 @@ FrameResult ToFrameResult(v1::FrameCode code) {
     case v1::FRAME_CODE_OK:
       return FrameResult::kOk;
     case v1::FRAME_CODE_INVALID_ARGUMENT:
+    case v1::FRAME_CODE_RESOURCE_EXHAUSTED:
       return FrameResult::kInvalid;
     case v1::FRAME_CODE_DROPPED:
       return FrameResult::kDropped;
@@ -185,4 +190,4 @@ const char* GrpcCodeName(grpc::StatusCode code) {
   }
 }
 
-}  // namespace lane::server
+}  // namespace lane::wire

@@ -5,8 +5,8 @@
 // absl::StatusCode and grpc::StatusCode share their numbering, so the mapping
 // is one-to-one; only the per-frame codes are a subset (see FrameCode in
 // proto/lane/v1/lane_service.proto).
-#ifndef LANE_SERVER_STATUS_MAP_H_
-#define LANE_SERVER_STATUS_MAP_H_
+#ifndef LANE_WIRE_STATUS_MAP_H_
+#define LANE_WIRE_STATUS_MAP_H_
 
 #include <grpcpp/support/status.h>
 
@@ -16,7 +16,7 @@
 #include "absl/strings/string_view.h"
 #include "lane/v1/lane_service.pb.h"
 
-namespace lane::server {
+namespace lane::wire {
 
 // ---- Errors of the service (constructors, so the codes live here) ----------
 
@@ -73,6 +73,6 @@ const char* FrameResultLabel(FrameResult result);
 // "OK", "INVALID_ARGUMENT", ... as in grpc_server_handled_total{grpc_code}.
 const char* GrpcCodeName(grpc::StatusCode code);
 
-}  // namespace lane::server
+}  // namespace lane::wire
 
-#endif  // LANE_SERVER_STATUS_MAP_H_
+#endif  // LANE_WIRE_STATUS_MAP_H_

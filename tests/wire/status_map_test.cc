@@ -1,8 +1,8 @@
-#include "status_map.h"
+#include "wire/status_map.h"
 
 #include <gtest/gtest.h>
 
-namespace lane::server {
+namespace lane::wire {
 namespace {
 
 TEST(StatusMapTest, ServiceErrorsHaveTheDocumentedCodes) {
@@ -69,4 +69,4 @@ TEST(StatusMapTest, Labels) {
 }
 
 }  // namespace
-}  // namespace lane::server
+}  // namespace lane::wire

@@ -1,0 +1,247 @@
+// PNG through libpng's progressive ("push") reader.
+//
+// Why not png_read_row/png_read_image: when the sequential reader finishes
+// the last row it drains the rest of the zlib stream (png_read_finish_IDAT
+// inflates until the stream ends), so IDAT data that inflates to gigabytes
+// beyond the image costs seconds. The push reader inflates into one row at a
+// time and stops at the first byte past the last row ("Extra compressed data
+// in IDAT"); what follows is only CRC-checked, at memory speed, and the byte
+// cap bounds that. png_read_end is never called.
+//
+// libpng reports errors through our error callback, which longjmps to the
+// setjmp in RunPng (png_jmpbuf). Everything the decode touches between the
+// two lives in one trivially destructible PngState, and the functions it may
+// leave by longjmp hold nothing with a destructor.
+#include <png.h>
+
+#include <algorithm>
+#include <csetjmp>
+#include <cstring>
+#include <type_traits>
+
+#include "absl/strings/str_cat.h"
+#include "codecs.h"
+
+namespace lane::decode::internal {
+namespace {
+
+enum class Failure {
+  kNone,
+  kError,       // libpng's error: message[] holds libpng's message
+  kDamaged,     // a libpng warning and !accept_damaged: message[] likewise
+  kDeadline,    // the deadline passed
+  kUnexpected,  // libpng's idea of the image differs from the header's
+};
+
+struct PngState {
+  png_structp png;
+  png_infop info;
+
+  // Inputs.
+  const unsigned char* data;
+  size_t size;
+  unsigned char* out;  // height rows of stride bytes
+  size_t stride;
+  int width;
+  int height;
+  bool gray;
+  bool accept_damaged;
+  absl::Time deadline;
+
+  // Progress.
+  bool interlaced;
+  bool rows_done;  // the last row of the last pass was delivered
+  bool end_seen;   // IEND was read
+
+  // Outcome.
+  Failure failure;
+  char message[kMaxLibraryMessage + 1];
+};
+static_assert(std::is_trivially_destructible_v<PngState>,
+              "PngState is left by longjmp: no destructors");
+
+// Input is fed to libpng in slices of this size, the deadline checked
+// between them (the rows' own checks do not see CRC-only skipping).
+constexpr size_t kFeedBytes = 64 << 10;
+// Largest non-IDAT chunk libpng accepts without a warning (so, unless
+// accept_damaged, at all): PLTE is 768 bytes; everything else is ignored,
+// but libpng's push reader buffers a chunk whole before skipping it.
+constexpr png_alloc_size_t kMaxChunkBytes = 1 << 20;
+// Ancillary chunks kept in libpng's list (sPLT, unknown): none are wanted.
+constexpr png_uint_32 kMaxCachedChunks = 32;
+
+PngState* StateOf(png_structp png) { return static_cast<PngState*>(png_get_error_ptr(png)); }
+
+void Record(PngState* state, Failure failure, const char* message) {
+  if (state->failure != Failure::kNone) return;
+  state->failure = failure;
+  std::strncpy(state->message, message, kMaxLibraryMessage);
+  state->message[kMaxLibraryMessage] = '\0';
+}
+
+// Must not return (libpng would print the message and then longjmp).
+[[noreturn]] void OnError(png_structp png, png_const_charp message) {
+  Record(StateOf(png), Failure::kError, message);
+  png_longjmp(png, 1);
+}
+
+void OnWarning(png_structp png, png_const_charp message) {
+  PngState* state = StateOf(png);
+  if (state->accept_damaged) return;
+  Record(state, Failure::kDamaged, message);
+  png_error(png, message);  // does not return
+}
+
+[[noreturn]] void Fail(png_structp png, Failure failure) {
+  Record(StateOf(png), failure, "");
+  png_error(png, "");
+}
+
+void CheckDeadline(png_structp png, const PngState* state) {
+  if (absl::Now() > state->deadline) Fail(png, Failure::kDeadline);
+}
+
+// After the chunks before the first IDAT: the output transformations.
+void OnInfo(png_structp png, png_infop info) {
+  PngState* state = StateOf(png);
+  png_uint_32 width = 0;
+  png_uint_32 height = 0;
+  int bit_depth = 0;
+  int color_type = 0;
+  int interlace = 0;
+  png_get_IHDR(png, info, &width, &height, &bit_depth, &color_type, &interlace, nullptr, nullptr);
+  if (width != static_cast<png_uint_32>(state->width) ||
+      height != static_cast<png_uint_32>(state->height)) {
+    Fail(png, Failure::kUnexpected);
+  }
+  // What cv::imdecode asks of libpng: palette -> RGB and grey < 8 bits -> 8
+  // (png_set_expand; it also turns tRNS into alpha, which is then dropped, so
+  // the colours are the same), 16 bits -> 8 by dropping the low byte, no
+  // alpha, BGR order or grey by the 0.299/0.587 weights.
+  png_set_expand(png);
+  png_set_strip_16(png);
+  png_set_strip_alpha(png);
+  const bool colour = (color_type & PNG_COLOR_MASK_COLOR) != 0;
+  if (state->gray) {
+    if (colour) png_set_rgb_to_gray(png, PNG_ERROR_ACTION_NONE, 0.299, 0.587);
+  } else if (colour) {
+    png_set_bgr(png);
+  } else {
+    png_set_gray_to_rgb(png);
+  }
+  state->interlaced = interlace != PNG_INTERLACE_NONE;
+  png_set_interlace_handling(png);
+  png_read_update_info(png, info);
+  const png_byte channels = state->gray ? 1 : 3;
+  if (png_get_channels(png, info) != channels || png_get_bit_depth(png, info) != 8 ||
+      png_get_rowbytes(png, info) != static_cast<size_t>(state->width) * channels) {
+    Fail(png, Failure::kUnexpected);
+  }
+}
+
+// Each row of each pass. With interlace handling libpng delivers every image
+// row in every pass (new_row is null for a row the pass does not touch) and
+// the seventh pass (6) is always the last, so (height - 1, last pass) is the
+// final call.
+void OnRow(png_structp png, png_bytep new_row, png_uint_32 row, int pass) {
+  PngState* state = StateOf(png);
+  CheckDeadline(png, state);
+  if (row >= static_cast<png_uint_32>(state->height)) Fail(png, Failure::kUnexpected);
+  if (new_row != nullptr) {
+    png_progressive_combine_row(png, state->out + row * state->stride, new_row);
+  }
+  if (row + 1 == static_cast<png_uint_32>(state->height) && pass == (state->interlaced ? 6 : 0)) {
+    state->rows_done = true;
+  }
+}
+
+void OnEnd(png_structp png, png_infop /*info*/) { StateOf(png)->end_seen = true; }
+
+// May leave by longjmp (through png_error).
+void DecodeSteps(PngState* state) {
+  png_structp png = state->png;
+  png_set_progressive_read_fn(png, state, OnInfo, OnRow, OnEnd);
+  png_set_user_limits(png, static_cast<png_uint_32>(state->width),
+                      static_cast<png_uint_32>(state->height));
+  png_set_chunk_cache_max(png, kMaxCachedChunks);
+  png_set_chunk_malloc_max(png, kMaxChunkBytes);
+  // Every chunk but IHDR, PLTE, tRNS, IDAT and IEND is skipped unread: text
+  // and iCCP (compressed, so bombs of their own), EXIF, and so on. Grey
+  // output keeps gAMA and sRGB: libpng's RGB -> grey is done in linear light
+  // when the file states its gamma, as in cv::imdecode.
+  png_set_keep_unknown_chunks(png, PNG_HANDLE_CHUNK_NEVER, nullptr, -1);
+  if (state->gray) {
+    static constexpr png_byte kGammaChunks[] = "gAMA\0sRGB";
+    png_set_keep_unknown_chunks(png, PNG_HANDLE_CHUNK_AS_DEFAULT, kGammaChunks, 2);
+  }
+  size_t pos = 0;
+  while (pos < state->size && !state->end_seen) {
+    const size_t count = std::min(kFeedBytes, state->size - pos);
+    // libpng only reads the buffer; its API predates const.
+    png_process_data(png, state->info, const_cast<png_bytep>(state->data + pos), count);
+    pos += count;
+    CheckDeadline(png, state);
+  }
+}
+
+// True if libpng went through the data without an error; else
+// state->failure says why.
+bool RunPng(PngState* state) {
+  state->png = png_create_read_struct(PNG_LIBPNG_VER_STRING, state, OnError, OnWarning);
+  if (state->png == nullptr) {
+    Record(state, Failure::kError, "out of memory");
+    return false;
+  }
+  state->info = png_create_info_struct(state->png);
+  if (state->info == nullptr) {
+    png_destroy_read_struct(&state->png, nullptr, nullptr);
+    Record(state, Failure::kError, "out of memory");
+    return false;
+  }
+  if (setjmp(png_jmpbuf(state->png)) != 0) {
+    png_destroy_read_struct(&state->png, &state->info, nullptr);
+    return false;
+  }
+  DecodeSteps(state);
+  png_destroy_read_struct(&state->png, &state->info, nullptr);
+  return true;
+}
+
+}  // namespace
+
+absl::Status DecodePng(const CodecRequest& request, cv::Mat& out) {
+  PngState state{};
+  state.data = reinterpret_cast<const unsigned char*>(request.bytes.data());
+  state.size = request.bytes.size();
+  state.out = out.data;
+  state.stride = out.step[0];
+  state.width = request.width;
+  state.height = request.height;
+  state.gray = request.gray;
+  state.accept_damaged = request.accept_damaged;
+  state.deadline = request.deadline;
+  if (!RunPng(&state)) {
+    switch (state.failure) {
+      case Failure::kDamaged:
+        return absl::InvalidArgumentError(absl::StrCat("damaged PNG frame: ", state.message));
+      case Failure::kDeadline:
+        return DeadlineExceeded("PNG", request.budget);
+      case Failure::kUnexpected:
+        return absl::InvalidArgumentError("the PNG frame decoded to an unexpected image");
+      case Failure::kError:
+      case Failure::kNone:
+        break;
+    }
+    return absl::InvalidArgumentError(absl::StrCat("cannot decode the PNG frame: ", state.message));
+  }
+  if (!state.rows_done) {
+    return absl::InvalidArgumentError(
+        "truncated PNG frame: the image data ends before the last row");
+  }
+  if (!state.end_seen && !state.accept_damaged) {
+    return absl::InvalidArgumentError("truncated PNG frame: no IEND chunk after the image data");
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace lane::decode::internal

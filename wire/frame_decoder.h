@@ -1,0 +1,32 @@
+// A frame request's image -> an image the detector accepts (CV_8UC3 BGR or
+// CV_8UC1): encoded frames through the bounded decoder (lane/decode: header
+// checks before decoding, a byte cap, a scan limit, a deadline, damaged data
+// refused unless accepted), raw frames checked and wrapped without a copy.
+#ifndef LANE_WIRE_FRAME_DECODER_H_
+#define LANE_WIRE_FRAME_DECODER_H_
+
+#include <opencv2/core.hpp>
+
+#include "absl/status/statusor.h"
+#include "lane/decode/image_decoder.h"
+#include "lane/v1/lane_service.pb.h"
+
+namespace lane::wire {
+
+using decode::DecodeOptions;
+using decode::EncodedFormat;
+using decode::EncodedHeader;
+using decode::ReadEncodedHeader;
+
+// The frame of `request` (its `encoded` or `raw` image) as CV_8UC3 BGR or
+// CV_8UC1 of exactly options.width x options.height. INVALID_ARGUMENT for
+// every bad frame, with a message saying what is wrong; RESOURCE_EXHAUSTED
+// when decoding passes options.deadline.
+//
+// A raw BGR8 or GRAY8 frame is not copied: the returned Mat points into
+// `request`, which must outlive it.
+absl::StatusOr<cv::Mat> DecodeFrame(const v1::FrameRequest& request, const DecodeOptions& options);
+
+}  // namespace lane::wire
+
+#endif  // LANE_WIRE_FRAME_DECODER_H_
