@@ -146,7 +146,7 @@ struct InprocessResult {
 };
 
 // The service's work without gRPC: `workers` threads decode (the server's
-// lane::server::DecodeFrame) and detect the same frames with a detector built
+// lane::wire::DecodeFrame) and detect the same frames with a detector built
 // from `session`, for warm-up + duration.
 absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& frames,
                                              const lane::v1::SessionConfig& session, int workers,

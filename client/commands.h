@@ -1,20 +1,27 @@
-// The lane-client subcommands. Each takes the arguments after its name and
-// returns the process exit code (common.h).
+// The lane-client subcommands. Each Add*Command registers its subcommand,
+// with its options, on the program's CLI11 app and returns it with the
+// function that runs it once the command line is parsed; that function
+// returns the exit status (common.h).
 #ifndef LANE_CLIENT_COMMANDS_H_
 #define LANE_CLIENT_COMMANDS_H_
 
 #include <string>
 #include <vector>
 
+#include "cli/command_line.h"
+
 namespace lane_client {
 
-int RunSession(const std::vector<std::string>& args);
-int RunStream(const std::vector<std::string>& args);
-int RunBench(const std::vector<std::string>& args);
-int RunHealth(const std::vector<std::string>& args);
-int RunInfo(const std::vector<std::string>& args);
+using lane_tools::Command;
 
-// Dispatches argv[1] (the subcommand) to the functions above.
+// session create|get|list|delete.
+std::vector<Command> AddSessionCommands(CLI::App& client);
+Command AddStreamCommand(CLI::App& client);
+Command AddBenchCommand(CLI::App& client);
+Command AddHealthCommand(CLI::App& client);
+Command AddInfoCommand(CLI::App& client);
+
+// Parses the arguments after the program name and runs the command.
 int RunCommand(const std::vector<std::string>& args);
 
 }  // namespace lane_client

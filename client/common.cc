@@ -9,6 +9,7 @@
 #include <memory>
 #include <sstream>
 #include <utility>
+#include <vector>
 
 #include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
@@ -19,61 +20,33 @@
 
 namespace lane_client {
 
-int UsageError(const std::string& command, const std::string& message, const char* usage) {
-  std::fprintf(stderr, "lane-client %s: %s\n\n%s", command.c_str(), message.c_str(), usage);
-  return kExitUsage;
-}
-
 int Failure(const std::string& command, const std::string& message) {
   Note(command, message);
   return kExitFailure;
 }
 
 void Note(const std::string& command, const std::string& message) {
-  std::fprintf(stderr, "lane-client %s: %s\n", command.c_str(), message.c_str());
+  lane_tools::PrintMessage("lane-client " + command, message);
 }
 
-absl::StatusOr<std::optional<absl::Duration>> GetDuration(const lane_tools::Args& args,
-                                                          const std::string& name) {
-  const std::optional<std::string> text = args.Get(name);
-  if (!text) return std::optional<absl::Duration>();
-  absl::Duration d;
-  double seconds = 0;
-  if (absl::SimpleAtod(*text, &seconds) && std::isfinite(seconds)) {
-    d = absl::Seconds(seconds);
-  } else if (!absl::ParseDuration(*text, &d)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "--", name, " must be a duration such as 500ms, 10s or 2.5, got \"", *text, "\""));
-  }
-  if (d < absl::ZeroDuration()) {
-    return absl::InvalidArgumentError(absl::StrCat("--", name, " must not be negative"));
-  }
-  return std::optional<absl::Duration>(d);
+CLI::Option* AddTargetOption(CLI::App* app, std::string* target, const std::string& description) {
+  *target = kDefaultTarget;
+  return app->add_option("--target", *target, description)->type_name("T");
 }
 
-absl::StatusOr<std::optional<double>> GetNumber(const lane_tools::Args& args,
-                                                const std::string& name) {
-  const std::optional<std::string> text = args.Get(name);
-  if (!text) return std::optional<double>();
-  double v = 0;
-  if (!absl::SimpleAtod(*text, &v) || !std::isfinite(v) || v < 0) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--", name, " must be a non-negative number, got \"", *text, "\""));
-  }
-  return std::optional<double>(v);
+void AddCallOptions(CLI::App* app, CallFlags* flags, const std::string& default_timeout) {
+  AddTargetOption(app, &flags->target, "server address, or a comma list: every target is asked");
+  lane_tools::AddDuration(app, "--timeout", &flags->timeout, "deadline of each call",
+                          default_timeout);
 }
 
-absl::StatusOr<std::vector<int>> ParseIntList(const std::string& text, const std::string& name) {
-  std::vector<int> out;
-  for (absl::string_view part : absl::StrSplit(text, ',')) {
-    int v = 0;
-    if (!absl::SimpleAtoi(part, &v) || v <= 0) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "--", name, " must be a comma-separated list of positive integers, got \"", text, "\""));
-    }
-    out.push_back(v);
-  }
-  return out;
+absl::StatusOr<CallSetup> ParseCallSetup(const CallFlags& flags, absl::Duration default_timeout) {
+  CallSetup setup;
+  absl::StatusOr<std::vector<std::string>> targets = SplitTargets(flags.target);
+  if (!targets.ok()) return targets.status();
+  setup.targets = *std::move(targets);
+  setup.timeout = flags.timeout.value_or(default_timeout);
+  return setup;
 }
 
 absl::StatusOr<std::vector<std::string>> SplitTargets(const std::string& spec) {
@@ -140,57 +113,44 @@ class BearerInterceptorFactory final
 
 }  // namespace
 
-const char kSecurityUsage[] =
-    "security options (every command):\n"
-    "  --ca FILE            PEM CA certificates: connect with TLS, verify the server\n"
-    "  --cert FILE          PEM client certificate for mutual TLS (with --key, --ca)\n"
-    "  --key FILE           PEM private key of --cert\n"
-    "  --token-file FILE    Bearer token sent with every call (first line of FILE);\n"
-    "                       default: the environment variable LANE_TOKEN\n";
+void AddSecurityOptions(CLI::App& app, SecurityFlags* flags) {
+  const std::string group = "Security (every command)";
+  app.add_option("--ca", flags->ca, "PEM CA certificates: connect with TLS, verify the server")
+      ->type_name("FILE")
+      ->group(group);
+  app.add_option("--cert", flags->cert, "PEM client certificate for mutual TLS (with --key, --ca)")
+      ->type_name("FILE")
+      ->group(group);
+  app.add_option("--key", flags->key, "PEM private key of --cert")->type_name("FILE")->group(group);
+  app.add_option("--token-file", flags->token_file,
+                 "Bearer token sent with every call (first line of FILE); default: the "
+                 "environment variable LANE_TOKEN")
+      ->type_name("FILE")
+      ->group(group);
+  app.fallthrough();
+}
 
-absl::StatusOr<Security> TakeSecurityOptions(std::vector<std::string>& args) {
-  static const char* const kNames[] = {"ca", "cert", "key", "token-file"};
-  std::string paths[4];
-  std::vector<std::string> rest;
-  for (size_t i = 0; i < args.size(); ++i) {
-    const std::string& arg = args[i];
-    if (arg == "--") {
-      rest.insert(rest.end(), args.begin() + static_cast<std::ptrdiff_t>(i), args.end());
-      break;
-    }
-    bool taken = false;
-    for (int k = 0; k < 4 && !taken; ++k) {
-      const std::string flag = absl::StrCat("--", kNames[k]);
-      if (arg == flag) {
-        if (i + 1 >= args.size()) {
-          return absl::InvalidArgumentError(absl::StrCat(flag, " needs a value"));
-        }
-        paths[k] = args[++i];
-        taken = true;
-      } else if (absl::StartsWith(arg, flag + "=")) {
-        paths[k] = arg.substr(flag.size() + 1);
-        taken = true;
-      }
-    }
-    if (!taken) rest.push_back(arg);
-  }
+absl::StatusOr<Security> LoadSecurity(const SecurityFlags& flags) {
   Security security;
-  std::string* const targets[] = {&security.ca_pem, &security.cert_pem, &security.key_pem,
-                                  &security.token};
-  for (int k = 0; k < 4; ++k) {
-    if (paths[k].empty()) continue;
-    absl::StatusOr<std::string> text = ReadFileText(kNames[k], paths[k]);
+  const std::pair<const char*, std::pair<const std::string*, std::string*>> files[] = {
+      {"ca", {&flags.ca, &security.ca_pem}},
+      {"cert", {&flags.cert, &security.cert_pem}},
+      {"key", {&flags.key, &security.key_pem}},
+      {"token-file", {&flags.token_file, &security.token}}};
+  for (const auto& [option, paths] : files) {
+    if (paths.first->empty()) continue;
+    absl::StatusOr<std::string> text = ReadFileText(option, *paths.first);
     if (!text.ok()) return text.status();
-    *targets[k] = *std::move(text);
+    *paths.second = *std::move(text);
   }
-  if (paths[3].empty()) {
+  if (flags.token_file.empty()) {
     if (const char* env = std::getenv("LANE_TOKEN"); env != nullptr) security.token = env;
   }
   // The token: its first line, without surrounding whitespace.
   security.token = std::string(absl::StripAsciiWhitespace(
       absl::string_view(security.token).substr(0, security.token.find('\n'))));
-  if (!paths[3].empty() && security.token.empty()) {
-    return absl::InvalidArgumentError(absl::StrCat("--token-file ", paths[3], " is empty"));
+  if (!flags.token_file.empty() && security.token.empty()) {
+    return absl::InvalidArgumentError(absl::StrCat("--token-file ", flags.token_file, " is empty"));
   }
   if (security.cert_pem.empty() != security.key_pem.empty()) {
     return absl::InvalidArgumentError("--cert and --key go together");
@@ -198,7 +158,21 @@ absl::StatusOr<Security> TakeSecurityOptions(std::vector<std::string>& args) {
   if (!security.cert_pem.empty() && security.ca_pem.empty()) {
     return absl::InvalidArgumentError("--cert/--key need --ca (TLS)");
   }
-  args = std::move(rest);
+  return security;
+}
+
+absl::StatusOr<Security> TakeSecurityOptions(std::vector<std::string>& args) {
+  CLI::App app;
+  SecurityFlags flags;
+  AddSecurityOptions(app, &flags);
+  app.allow_extras();
+  try {
+    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
+  } catch (const CLI::Error& e) {
+    return absl::InvalidArgumentError(e.what());
+  }
+  absl::StatusOr<Security> security = LoadSecurity(flags);
+  if (security.ok()) args = app.remaining();
   return security;
 }
 

@@ -1,5 +1,5 @@
-// What every lane-client subcommand shares: exit codes, messages, option
-// parsing helpers, and channels to the service.
+// What every lane-client subcommand shares: exit codes, messages, the
+// security options, and channels to the service.
 #ifndef LANE_CLIENT_COMMON_H_
 #define LANE_CLIENT_COMMON_H_
 
@@ -13,11 +13,11 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
-#include "args.h"
+#include "cli/command_line.h"
 
 namespace lane_client {
 
-// Exit codes (args.h has 0, 1 and 2).
+// Exit codes (cli/command_line.h has 0, 1 and 2).
 inline constexpr int kExitOk = lane_tools::kExitOk;
 inline constexpr int kExitFailure = lane_tools::kExitFailure;  // run-time error
 inline constexpr int kExitUsage = lane_tools::kExitUsage;      // bad command line
@@ -25,23 +25,27 @@ inline constexpr int kExitSlo = 3;                             // bench: --slo-p
 
 inline constexpr char kDefaultTarget[] = "127.0.0.1:50051";
 
-// "lane-client COMMAND: MESSAGE", a blank line and the usage, on stderr;
-// returns kExitUsage.
-int UsageError(const std::string& command, const std::string& message, const char* usage);
 // "lane-client COMMAND: MESSAGE" on stderr; returns kExitFailure.
 int Failure(const std::string& command, const std::string& message);
 // "lane-client COMMAND: MESSAGE" on stderr.
 void Note(const std::string& command, const std::string& message);
 
-// A duration option: absl syntax ("500ms", "10s", "1m") or plain seconds
-// ("2.5"). INVALID_ARGUMENT naming the option when malformed or negative.
-absl::StatusOr<std::optional<absl::Duration>> GetDuration(const lane_tools::Args& args,
-                                                          const std::string& name);
-// A non-negative number option.
-absl::StatusOr<std::optional<double>> GetNumber(const lane_tools::Args& args,
-                                                const std::string& name);
-// "1,2,4" -> {1, 2, 4}: positive integers.
-absl::StatusOr<std::vector<int>> ParseIntList(const std::string& text, const std::string& name);
+// --target T: the server address, or a comma list (SplitTargets).
+CLI::Option* AddTargetOption(CLI::App* app, std::string* target, const std::string& description);
+
+// The options of the commands that make one call per target: --target (a
+// comma list: every target is asked) and --timeout.
+struct CallFlags {
+  std::string target;
+  std::optional<absl::Duration> timeout;
+};
+void AddCallOptions(CLI::App* app, CallFlags* flags, const std::string& default_timeout);
+struct CallSetup {
+  std::vector<std::string> targets;
+  absl::Duration timeout;
+};
+// INVALID_ARGUMENT for a bad target list.
+absl::StatusOr<CallSetup> ParseCallSetup(const CallFlags& flags, absl::Duration default_timeout);
 
 // Transport security and credentials of every channel MakeChannel builds:
 // TLS when ca_pem is set (cert/key: a client certificate for mutual TLS), a
@@ -53,16 +57,28 @@ struct Security {
   std::string key_pem;
   std::string token;
 };
-// Takes --ca FILE, --cert FILE, --key FILE and --token-file FILE (also
-// --name=FILE) out of `args` (options before a "--" only) and reads the
-// files; the token comes from --token-file or else the environment variable
-// LANE_TOKEN. INVALID_ARGUMENT on a missing value or an unreadable file.
+// The files the security options name.
+struct SecurityFlags {
+  std::string ca;
+  std::string cert;
+  std::string key;
+  std::string token_file;
+};
+// --ca FILE, --cert FILE, --key FILE and --token-file FILE on the program's
+// app: subcommands pass them up (fallthrough), so they are accepted after
+// any command, anywhere before a "--".
+void AddSecurityOptions(CLI::App& app, SecurityFlags* flags);
+// Reads the files; the token comes from --token-file or else the
+// environment variable LANE_TOKEN. INVALID_ARGUMENT on an unreadable file
+// or options that do not go together.
+absl::StatusOr<Security> LoadSecurity(const SecurityFlags& flags);
+// The security options taken out of `args` (options before a "--" only,
+// also --name=FILE), the rest left in order, and LoadSecurity: for callers
+// that parse the rest themselves. INVALID_ARGUMENT on a missing value too.
 absl::StatusOr<Security> TakeSecurityOptions(std::vector<std::string>& args);
 // The security of the channels built from now on (default: plaintext, no
 // token).
 void SetSecurity(Security security);
-// The usage text of the options above.
-extern const char kSecurityUsage[];
 
 // --target: "host:port", "dns:///name[:port]", or a comma list "a:1,b:2".
 // A gRPC URI with its own address list ("ipv4:a:1,b:2", "ipv6:...") is kept

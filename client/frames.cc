@@ -13,7 +13,7 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "inputs.h"
+#include "cli/inputs.h"
 
 namespace lane_client {
 namespace {

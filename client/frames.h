@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "inputs.h"
+#include "cli/inputs.h"
 #include "lane/v1/lane_service.pb.h"
 
 namespace lane_client {

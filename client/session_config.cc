@@ -2,41 +2,54 @@
 
 #include <string>
 
-#include "cli_config.h"
+#include "cli/cli_config.h"
 #include "lane/config.h"
 #include "wire/config_proto.h"
 
 namespace lane_client {
 
-std::vector<lane_tools::OptionSpec> SessionConfigOptionSpecs() {
-  return {{"config"}, {"mode"}, {"backpressure"}, {"session-inflight"}};
+void AddSessionConfigOptions(CLI::App* app, SessionConfigFlags* flags) {
+  const std::string group = "Session";
+  lane_tools::AddOptional(app, "--config", &flags->config,
+                          "session config: the JSON format of `lane` (docs/config.md)")
+      ->type_name("FILE")
+      ->group(group);
+  lane_tools::OneOf(
+      lane_tools::AddOptional(app, "--mode", &flags->mode, "detector mode instead of the config's"),
+      {"all", "two"})
+      ->group(group);
+  lane_tools::OneOf(lane_tools::AddOptional(app, "--backpressure", &flags->backpressure,
+                                            "what the server does at the stream's in-flight bound"),
+                    {"block", "drop_oldest"})
+      ->group(group);
+  lane_tools::AddOptional(app, "--max-inflight-frames,--session-inflight",
+                          &flags->max_inflight_frames,
+                          "the session's bound on a stream's frames in flight in the server")
+      ->type_name("N")
+      ->check(lane_tools::Between(1, 1 << 20))
+      ->default_str("the server's --max_inflight_frames")
+      ->group(group);
 }
 
-absl::StatusOr<std::optional<lane::v1::SessionConfig>> SessionConfigFromArgs(
-    const lane_tools::Args& args, bool required) {
-  const auto mode = args.GetChoice("mode", {"all", "two"});
-  if (!mode.ok()) return mode.status();
-  const auto backpressure = args.GetChoice("backpressure", {"block", "drop_oldest"});
-  if (!backpressure.ok()) return backpressure.status();
-  const auto inflight = args.GetInt("session-inflight", 1, 1 << 20);
-  if (!inflight.ok()) return inflight.status();
-  const std::optional<std::string> path = args.Get("config");
-  if (!required && !path && !*mode) {
-    if (*backpressure || *inflight) {
-      return absl::InvalidArgumentError("--backpressure and --session-inflight need --config");
+absl::StatusOr<std::optional<lane::v1::SessionConfig>> SessionConfigFromFlags(
+    const SessionConfigFlags& flags, bool required) {
+  if (!required && !flags.config && !flags.mode) {
+    if (flags.backpressure || flags.max_inflight_frames) {
+      return absl::InvalidArgumentError("--backpressure and --max-inflight-frames need --config");
     }
     return std::optional<lane::v1::SessionConfig>();
   }
-  absl::StatusOr<lane::Config> config = lane_tools::LoadEffectiveConfig(path, *mode);
+  absl::StatusOr<lane::Config> config = lane_tools::LoadEffectiveConfig(flags.config, flags.mode);
   if (!config.ok()) return config.status();
   lane::v1::SessionConfig proto;
   lane::wire::ConfigToProto(*config, &proto);
   lane::v1::StreamOptions* stream = proto.mutable_stream();
-  if (*backpressure) {
-    stream->set_backpressure(**backpressure == "drop_oldest" ? lane::v1::BACKPRESSURE_DROP_OLDEST
-                                                             : lane::v1::BACKPRESSURE_BLOCK);
+  if (flags.backpressure) {
+    stream->set_backpressure(*flags.backpressure == "drop_oldest"
+                                 ? lane::v1::BACKPRESSURE_DROP_OLDEST
+                                 : lane::v1::BACKPRESSURE_BLOCK);
   }
-  if (*inflight) stream->set_max_inflight_frames(static_cast<uint32_t>(**inflight));
+  if (flags.max_inflight_frames) stream->set_max_inflight_frames(*flags.max_inflight_frames);
   return std::optional<lane::v1::SessionConfig>(std::move(proto));
 }
 

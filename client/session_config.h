@@ -4,33 +4,33 @@
 #ifndef LANE_CLIENT_SESSION_CONFIG_H_
 #define LANE_CLIENT_SESSION_CONFIG_H_
 
+#include <cstdint>
 #include <optional>
-#include <vector>
+#include <string>
 
 #include "absl/status/statusor.h"
-#include "args.h"
+#include "cli/command_line.h"
 #include "lane/v1/lane_service.pb.h"
 
 namespace lane_client {
 
-// --config FILE, --mode all|two, --backpressure block|drop_oldest,
-// --session-inflight N.
-std::vector<lane_tools::OptionSpec> SessionConfigOptionSpecs();
+struct SessionConfigFlags {
+  std::optional<std::string> config;
+  std::optional<std::string> mode;
+  std::optional<std::string> backpressure;
+  std::optional<uint32_t> max_inflight_frames;
+};
 
-inline constexpr char kSessionConfigUsage[] =
-    "  --config FILE        session config: the JSON format of `lane` (docs/config.md)\n"
-    "  --mode all|two       detector mode instead of the config's\n"
-    "  --backpressure block|drop_oldest\n"
-    "                       what the server does at the stream's in-flight bound\n"
-    "  --session-inflight N the session's bound on a stream's frames in flight\n"
-    "                       (default: the server's --max_inflight_frames)\n";
+// --config FILE, --mode all|two, --backpressure block|drop_oldest,
+// --max-inflight-frames N (old spelling --session-inflight).
+void AddSessionConfigOptions(CLI::App* app, SessionConfigFlags* flags);
 
 // The SessionConfig the options describe: the config file (or the defaults)
 // loaded with lane::LoadConfigFile and converted field by field
-// (lane::server::ConfigToProto), plus the stream options. nullopt when none
+// (lane::wire::ConfigToProto), plus the stream options. nullopt when none
 // of the options is given and `required` is false.
-absl::StatusOr<std::optional<lane::v1::SessionConfig>> SessionConfigFromArgs(
-    const lane_tools::Args& args, bool required);
+absl::StatusOr<std::optional<lane::v1::SessionConfig>> SessionConfigFromFlags(
+    const SessionConfigFlags& flags, bool required);
 
 }  // namespace lane_client
 

@@ -13,11 +13,12 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
+#include "cli/inputs.h"
+#include "cli/overlay.h"
 #include "commands.h"
 #include "common.h"
 #include "frames.h"
 #include "lane/detector.h"
-#include "overlay.h"
 #include "results.h"
 #include "session_config.h"
 #include "streamer.h"
@@ -28,9 +29,7 @@ namespace {
 
 namespace v1 = lane::v1;
 
-constexpr char kUsage[] =
-    "usage: lane-client stream [options] INPUT...\n"
-    "\n"
+constexpr char kDescription[] =
     "Streams the frames of INPUT to the service as one camera and writes one\n"
     "JSON object per frame, in input order (JSON Lines, schema 1: docs/client.md).\n"
     "INPUT is a directory (its .jpg/.jpeg/.png files, sorted), a list file (.txt,\n"
@@ -39,41 +38,27 @@ constexpr char kUsage[] =
     "\n"
     "If the stream breaks (server restart, UNAVAILABLE, lost connection), the\n"
     "client reconnects with backoff, re-creates the session and resends every\n"
-    "unanswered frame: each frame appears exactly once in the output.\n"
-    "\n"
-    "options:\n"
-    "  --target T           server address (default 127.0.0.1:50051)\n"
-    "  --camera ID          camera id of the session (default \"default\")\n"
-    "%s"
-    "  --replace            replace a session of the camera with a different config\n"
-    "  --raw                decode image files here and send raw BGR pixels\n"
-    "  --output FILE        write the results to FILE instead of stdout\n"
-    "  --overlay DIR        also write DIR/STEM.png and DIR/STEM_ipm.png per frame\n"
-    "  --inflight K         frames sent and not answered, at most (default 8)\n"
-    "  --retry-timeout D    give up when no frame is answered for D (default 60s)\n"
-    "  --stall-timeout D    reconnect when frames are in flight and nothing comes\n"
-    "                       back for D (default 30s)\n"
-    "  -h, --help           show this help\n"
-    "\n"
+    "unanswered frame: each frame appears exactly once in the output.";
+
+constexpr char kFooter[] =
     "Without --config the camera's session must exist on the server; its config\n"
     "is read once and used to re-create it after a restart.\n"
     "Exit status: 0 when every frame was answered OK, 1 otherwise, 2 for a bad\n"
-    "command line.\n";
+    "command line.";
 
-std::string Usage() {
-  static const std::string usage = [] {
-    char buffer[4096];
-    std::snprintf(buffer, sizeof(buffer), kUsage, kSessionConfigUsage);
-    return std::string(buffer);
-  }();
-  return usage;
-}
-
-std::string UniqueStem(const std::string& stem, std::set<std::string>& used) {
-  std::string candidate = stem;
-  for (int i = 2; !used.insert(candidate).second; ++i) candidate = absl::StrCat(stem, "-", i);
-  return candidate;
-}
+struct StreamFlags {
+  std::string target;
+  std::string camera = "default";
+  SessionConfigFlags session;
+  bool replace = false;
+  bool raw = false;
+  std::optional<std::string> output;
+  std::optional<std::string> overlay;
+  size_t window = StreamerOptions().window;
+  std::optional<absl::Duration> retry_timeout;
+  std::optional<absl::Duration> stall_timeout;
+  std::vector<std::string> inputs;
+};
 
 // Draws the overlays of one answered frame with a detector built from the
 // session's resolved config (the ROI, the horizon and the top view).
@@ -97,20 +82,8 @@ class OverlayWriter {
     const cv::Mat frame = DecodeRequestImage(*item.request);
     if (frame.empty()) return "cannot decode the frame for the overlay";
     const lane::Detection detection = DetectionFromResponse(response);
-    const std::string stem = UniqueStem(item.stem, used_);
-    const std::string image_path = (dir_ / (stem + ".png")).string();
-    const std::string ipm_path = (dir_ / (stem + "_ipm.png")).string();
-    try {
-      if (!cv::imwrite(image_path, lane_tools::DrawLanesOnImage(frame, detection, *detector_))) {
-        return absl::StrCat("cannot write ", image_path);
-      }
-      if (!cv::imwrite(ipm_path, lane_tools::DrawIpmView(frame, detection, *detector_))) {
-        return absl::StrCat("cannot write ", ipm_path);
-      }
-    } catch (const cv::Exception& e) {
-      return absl::StrCat("cannot write overlay ", image_path, ": ", e.what());
-    }
-    return "";
+    return lane_tools::WriteOverlays(dir_, lane_tools::UniqueStem(item.stem, used_), frame,
+                                     detection, *detector_);
   }
 
  private:
@@ -120,73 +93,11 @@ class OverlayWriter {
   std::set<std::string> used_;
 };
 
-}  // namespace
-
-int RunStream(const std::vector<std::string>& argv) {
-  const std::string usage = Usage();
-  std::vector<lane_tools::OptionSpec> specs = SessionConfigOptionSpecs();
-  for (const char* name :
-       {"target", "camera", "output", "overlay", "inflight", "retry-timeout", "stall-timeout"}) {
-    specs.push_back({name});
-  }
-  specs.push_back({"replace", false});
-  specs.push_back({"raw", false});
-  const absl::StatusOr<lane_tools::Args> args = lane_tools::Args::Parse(argv, specs);
-  if (!args.ok()) return UsageError("stream", std::string(args.status().message()), usage.c_str());
-  if (args->help()) {
-    std::fputs(usage.c_str(), stdout);
-    return kExitOk;
-  }
-  if (args->positional().empty()) return UsageError("stream", "no INPUT given", usage.c_str());
-  const auto inflight = args->GetInt("inflight", 1, 4096);
-  const auto retry = GetDuration(*args, "retry-timeout");
-  const auto stall = GetDuration(*args, "stall-timeout");
-  for (const absl::Status& s : {inflight.status(), retry.status(), stall.status()}) {
-    if (!s.ok()) return UsageError("stream", std::string(s.message()), usage.c_str());
-  }
-  const auto targets = SplitTargets(args->Get("target").value_or(kDefaultTarget));
-  if (!targets.ok()) {
-    return UsageError("stream", std::string(targets.status().message()), usage.c_str());
-  }
-  if (targets->size() != 1) {
-    return UsageError("stream", "stream takes one --target (use a dns:/// name to balance)",
-                      usage.c_str());
-  }
-  absl::StatusOr<std::optional<v1::SessionConfig>> session = SessionConfigFromArgs(*args, false);
-  if (!session.ok()) return Failure("stream", std::string(session.status().message()));
-
-  StreamerOptions options;
-  options.camera_id = args->Get("camera").value_or("default");
-  options.session = *session;
-  options.replace = args->Has("replace");
-  if (*inflight) options.window = static_cast<size_t>(**inflight);
-  if (*retry) options.give_up_after = **retry;
-  if (*stall) options.stall_timeout = **stall;
-  const bool raw = args->Has("raw");
-
-  std::ofstream file;
-  if (const auto output = args->Get("output")) {
-    if (!lane_tools::OpenOutputFile(*output, &file)) {
-      return Failure("stream", absl::StrCat("cannot write ", *output));
-    }
-  }
-  std::ostream& out = file.is_open() ? static_cast<std::ostream&>(file) : std::cout;
-
-  std::unique_ptr<OverlayWriter> overlays;
-  if (const auto overlay = args->Get("overlay")) {
-    std::error_code ec;
-    std::filesystem::create_directories(*overlay, ec);
-    if (ec || !std::filesystem::is_directory(*overlay)) {
-      return Failure("stream", absl::StrCat("cannot create overlay folder ", *overlay));
-    }
-    overlays = std::make_unique<OverlayWriter>(*overlay);
-  }
-
-  FrameSource frames(args->positional(), raw);
-  const std::string camera_id = options.camera_id;
-  const Streamer::Source source = [&frames, &camera_id](StreamItem* item) {
+// The streamer's frames: read from the inputs, as requests of the camera.
+Streamer::Source MakeSource(FrameSource* frames, const std::string& camera_id) {
+  return [frames, camera_id](StreamItem* item) {
     ClientFrame frame;
-    if (!frames.Next(&frame)) return false;
+    if (!frames->Next(&frame)) return false;
     item->name = frame.name;
     item->stem = frame.stem;
     if (!frame.error.empty()) {
@@ -202,46 +113,135 @@ int RunStream(const std::vector<std::string>& argv) {
     item->request = std::move(request);
     return true;
   };
+}
 
-  Streamer streamer(MakeChannel(targets->front()), options,
-                    [](const std::string& message) { Note("stream", message); });
-  uint64_t ok = 0;
-  uint64_t failed = 0;
-  bool overlay_failed = false;
-  const Streamer::Sink sink = [&](const StreamItem& item, const v1::FrameResponse* response,
-                                  double latency_ms) {
+// Where the answers go: the results, the overlays, the counts.
+class StreamSink {
+ public:
+  StreamSink(std::ostream& out, const std::string& camera_id, OverlayWriter* overlays,
+             const Streamer& streamer)
+      : out_(out), camera_id_(camera_id), overlays_(overlays), streamer_(streamer) {}
+
+  void operator()(const StreamItem& item, const v1::FrameResponse* response, double latency_ms) {
     if (response == nullptr) {
-      ++failed;
+      ++failed_;
       Note("stream", absl::StrCat(item.name, ": ", item.local_error));
-      out << ClientErrorJsonLine(item.name, camera_id, item.frame_id, item.local_error) << '\n';
+      out_ << ClientErrorJsonLine(item.name, camera_id_, item.frame_id, item.local_error) << '\n';
     } else {
-      out << ResponseJsonLine(item.name, *response, latency_ms, item.attempts) << '\n';
+      out_ << ResponseJsonLine(item.name, *response, latency_ms, item.attempts) << '\n';
       if (response->status().code() == v1::FRAME_CODE_OK) {
-        ++ok;
-        if (overlays) {
-          const std::string error = overlays->Write(item, *response, streamer.session());
+        ++ok_;
+        if (overlays_ != nullptr) {
+          const std::string error = overlays_->Write(item, *response, streamer_.session());
           if (!error.empty()) {
-            overlay_failed = true;
+            overlay_failed_ = true;
             Note("stream", absl::StrCat(item.name, ": ", error));
           }
         }
       } else {
-        ++failed;
+        ++failed_;
         Note("stream", absl::StrCat(item.name, ": ", FrameCodeName(response->status().code()), ": ",
                                     response->status().message()));
       }
     }
-    out.flush();
-  };
+    out_.flush();
+  }
 
-  const absl::Status status = streamer.Run(source, sink);
+  uint64_t ok() const { return ok_; }
+  uint64_t failed() const { return failed_; }
+  bool overlay_failed() const { return overlay_failed_; }
+
+ private:
+  std::ostream& out_;
+  const std::string camera_id_;
+  OverlayWriter* const overlays_;
+  const Streamer& streamer_;
+  uint64_t ok_ = 0;
+  uint64_t failed_ = 0;
+  bool overlay_failed_ = false;
+};
+
+int RunStream(const CLI::App& app, const StreamFlags& flags) {
+  if (flags.inputs.empty()) return lane_tools::UsageError(app, "no INPUT given");
+  const auto targets = SplitTargets(flags.target);
+  if (!targets.ok()) return lane_tools::UsageError(app, std::string(targets.status().message()));
+  if (targets->size() != 1) {
+    return lane_tools::UsageError(app, "stream takes one --target (use a dns:/// name to balance)");
+  }
+  absl::StatusOr<std::optional<v1::SessionConfig>> session =
+      SessionConfigFromFlags(flags.session, false);
+  if (!session.ok()) return Failure("stream", std::string(session.status().message()));
+
+  StreamerOptions options;
+  options.camera_id = flags.camera;
+  options.session = *session;
+  options.replace = flags.replace;
+  options.window = flags.window;
+  if (flags.retry_timeout) options.give_up_after = *flags.retry_timeout;
+  if (flags.stall_timeout) options.stall_timeout = *flags.stall_timeout;
+
+  std::ofstream file;
+  if (flags.output && !lane_tools::OpenOutputFile(*flags.output, &file)) {
+    return Failure("stream", absl::StrCat("cannot write ", *flags.output));
+  }
+  std::ostream& out = file.is_open() ? static_cast<std::ostream&>(file) : std::cout;
+  std::unique_ptr<OverlayWriter> overlays;
+  if (const auto& overlay = flags.overlay) {
+    std::error_code ec;
+    std::filesystem::create_directories(*overlay, ec);
+    if (ec || !std::filesystem::is_directory(*overlay)) {
+      return Failure("stream", absl::StrCat("cannot create overlay folder ", *overlay));
+    }
+    overlays = std::make_unique<OverlayWriter>(*overlay);
+  }
+
+  FrameSource frames(flags.inputs, flags.raw);
+  Streamer streamer(MakeChannel(targets->front()), options,
+                    [](const std::string& message) { Note("stream", message); });
+  StreamSink sink(out, options.camera_id, overlays.get(), streamer);
+  const absl::Status status =
+      streamer.Run(MakeSource(&frames, options.camera_id),
+                   [&sink](const StreamItem& item, const v1::FrameResponse* response,
+                           double latency_ms) { sink(item, response, latency_ms); });
   const StreamerStats& stats = streamer.stats();
   Note("stream",
-       absl::StrCat(stats.frames, " frames: ", ok, " ok, ", failed, " failed; ", stats.connections,
-                    " connection(s), ", stats.resent, " frame(s) resent"));
+       absl::StrCat(stats.frames, " frames: ", sink.ok(), " ok, ", sink.failed(), " failed; ",
+                    stats.connections, " connection(s), ", stats.resent, " frame(s) resent"));
   if (!status.ok()) return Failure("stream", std::string(status.message()));
   if (!out) return Failure("stream", "error writing the results");
-  return failed > 0 || overlay_failed ? kExitFailure : kExitOk;
+  return sink.failed() > 0 || sink.overlay_failed() ? kExitFailure : kExitOk;
+}
+
+}  // namespace
+
+Command AddStreamCommand(CLI::App& client) {
+  auto flags = std::make_shared<StreamFlags>();
+  CLI::App* app = lane_tools::AddCommand(
+      client, "stream", "frames of files or videos in, JSON Lines out", kDescription, kFooter);
+  AddTargetOption(app, &flags->target, "server address");
+  app->add_option("--camera", flags->camera, "camera id of the session")->type_name("ID");
+  AddSessionConfigOptions(app, &flags->session);
+  app->add_flag("--replace", flags->replace,
+                "replace a session of the camera with a different config");
+  app->add_flag("--raw", flags->raw, "decode image files here and send raw BGR pixels");
+  lane_tools::AddOptional(app, "--output", &flags->output,
+                          "write the results to FILE instead of stdout")
+      ->type_name("FILE");
+  lane_tools::AddOptional(app, "--overlay", &flags->overlay,
+                          "also write DIR/STEM.png and DIR/STEM_ipm.png per frame")
+      ->type_name("DIR");
+  app->add_option("--window,--inflight", flags->window,
+                  "frames sent and not answered, at most (the client's window; the server's "
+                  "bound is --max-inflight-frames)")
+      ->type_name("K")
+      ->check(lane_tools::Between(1, 4096));
+  lane_tools::AddDuration(app, "--retry-timeout", &flags->retry_timeout,
+                          "give up when no frame is answered for D", "60s");
+  lane_tools::AddDuration(app, "--stall-timeout", &flags->stall_timeout,
+                          "reconnect when frames are in flight and nothing comes back for D",
+                          "30s");
+  app->add_option("INPUT", flags->inputs, "image files, directories, list files or videos");
+  return {app, [app, flags] { return RunStream(*app, *flags); }};
 }
 
 }  // namespace lane_client

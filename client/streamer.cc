@@ -1,7 +1,6 @@
 #include "streamer.h"
 
 #include <algorithm>
-#include <random>
 #include <thread>
 #include <utility>
 
@@ -83,8 +82,7 @@ grpc::Status Streamer::PrepareSession(bool first_connection) {
 }
 
 absl::Status Streamer::Run(const Source& source, const Sink& sink) {
-  std::mt19937_64 rng(std::random_device{}());
-  absl::Duration backoff = options_.initial_backoff;
+  ReconnectBackoff backoff(options_.reconnect);
   auto last_progress = Clock::now();
   bool first_connection = true;
   while (true) {
@@ -107,7 +105,7 @@ absl::Status Streamer::Run(const Source& source, const Sink& sink) {
       status = grpc::Status(grpc::StatusCode::UNKNOWN, "the stream ended with frames unanswered");
     }
     if (progress) {
-      backoff = options_.initial_backoff;
+      backoff.Reset();
       last_progress = Clock::now();
     }
     const std::string why = StatusText(status);
@@ -125,13 +123,11 @@ absl::Status Streamer::Run(const Source& source, const Sink& sink) {
       std::lock_guard<std::mutex> lock(mu_);
       unanswered = unanswered_;
     }
-    std::uniform_real_distribution<double> jitter(0.8, 1.2);
-    const absl::Duration wait = backoff * jitter(rng);
+    const absl::Duration wait = backoff.Next();
     Log(absl::StrCat(why, "; reconnecting in ",
                      absl::FormatDuration(absl::Trunc(wait, absl::Milliseconds(1))), " (",
                      unanswered, " frames to resend)"));
     std::this_thread::sleep_for(absl::ToChronoNanoseconds(wait));
-    backoff = std::min(backoff * 2, options_.max_backoff);
   }
 }
 
@@ -149,6 +145,28 @@ void Streamer::EmitLocalErrors(const Sink& sink) {
     sink(*item, nullptr, 0.0);
     ++stats_.frames;
   }
+}
+
+std::string Streamer::TakeAnswered(uint64_t frame_id, Clock::time_point now,
+                                   std::vector<std::shared_ptr<StreamItem>>* ready) {
+  std::lock_guard<std::mutex> lock(mu_);
+  while (!pending_.empty() && pending_.front()->request == nullptr && passed_ > 0) {
+    ready->push_back(std::move(pending_.front()));
+    pending_.pop_front();
+    --passed_;
+  }
+  if (pending_.empty() || passed_ == 0 || written_ == 0 || pending_.front()->frame_id != frame_id) {
+    return absl::StrCat(
+        "response for frame_id ", frame_id, " but the oldest unanswered frame is ",
+        pending_.empty() ? std::string("none") : absl::StrCat(pending_.front()->frame_id));
+  }
+  ready->push_back(std::move(pending_.front()));
+  pending_.pop_front();
+  --passed_;
+  --unanswered_;
+  --written_;
+  last_activity_ = now;
+  return "";
 }
 
 grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* progress) {
@@ -172,27 +190,7 @@ grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* 
   while (stream->Read(&response)) {
     const auto now = Clock::now();
     std::vector<std::shared_ptr<StreamItem>> ready;
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      while (!pending_.empty() && pending_.front()->request == nullptr && passed_ > 0) {
-        ready.push_back(std::move(pending_.front()));
-        pending_.pop_front();
-        --passed_;
-      }
-      if (pending_.empty() || passed_ == 0 || written_ == 0 ||
-          pending_.front()->frame_id != response.frame_id()) {
-        protocol_error = absl::StrCat(
-            "response for frame_id ", response.frame_id(), " but the oldest unanswered frame is ",
-            pending_.empty() ? std::string("none") : absl::StrCat(pending_.front()->frame_id));
-      } else {
-        ready.push_back(std::move(pending_.front()));
-        pending_.pop_front();
-        --passed_;
-        --unanswered_;
-        --written_;
-        last_activity_ = now;
-      }
-    }
+    protocol_error = TakeAnswered(response.frame_id(), now, &ready);
     cv_.notify_all();
     if (!protocol_error.empty()) break;
     for (size_t i = 0; i < ready.size(); ++i) {

@@ -29,6 +29,7 @@
 #include "absl/status/status.h"
 #include "absl/time/time.h"
 #include "lane/v1/lane_service.grpc.pb.h"
+#include "reconnect_backoff.h"
 
 namespace lane_client {
 
@@ -55,9 +56,9 @@ struct StreamerOptions {
   // Frames sent and not answered, at most.
   size_t window = 8;
   uint64_t first_frame_id = 0;
-  // Reconnection backoff: doubles from initial to max, +-20 % jitter.
-  absl::Duration initial_backoff = absl::Milliseconds(100);
-  absl::Duration max_backoff = absl::Seconds(2);
+  // Reconnection backoff (reconnect_backoff.h): doubles from 100 ms to 2 s,
+  // +-20 % jitter, from the start again once a frame is answered.
+  ReconnectSchedule reconnect;
   // Give up when no frame has been answered for this long across failures.
   absl::Duration give_up_after = absl::Seconds(60);
   // A call with frames in flight and no response for this long is cancelled
@@ -103,6 +104,11 @@ class Streamer {
   grpc::Status PrepareSession(bool first_connection);
   // One StreamFrames call. `progress`: some frame was answered.
   grpc::Status RunAttempt(const Source& source, const Sink& sink, bool* progress);
+  // Moves the frames a response for `frame_id` answers (local errors before
+  // it, then its own) from pending_ to `ready`; a protocol error message
+  // when it answers no frame in flight, else "".
+  std::string TakeAnswered(uint64_t frame_id, Clock::time_point now,
+                           std::vector<std::shared_ptr<StreamItem>>* ready);
   void WriterLoop(Stream* stream, const Source& source);
   void WatchdogLoop(grpc::ClientContext* context);
   void EmitLocalErrors(const Sink& sink);

@@ -229,7 +229,7 @@ class StreamLoop(threading.Thread):
             cmd = [self.client, "stream", "--target", target,
                    "--camera", "cluster-stream-%d" % self.index,
                    "--config", os.path.join(REPO, "configs", "synthetic.json"),
-                   "--inflight", "2", "--retry-timeout", "30s", "--stall-timeout", "10s",
+                   "--window", "2", "--retry-timeout", "30s", "--stall-timeout", "10s",
                    "--output", output, self.list_file]
             started = time.monotonic()
             with open(errlog, "w") as err:
@@ -298,7 +298,7 @@ def main():
     # Frames for the streams: rendered JPEGs, listed frames_per_run times in all.
     frames_dir = os.path.join(out, "frames")
     subprocess.run([bins["lane"], "render", "--config", os.path.join(REPO, "configs", "synthetic.json"),
-                    "--count", "20", "--seed", "7", "--format", "jpg", "--out", frames_dir],
+                    "--count", "20", "--seed", "7", "--format", "jpg", "--output", frames_dir],
                    check=True, stdout=subprocess.DEVNULL)
     files = sorted(f for f in os.listdir(frames_dir) if f.endswith(".jpg"))
     names = [files[i % len(files)] for i in range(args.frames_per_run)]

@@ -54,8 +54,8 @@ run() {  # run NAME ARGS...: one bench, JSON report in $OUT/NAME.json
 
 # 1 and 3: maximum throughput (closed loop), JPEG with the in-process
 # reference, then raw.
-run jpeg-closed --cameras "$CAMERAS" --inflight "$INFLIGHT" --inprocess
-run raw-closed --cameras "$CAMERAS" --inflight "$INFLIGHT" --raw --inprocess
+run jpeg-closed --cameras "$CAMERAS" --window "$INFLIGHT" --inprocess
+run raw-closed --cameras "$CAMERAS" --window "$INFLIGHT" --raw --inprocess
 # 2: open loop at half the maximum JPEG throughput, spread over OPEN_CAMERAS.
 MAX=$(field "$OUT/jpeg-closed.json" "r['runs'][0]['achieved_fps']")
 PER_CAMERA=$(/usr/bin/python3 -c "print(round($MAX / 2 / $OPEN_CAMERAS, 2))")

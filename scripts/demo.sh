@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 OUT=out/demo
 PORT=${LANE_DEMO_PORT:-50551}
 rm -rf "$OUT" && mkdir -p "$OUT"
-build/tools/lane render --config configs/synthetic.json --count 20 --seed 1 --out "$OUT/frames" --format jpg
+build/tools/lane render --config configs/synthetic.json --count 20 --seed 1 --output "$OUT/frames" --format jpg
 
 build/server/lane-server --address="127.0.0.1:$PORT" --metrics_address= \
   --default_config=configs/synthetic.json > "$OUT/server.log" 2>&1 &

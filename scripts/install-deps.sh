@@ -10,6 +10,7 @@ PACKAGES=(
   libpng-dev zlib1g-dev  # decode/: PNG frames inflated only as far as their rows need
   libeigen3-dev          # linear algebra: Bezier least squares, TLS line fits
   libabsl-dev            # absl::Status/StatusOr, flags, strings
+  libcli11-dev           # command lines of lane and lane-client (header-only, CLI11 2.1)
   nlohmann-json3-dev     # config files and JSON Lines results
   libgtest-dev libgmock-dev   # unit and integration tests
   libbenchmark-dev       # benchmarks

@@ -58,7 +58,7 @@ until "$CLIENT" health --target "$TARGET" >/dev/null 2>&1; do
 done
 
 echo "soak: probing the maximum throughput for $PROBE (closed loop)" >&2
-"$CLIENT" bench --target "$TARGET" --cameras 2 --inflight 4 --warmup 2s --duration "$PROBE" \
+"$CLIENT" bench --target "$TARGET" --cameras 2 --window 4 --warmup 2s --duration "$PROBE" \
   --json --output "$OUT/probe.json"
 PER_CAMERA=$($PY -c "import json,sys; r=json.load(open(sys.argv[1]))['runs'][0]; \
 print(round(r['achieved_fps'] * $HALF / 100 / $CAMERAS, 3))" "$OUT/probe.json")

@@ -1,34 +1,6 @@
 # End-to-end test of the `lane` command, run by ctest as
 #   cmake -DLANE=<lane binary> -DSRC=<source dir> -DOUT=<scratch dir> -P cli_test.cmake
-foreach(var LANE SRC OUT)
-  if(NOT DEFINED ${var})
-    message(FATAL_ERROR "cli_test.cmake needs -D${var}=...")
-  endif()
-endforeach()
-
-file(REMOVE_RECURSE "${OUT}")
-file(MAKE_DIRECTORY "${OUT}")
-set(CONFIG "${SRC}/configs/synthetic.json")
-
-# run(<expected exit code> <name> args...): runs lane, keeps stdout/stderr in
-# ${name}_out / ${name}_err, fails unless the exit code is the expected one
-# (a crash reports a signal name instead of a number).
-macro(run expected name)
-  execute_process(COMMAND "${LANE}" ${ARGN}
-                  RESULT_VARIABLE ${name}_rc OUTPUT_VARIABLE ${name}_out
-                  ERROR_VARIABLE ${name}_err TIMEOUT 240)
-  if(NOT "${${name}_rc}" STREQUAL "${expected}")
-    message(FATAL_ERROR "lane ${ARGN}\nexit: ${${name}_rc} (expected ${expected})\n"
-                        "stdout:\n${${name}_out}\nstderr:\n${${name}_err}")
-  endif()
-endmacro()
-
-macro(expect_contains text part what)
-  string(FIND "${text}" "${part}" _pos)
-  if(_pos EQUAL -1)
-    message(FATAL_ERROR "${what}: expected to contain '${part}', got:\n${text}")
-  endif()
-endmacro()
+include(${CMAKE_CURRENT_LIST_DIR}/cli_test_common.cmake)
 
 # --- help and usage errors -------------------------------------------------
 run(0 help --help)
@@ -38,6 +10,13 @@ expect_contains("${detect_help_out}" "--overlay" "lane detect --help")
 run(2 bad_option detect --config "${CONFIG}" --no-such-option x.png)
 expect_contains("${bad_option_err}" "usage: lane detect" "unknown option")
 run(2 bad_command frobnicate)
+run(2 no_command)
+run(0 version --version)
+expect_contains("${version_out}" "lane 0." "lane --version")
+run(2 bad_mode detect --config "${CONFIG}" --mode three x.png)
+run(2 bad_seed detect --config "${CONFIG}" --seed -1 x.png)
+run(2 no_input detect --config "${CONFIG}")
+run(2 bad_count render --config "${CONFIG}" --count 0 --output "${OUT}/none")
 
 # --- config ----------------------------------------------------------------
 run(0 config config --config "${CONFIG}" --mode two)
@@ -47,12 +26,17 @@ run(1 typo config --config "${OUT}/typo.json")
 expect_contains("${typo_err}" "detector.hough.min_peek" "config with a typo")
 
 # --- render 3 frames, detect them with overlays ----------------------------
-run(0 render render --config "${CONFIG}" --count 3 --seed 7 --out "${OUT}/frames")
+run(0 render render --config "${CONFIG}" --count 3 --seed 7 --output "${OUT}/frames")
 foreach(f 000000.png 000001.png 000002.png labels.jsonl list.txt)
   if(NOT EXISTS "${OUT}/frames/${f}")
     message(FATAL_ERROR "lane render did not write ${f}")
   endif()
 endforeach()
+# The old spelling --out is an alias of --output.
+run(0 render_out render --config "${CONFIG}" --count 1 --out "${OUT}/frames-out")
+if(NOT EXISTS "${OUT}/frames-out/000000.png")
+  message(FATAL_ERROR "lane render --out did not write 000000.png")
+endif()
 file(STRINGS "${OUT}/frames/labels.jsonl" labels)
 list(LENGTH labels n)
 if(NOT n EQUAL 3)

@@ -5,75 +5,48 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
-#include "args.h"
-#include "cli_config.h"
+#include "cli/cli_config.h"
+#include "cli/inputs.h"
+#include "cli/overlay.h"
+#include "cli/results_json.h"
 #include "commands.h"
-#include "inputs.h"
 #include "lane/config.h"
 #include "lane/detector.h"
-#include "overlay.h"
-#include "results_json.h"
 
 namespace lane_tools {
 namespace {
 
-constexpr char kUsage[] =
-    "usage: lane detect --config CONFIG [options] INPUT...\n"
-    "\n"
+constexpr char kDescription[] =
     "Detects the lane markings of every frame and writes one JSON object per\n"
     "frame (JSON Lines, schema 1: docs/results-format.md).\n"
     "\n"
     "INPUT is an image file; a directory (its .jpg/.jpeg/.png files, sorted by\n"
     "name, not recursive); a list file (.txt: one path a line, relative paths\n"
     "resolved against the list's folder, blank lines and # comments skipped);\n"
-    "or a video (.mp4/.avi/.mkv/.mov; frames are named VIDEO#000123).\n"
-    "\n"
-    "options:\n"
-    "  --config CONFIG   JSON config file (docs/config.md), required\n"
-    "  --mode all|two    detector mode instead of the config's: the mode's\n"
-    "                    defaults, then the config's other detector keys\n"
-    "  --seed N          RANSAC seed instead of the config's detector.seed\n"
-    "  --output FILE     write the results to FILE instead of stdout\n"
-    "  --overlay DIR     also write DIR/STEM.png (lanes on the frame) and\n"
-    "                    DIR/STEM_ipm.png (lanes in the top view)\n"
-    "  -h, --help        show this help\n"
-    "\n"
+    "or a video (.mp4/.avi/.mkv/.mov; frames are named VIDEO#000123).";
+
+constexpr char kFooter[] =
     "A frame that cannot be read or processed gets a record with \"error\" and\n"
     "a message on stderr; the other frames go on. Exit status: 0 when every\n"
-    "frame was processed, 1 when some failed, 2 for a bad command line.\n";
+    "frame was processed, 1 when some failed, 2 for a bad command line.";
 
-// A stem not used yet in this run: "name", "name-2", "name-3", ...
-std::string UniqueStem(const std::string& stem, std::set<std::string>& used) {
-  std::string candidate = stem;
-  for (int i = 2; !used.insert(candidate).second; ++i) candidate = absl::StrCat(stem, "-", i);
-  return candidate;
-}
-
-// Writes both overlay pictures; an error message or "".
-std::string WriteOverlays(const std::filesystem::path& dir, const std::string& stem,
-                          const cv::Mat& frame, const lane::Detection& detection,
-                          const lane::Detector& detector) {
-  const std::string image_path = (dir / (stem + ".png")).string();
-  const std::string ipm_path = (dir / (stem + "_ipm.png")).string();
-  try {
-    if (!cv::imwrite(image_path, DrawLanesOnImage(frame, detection, detector))) {
-      return absl::StrCat("cannot write ", image_path);
-    }
-    if (!cv::imwrite(ipm_path, DrawIpmView(frame, detection, detector))) {
-      return absl::StrCat("cannot write ", ipm_path);
-    }
-  } catch (const cv::Exception& e) {
-    return absl::StrCat("cannot write overlay ", image_path, ": ", e.what());
-  }
-  return "";
-}
+struct DetectFlags {
+  std::string config;
+  std::optional<std::string> mode;
+  std::optional<uint64_t> seed;
+  std::optional<std::string> output;
+  std::optional<std::string> overlay;
+  std::vector<std::string> inputs;
+};
 
 double Median(std::vector<double> values) {
   if (values.empty()) return 0;
@@ -84,126 +57,171 @@ double Median(std::vector<double> values) {
   return 0.5 * (upper + *std::max_element(values.begin(), values.begin() + mid));
 }
 
-}  // namespace
-
-int RunDetect(const std::vector<std::string>& argv) {
-  const absl::StatusOr<Args> args =
-      Args::Parse(argv, {{"config"}, {"mode"}, {"seed"}, {"output"}, {"overlay"}});
-  if (!args.ok()) return UsageError("detect", std::string(args.status().message()), kUsage);
-  if (args->help()) {
-    std::fputs(kUsage, stdout);
-    return kExitOk;
-  }
-  if (!args->Has("config")) return UsageError("detect", "--config is required", kUsage);
-  if (args->positional().empty()) return UsageError("detect", "no INPUT given", kUsage);
-  const auto mode = args->GetChoice("mode", {"all", "two"});
-  if (!mode.ok()) return UsageError("detect", std::string(mode.status().message()), kUsage);
-  const auto seed = args->GetUint64("seed");
-  if (!seed.ok()) return UsageError("detect", std::string(seed.status().message()), kUsage);
-
-  absl::StatusOr<lane::Config> config = LoadEffectiveConfig(args->Get("config"), *mode);
-  if (!config.ok()) return Failure("detect", std::string(config.status().message()));
-  if (*seed) config->detector.seed = **seed;
-  const absl::StatusOr<lane::Detector> detector =
+// The detector of the effective config; prints the top view's scale, which
+// users need to read the IPM coordinates.
+absl::StatusOr<lane::Detector> MakeDetector(const DetectFlags& flags, lane::Config* config) {
+  absl::StatusOr<lane::Config> loaded = LoadEffectiveConfig(flags.config, flags.mode);
+  if (!loaded.ok()) return loaded.status();
+  *config = *std::move(loaded);
+  if (flags.seed) config->detector.seed = *flags.seed;
+  absl::StatusOr<lane::Detector> detector =
       lane::Detector::Create(config->camera, config->ipm, config->detector);
   if (!detector.ok()) {
-    return Failure("detect",
-                   absl::StrCat("cannot build the detector: ", detector.status().message()));
+    return absl::Status(detector.status().code(),
+                        absl::StrCat("cannot build the detector: ", detector.status().message()));
   }
-  const lane::Mode detector_mode = detector->options().mode;
-  {
-    // The top view's scale: users need it to read the IPM coordinates.
-    const lane::IpmMapping& ipm = detector->ipm();
-    std::fprintf(stderr,
-                 "lane detect: top view %dx%d px covering x %.2f..%.2f m, y %.2f..%.2f m ahead: "
-                 "%.4f m/px across, %.4f m/px along; filter sigmas %.2f x %.2f px\n",
-                 ipm.width(), ipm.height(), ipm.x_min(), ipm.x_max(), ipm.y_min(), ipm.y_max(),
-                 ipm.metres_per_px_x(), ipm.metres_per_px_y(), detector->kernels().sigma_x_px,
-                 detector->kernels().sigma_y_px);
-  }
-  const int expected_width = config->camera.image_width;
-  const int expected_height = config->camera.image_height;
+  const lane::IpmMapping& ipm = detector->ipm();
+  std::fprintf(stderr,
+               "lane detect: top view %dx%d px covering x %.2f..%.2f m, y %.2f..%.2f m ahead: "
+               "%.4f m/px across, %.4f m/px along; filter sigmas %.2f x %.2f px\n",
+               ipm.width(), ipm.height(), ipm.x_min(), ipm.x_max(), ipm.y_min(), ipm.y_max(),
+               ipm.metres_per_px_x(), ipm.metres_per_px_y(), detector->kernels().sigma_x_px,
+               detector->kernels().sigma_y_px);
+  return detector;
+}
 
-  std::ofstream file;
-  if (const auto output = args->Get("output")) {
-    if (!OpenOutputFile(*output, &file)) {
-      return Failure("detect", absl::StrCat("cannot write ", *output));
-    }
+// Creates the overlay folder; an error message or "".
+std::string MakeOverlayDir(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir)) {
+    return absl::StrCat("cannot create overlay folder ", dir,
+                        ec ? ": " + ec.message() : std::string());
   }
-  std::ostream& out = file.is_open() ? static_cast<std::ostream&>(file) : std::cout;
+  return "";
+}
 
-  std::filesystem::path overlay_dir;
-  if (const auto overlay = args->Get("overlay")) {
-    overlay_dir = *overlay;
-    std::error_code ec;
-    std::filesystem::create_directories(overlay_dir, ec);
-    if (ec || !std::filesystem::is_directory(overlay_dir)) {
-      return Failure("detect", absl::StrCat("cannot create overlay folder ", *overlay,
-                                            ec ? ": " + ec.message() : std::string()));
-    }
-  }
+// The frames of one run through the detector, their results to `out`.
+class DetectRun {
+ public:
+  DetectRun(const lane::Detector& detector, const lane::Config& config, std::ostream& out,
+            std::filesystem::path overlay_dir)
+      : detector_(detector),
+        mode_(detector.options().mode),
+        expected_width_(config.camera.image_width),
+        expected_height_(config.camera.image_height),
+        out_(out),
+        overlay_dir_(std::move(overlay_dir)) {}
 
-  int frames = 0;
-  int failures = 0;
-  bool overlay_failed = false;
-  long total_lanes = 0;
-  std::vector<double> total_ms;
-  std::set<std::string> used_stems;
-  FrameReader reader(args->positional());
-  InputFrame frame;
-  while (reader.Next(&frame)) {
-    ++frames;
+  void Process(const InputFrame& frame) {
+    ++frames_;
     std::string error = frame.error;
     absl::StatusOr<lane::Detection> detection = lane::Detection();
-    if (error.empty() && (frame.bgr.cols != expected_width || frame.bgr.rows != expected_height)) {
-      error =
-          absl::StrCat("frame is ", frame.bgr.cols, "x", frame.bgr.rows, " but the camera expects ",
-                       expected_width, "x", expected_height, " (camera.image_width/image_height)");
+    if (error.empty() &&
+        (frame.bgr.cols != expected_width_ || frame.bgr.rows != expected_height_)) {
+      error = absl::StrCat("frame is ", frame.bgr.cols, "x", frame.bgr.rows,
+                           " but the camera expects ", expected_width_, "x", expected_height_,
+                           " (camera.image_width/image_height)");
     }
     if (error.empty()) {
       try {
-        detection = detector->Detect(frame.bgr);
+        detection = detector_.Detect(frame.bgr);
         if (!detection.ok()) error = std::string(detection.status().message());
       } catch (const std::exception& e) {  // e.g. a cv::Exception: this frame fails, not the run
         error = absl::StrCat("detector error: ", e.what());
       }
     }
     if (!error.empty()) {
-      ++failures;
+      ++failures_;
       std::fprintf(stderr, "lane detect: %s: %s\n", frame.name.c_str(), error.c_str());
-      out << ErrorJsonLine(frame.name, frame.bgr.cols, frame.bgr.rows, detector_mode, error)
-          << '\n';
-      out.flush();
-      continue;
+      out_ << ErrorJsonLine(frame.name, frame.bgr.cols, frame.bgr.rows, mode_, error) << '\n';
+      out_.flush();
+      return;
     }
-    out << DetectionJsonLine(frame.name, frame.bgr.cols, frame.bgr.rows, detector_mode, *detection,
-                             frame.decode_ms)
-        << '\n';
-    out.flush();
-    total_lanes += static_cast<long>(detection->lanes.size());
-    total_ms.push_back(detection->timings.total_ms);
-
-    if (!overlay_dir.empty()) {
-      const std::string message = WriteOverlays(overlay_dir, UniqueStem(frame.stem, used_stems),
-                                                frame.bgr, *detection, *detector);
+    out_ << DetectionJsonLine(frame.name, frame.bgr.cols, frame.bgr.rows, mode_, *detection,
+                              frame.decode_ms)
+         << '\n';
+    out_.flush();
+    total_lanes_ += static_cast<long>(detection->lanes.size());
+    total_ms_.push_back(detection->timings.total_ms);
+    if (!overlay_dir_.empty()) {
+      const std::string message = WriteOverlays(overlay_dir_, UniqueStem(frame.stem, used_stems_),
+                                                frame.bgr, *detection, detector_);
       if (!message.empty()) {
-        overlay_failed = true;
+        overlay_failed_ = true;
         std::fprintf(stderr, "lane detect: %s: %s\n", frame.name.c_str(), message.c_str());
       }
     }
   }
-  if (!out) {
-    return Failure("detect", args->Has("output")
-                                 ? absl::StrCat("error writing ", *args->Get("output"))
-                                 : std::string("error writing the results to stdout"));
+
+  // The summary line on stderr and the exit status.
+  int Finish() const {
+    const int ok_frames = frames_ - failures_;
+    std::fprintf(stderr,
+                 "lane detect: %d frames, %d failed, %.2f lanes/frame, median total %.2f ms\n",
+                 frames_, failures_, ok_frames > 0 ? double(total_lanes_) / ok_frames : 0.0,
+                 Median(total_ms_));
+    if (frames_ == 0) return Failure("detect", "the inputs contain no frames");
+    return failures_ > 0 || overlay_failed_ ? kExitFailure : kExitOk;
   }
 
-  const int ok_frames = frames - failures;
-  std::fprintf(
-      stderr, "lane detect: %d frames, %d failed, %.2f lanes/frame, median total %.2f ms\n", frames,
-      failures, ok_frames > 0 ? double(total_lanes) / ok_frames : 0.0, Median(total_ms));
-  if (frames == 0) return Failure("detect", "the inputs contain no frames");
-  return failures > 0 || overlay_failed ? kExitFailure : kExitOk;
+ private:
+  const lane::Detector& detector_;
+  const lane::Mode mode_;
+  const int expected_width_;
+  const int expected_height_;
+  std::ostream& out_;
+  const std::filesystem::path overlay_dir_;
+  int frames_ = 0;
+  int failures_ = 0;
+  bool overlay_failed_ = false;
+  long total_lanes_ = 0;
+  std::vector<double> total_ms_;
+  std::set<std::string> used_stems_;
+};
+
+int RunDetect(const DetectFlags& flags) {
+  lane::Config config;
+  const absl::StatusOr<lane::Detector> detector = MakeDetector(flags, &config);
+  if (!detector.ok()) return Failure("detect", std::string(detector.status().message()));
+
+  std::ofstream file;
+  if (flags.output && !OpenOutputFile(*flags.output, &file)) {
+    return Failure("detect", absl::StrCat("cannot write ", *flags.output));
+  }
+  std::ostream& out = file.is_open() ? static_cast<std::ostream&>(file) : std::cout;
+  if (flags.overlay) {
+    if (const std::string e = MakeOverlayDir(*flags.overlay); !e.empty()) {
+      return Failure("detect", e);
+    }
+  }
+
+  DetectRun run(*detector, config, out, flags.overlay.value_or(""));
+  FrameReader reader(flags.inputs);
+  InputFrame frame;
+  while (reader.Next(&frame)) run.Process(frame);
+  if (!out) {
+    return Failure("detect", flags.output ? absl::StrCat("error writing ", *flags.output)
+                                          : std::string("error writing the results to stdout"));
+  }
+  return run.Finish();
+}
+
+}  // namespace
+
+Command AddDetectCommand(CLI::App& lane) {
+  auto flags = std::make_shared<DetectFlags>();
+  CLI::App* app =
+      AddCommand(lane, "detect", "detect lanes in images, directories, list files or videos",
+                 kDescription, kFooter);
+  app->add_option("--config", flags->config, "JSON config file (docs/config.md)")
+      ->type_name("CONFIG")
+      ->required();
+  OneOf(AddOptional(app, "--mode", &flags->mode,
+                    "detector mode instead of the config's: the mode's defaults, then the "
+                    "config's other detector keys"),
+        {"all", "two"});
+  AddOptional(app, "--seed", &flags->seed, "RANSAC seed instead of the config's detector.seed")
+      ->type_name("N");
+  AddOptional(app, "--output", &flags->output, "write the results to FILE instead of stdout")
+      ->type_name("FILE");
+  AddOptional(app, "--overlay", &flags->overlay,
+              "also write DIR/STEM.png (lanes on the frame) and DIR/STEM_ipm.png (lanes in the "
+              "top view)")
+      ->type_name("DIR");
+  app->add_option("INPUT", flags->inputs, "image files, directories, list files or videos")
+      ->required();
+  return {app, [flags] { return RunDetect(*flags); }};
 }
 
 }  // namespace lane_tools

@@ -3,32 +3,7 @@
 # Renders a few synthetic frames, evaluates the detector on them, then scores
 # the results it wrote (JSON Lines and the original .txt format) and expects
 # the same tables.
-foreach(var LANE SRC OUT)
-  if(NOT DEFINED ${var})
-    message(FATAL_ERROR "eval_cli_test.cmake needs -D${var}=...")
-  endif()
-endforeach()
-
-file(REMOVE_RECURSE "${OUT}")
-file(MAKE_DIRECTORY "${OUT}")
-set(CONFIG "${SRC}/configs/synthetic.json")
-
-macro(run expected name)
-  execute_process(COMMAND "${LANE}" ${ARGN}
-                  RESULT_VARIABLE ${name}_rc OUTPUT_VARIABLE ${name}_out
-                  ERROR_VARIABLE ${name}_err TIMEOUT 240)
-  if(NOT "${${name}_rc}" STREQUAL "${expected}")
-    message(FATAL_ERROR "lane ${ARGN}\nexit: ${${name}_rc} (expected ${expected})\n"
-                        "stdout:\n${${name}_out}\nstderr:\n${${name}_err}")
-  endif()
-endmacro()
-
-macro(expect_contains text part what)
-  string(FIND "${text}" "${part}" _pos)
-  if(_pos EQUAL -1)
-    message(FATAL_ERROR "${what}: expected to contain '${part}', got:\n${text}")
-  endif()
-endmacro()
+include(${CMAKE_CURRENT_LIST_DIR}/cli_test_common.cmake)
 
 # The two "| Total | ..." rows of a table (paper rule, CULane).
 function(total_rows text out)
@@ -52,8 +27,8 @@ run(1 not_a_dataset eval --config "${CONFIG}" "${OUT}")
 expect_contains("${not_a_dataset_err}" "cannot tell the format" "lane eval on an empty folder")
 
 # --- detector run ------------------------------------------------------------
-run(0 render render --config "${CONFIG}" --count 4 --seed 3 --num-lanes 2 --out "${OUT}/frames")
-run(0 eval eval --config "${CONFIG}" --out "${OUT}/eval" --overlays "${OUT}/eval/overlays"
+run(0 render render --config "${CONFIG}" --count 4 --seed 3 --num-lanes 2 --output "${OUT}/frames")
+run(0 eval eval --config "${CONFIG}" --output "${OUT}/eval" --overlay "${OUT}/eval/overlays"
     --write-baseline "${OUT}/baseline.json" "${OUT}/frames")
 expect_contains("${eval_out}" "## Paper rule" "lane eval tables")
 expect_contains("${eval_out}" "## CULane metric" "lane eval tables")
@@ -61,7 +36,7 @@ expect_contains("${eval_out}" "| Total | 4 |" "lane eval tables")
 expect_contains("${eval_err}" "CULane F1" "lane eval summary")
 foreach(f table.md table.json results.jsonl results.txt overlays/000000.png overlays/000003.png)
   if(NOT EXISTS "${OUT}/eval/${f}")
-    message(FATAL_ERROR "lane eval --out/--overlays did not write ${f}")
+    message(FATAL_ERROR "lane eval --output/--overlay did not write ${f}")
   endif()
 endforeach()
 file(READ "${OUT}/baseline.json" baseline)
@@ -88,6 +63,14 @@ if(NOT "${txt_rows}" STREQUAL "${detector_rows}")
   message(FATAL_ERROR "scoring results.txt gave\n${txt_rows}\ninstead of\n${detector_rows}")
 endif()
 run(2 seed_with_results eval --results "${OUT}/eval/results.txt" --seed 3 "${OUT}/frames")
+# The old spellings --out and --overlays are aliases of --output and --overlay.
+run(0 old_names eval --config "${CONFIG}" --out "${OUT}/eval-old"
+    --overlays "${OUT}/eval-old/overlays" "${OUT}/frames")
+foreach(f table.md results.txt overlays/000000.png)
+  if(NOT EXISTS "${OUT}/eval-old/${f}")
+    message(FATAL_ERROR "lane eval --out/--overlays did not write ${f}")
+  endif()
+endforeach()
 
 # --- 2-lanes mode and the original counting ----------------------------------
 run(0 two eval --config "${CONFIG}" --mode two --count many-to-one --rule or "${OUT}/frames")

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <set>
@@ -14,8 +15,9 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
-#include "args.h"
-#include "cli_config.h"
+#include "cli/cli_config.h"
+#include "cli/progress_bar.h"
+#include "cli/results_json.h"
 #include "commands.h"
 #include "eval_overlay.h"
 #include "lane/config.h"
@@ -26,17 +28,13 @@
 #include "lane/eval/results_jsonl.h"
 #include "lane/eval/results_txt.h"
 #include "lane/ipm.h"
-#include "progress_bar.h"
-#include "results_json.h"
 
 namespace lane_tools {
 namespace {
 
 namespace fs = std::filesystem;
 
-constexpr char kUsage[] =
-    "usage: lane eval (--config CONFIG | --results FILE) [options] DATASET\n"
-    "\n"
+constexpr char kDescription[] =
     "Scores lane detections against the hand-drawn labels of a data set, under\n"
     "the paper's rule (Aly 2008, Tables II/III) and the CULane metric, and\n"
     "prints the tables (Markdown) on stdout. With --config it runs the detector\n"
@@ -44,39 +42,27 @@ constexpr char kUsage[] =
     "\n"
     "DATASET is a folder holding Caltech Lanes clips (labels.ccvl + list.txt),\n"
     "CULane frames (NNNNN.jpg + NNNNN.lines.txt), TuSimple label files (.json)\n"
-    "or `lane render` output (labels.jsonl); the format is detected.\n"
-    "\n"
-    "options:\n"
-    "  --config CONFIG   detector config (docs/config.md). With --results it\n"
-    "                    only gives the frame size and the ROI (2-lanes scoring)\n"
-    "  --mode all|two    detector mode and what is scored: two = only the ego\n"
-    "                    lane's two labelled boundaries. Default: the config's\n"
-    "                    mode, or with --results the results' mode\n"
-    "  --seed N          RANSAC seed instead of the config's detector.seed\n"
-    "  --results FILE    score FILE instead of running the detector: lane detect\n"
-    "                    JSON Lines, or the original tool's results (.txt)\n"
-    "  --out DIR         write DIR/table.md, DIR/table.json, DIR/results.txt\n"
-    "                    (original format) and, when the detector ran,\n"
-    "                    DIR/results.jsonl\n"
-    "  --overlays DIR    write DIR/STEM.png per frame like the paper's Fig. 12:\n"
-    "                    labels green, correct detections green, false positives\n"
-    "                    red, misses blue (paper rule)\n"
-    "  --format F        caltech, culane, tusimple or render instead of detecting it\n"
-    "  --clip NAME       score only this clip of the data set\n"
-    "  --rule and|or     paper rule: d^ and/or d- within bounds (default and, the\n"
-    "                    paper's; or = the released Matlab code)\n"
-    "  --count one-to-one|many-to-one\n"
-    "                    paper rule: each label matches at most one detection,\n"
-    "                    best pairs first (default), or the released code's\n"
-    "                    many-to-one counting\n"
-    "  --write-baseline FILE  also write the regression baseline (CULane F1 and\n"
-    "                    paper figures of the total) to FILE\n"
-    "  --no-progress     no progress bar (it is only drawn when stderr is a\n"
-    "                    terminal anyway)\n"
-    "  -h, --help        show this help\n"
-    "\n"
+    "or `lane render` output (labels.jsonl); the format is detected.";
+
+constexpr char kFooter[] =
     "Exit status: 0 when every frame was scored, 1 when the data set, config or\n"
-    "results could not be read or frames failed, 2 for a bad command line.\n";
+    "results could not be read or frames failed, 2 for a bad command line.";
+
+struct EvalFlags {
+  std::string dataset;
+  std::optional<std::string> config;
+  std::optional<std::string> mode;
+  std::optional<uint64_t> seed;
+  std::optional<std::string> results;
+  std::optional<std::string> out;
+  std::optional<std::string> overlays;
+  std::optional<std::string> format;
+  std::optional<std::string> clip;
+  std::optional<std::string> rule;
+  std::optional<std::string> count;
+  std::optional<std::string> write_baseline;
+  bool no_progress = false;
+};
 
 // A file name stem for a frame name: extension dropped, '/', '#', ':' and
 // spaces replaced by '_'; "-2", "-3", ... appended on a clash.
@@ -122,213 +108,273 @@ std::string ShellWord(const std::string& word) {
   return quoted + "'";
 }
 
-}  // namespace
+// A usage error in flags CLI11 cannot check by itself, or "".
+std::string FlagsError(const EvalFlags& flags) {
+  if (flags.dataset.empty()) return "no DATASET given";
+  if (!flags.results && !flags.config) {
+    return "give --config (run the detector) or --results (score a file)";
+  }
+  if (flags.results && flags.seed) return "--seed has no effect with --results";
+  return "";
+}
 
-int RunEval(const std::vector<std::string>& argv) {
-  const absl::StatusOr<Args> args = Args::Parse(argv, {{"config"},
-                                                       {"mode"},
-                                                       {"seed"},
-                                                       {"results"},
-                                                       {"out"},
-                                                       {"overlays"},
-                                                       {"format"},
-                                                       {"clip"},
-                                                       {"rule"},
-                                                       {"count"},
-                                                       {"write-baseline"},
-                                                       {"no-progress", false}});
-  if (!args.ok()) return UsageError("eval", std::string(args.status().message()), kUsage);
-  if (args->help()) {
-    std::fputs(kUsage, stdout);
-    return kExitOk;
-  }
-  if (args->positional().size() != 1) {
-    return UsageError(
-        "eval", args->positional().empty() ? "no DATASET given" : "give exactly one DATASET folder",
-        kUsage);
-  }
-  const std::string dataset_dir = args->positional().front();
-  const std::optional<std::string> results_path = args->Get("results");
-  if (!results_path && !args->Has("config")) {
-    return UsageError("eval", "give --config (run the detector) or --results (score a file)",
-                      kUsage);
-  }
-  const auto mode = args->GetChoice("mode", {"all", "two"});
-  if (!mode.ok()) return UsageError("eval", std::string(mode.status().message()), kUsage);
-  const auto seed = args->GetUint64("seed");
-  if (!seed.ok()) return UsageError("eval", std::string(seed.status().message()), kUsage);
-  const auto format_name = args->GetChoice("format", {"caltech", "culane", "tusimple", "render"});
-  if (!format_name.ok()) {
-    return UsageError("eval", std::string(format_name.status().message()), kUsage);
-  }
-  const auto rule = args->GetChoice("rule", {"and", "or"});
-  if (!rule.ok()) return UsageError("eval", std::string(rule.status().message()), kUsage);
-  const auto count = args->GetChoice("count", {"one-to-one", "many-to-one"});
-  if (!count.ok()) return UsageError("eval", std::string(count.status().message()), kUsage);
-  if (results_path && *seed) {
-    return UsageError("eval", "--seed has no effect with --results", kUsage);
-  }
-
-  // The data set.
+// The data set, only the --clip clip when given.
+absl::Status LoadSelectedDataset(const EvalFlags& flags, lane::eval::Dataset* out) {
+  const std::string& dataset_dir = flags.dataset;
   std::optional<lane::eval::DatasetFormat> format;
-  if (*format_name) format = lane::eval::ParseDatasetFormat(**format_name);
+  if (flags.format) format = lane::eval::ParseDatasetFormat(*flags.format);
   absl::StatusOr<lane::eval::Dataset> dataset = lane::eval::LoadDataset(dataset_dir, format);
-  if (!dataset.ok()) return Failure("eval", std::string(dataset.status().message()));
-  if (const auto clip = args->Get("clip")) {
+  if (!dataset.ok()) return dataset.status();
+  if (const auto& clip = flags.clip) {
     std::vector<std::string> names;
     for (const auto& c : dataset->clips) names.push_back(c.name);
     dataset->clips.erase(std::remove_if(dataset->clips.begin(), dataset->clips.end(),
                                         [&](const lane::eval::Clip& c) { return c.name != *clip; }),
                          dataset->clips.end());
     if (dataset->clips.empty()) {
-      return Failure("eval", absl::StrCat("no clip \"", *clip, "\" in ", dataset_dir,
-                                          " (clips: ", absl::StrJoin(names, ", "), ")"));
+      return absl::NotFoundError(absl::StrCat("no clip \"", *clip, "\" in ", dataset_dir,
+                                              " (clips: ", absl::StrJoin(names, ", "), ")"));
     }
   }
   if (dataset->FrameCount() == 0) {
-    return Failure("eval", absl::StrCat(dataset_dir, " holds no frames"));
+    return absl::NotFoundError(absl::StrCat(dataset_dir, " holds no frames"));
   }
+  *out = *std::move(dataset);
+  return absl::OkStatus();
+}
 
+// --rule and --count.
+lane::eval::EvalOptions ScoringOptions(const EvalFlags& flags) {
   lane::eval::EvalOptions options;
-  if (*rule) {
-    options.paper.rule = **rule == "or" ? lane::eval::PaperRuleOptions::Rule::kOr
-                                        : lane::eval::PaperRuleOptions::Rule::kAnd;
+  if (flags.rule) {
+    options.paper.rule = *flags.rule == "or" ? lane::eval::PaperRuleOptions::Rule::kOr
+                                             : lane::eval::PaperRuleOptions::Rule::kAnd;
   }
-  if (*count) {
-    options.paper.assignment = **count == "many-to-one"
+  if (flags.count) {
+    options.paper.assignment = *flags.count == "many-to-one"
                                    ? lane::eval::PaperRuleOptions::Assignment::kManyToOne
                                    : lane::eval::PaperRuleOptions::Assignment::kOneToOne;
   }
+  return options;
+}
 
-  // The config, the detector (when it runs) and the ROI.
+// What is scored: the detector's output (with --config and no --results) or
+// a results file; the config (when given) and its ROI.
+struct EvalSource {
   std::optional<lane::Config> config;
   std::optional<lane::Roi> roi;
-  if (const auto config_path = args->Get("config")) {
-    absl::StatusOr<lane::Config> loaded = LoadEffectiveConfig(config_path, *mode);
-    if (!loaded.ok()) return Failure("eval", std::string(loaded.status().message()));
-    if (*seed) loaded->detector.seed = **seed;
-    config = *loaded;
-    const absl::StatusOr<lane::IpmMapping> ipm =
-        lane::IpmMapping::Create(config->camera, config->ipm);
-    if (!ipm.ok()) return Failure("eval", std::string(ipm.status().message()));
-    roi = ipm->roi();
-    options.ego_row = roi->bottom;
-    options.default_width = config->camera.image_width;
-    options.default_height = config->camera.image_height;
-  }
   std::optional<lane::Detector> detector;
   std::vector<lane::eval::FrameResult> records;
-  if (results_path) {
-    const bool txt = absl::AsciiStrToLower(fs::path(*results_path).extension().string()) == ".txt";
-    absl::StatusOr<std::vector<lane::eval::FrameResult>> read =
-        txt ? lane::eval::ReadResultsTxt(*results_path)
-            : lane::eval::ReadResultsJsonl(*results_path);
-    if (!read.ok()) return Failure("eval", std::string(read.status().message()));
-    records = std::move(*read);
-    // The mode: --mode, else the records' (when they agree), else all.
-    std::set<std::string> modes;
-    for (const auto& r : records) {
-      if (!r.mode.empty()) modes.insert(r.mode);
+};
+
+// The config and the ROI, when --config is given.
+absl::Status LoadConfig(const EvalFlags& flags, lane::eval::EvalOptions* options,
+                        EvalSource* source) {
+  if (const auto& config_path = flags.config) {
+    absl::StatusOr<lane::Config> loaded = LoadEffectiveConfig(config_path, flags.mode);
+    if (!loaded.ok()) return loaded.status();
+    if (flags.seed) loaded->detector.seed = *flags.seed;
+    source->config = *loaded;
+    const absl::StatusOr<lane::IpmMapping> ipm =
+        lane::IpmMapping::Create(source->config->camera, source->config->ipm);
+    if (!ipm.ok()) return ipm.status();
+    source->roi = ipm->roi();
+    options->ego_row = source->roi->bottom;
+    options->default_width = source->config->camera.image_width;
+    options->default_height = source->config->camera.image_height;
+  }
+  return absl::OkStatus();
+}
+
+// --results: the records and the mode they are scored in: --mode, else the
+// records' (when they agree), else all.
+absl::Status ReadResults(const EvalFlags& flags, lane::eval::EvalOptions* options,
+                         EvalSource* source) {
+  const std::string& results_path = *flags.results;
+  const bool txt = absl::AsciiStrToLower(fs::path(results_path).extension().string()) == ".txt";
+  absl::StatusOr<std::vector<lane::eval::FrameResult>> read =
+      txt ? lane::eval::ReadResultsTxt(results_path) : lane::eval::ReadResultsJsonl(results_path);
+  if (!read.ok()) return read.status();
+  source->records = std::move(*read);
+  std::set<std::string> modes;
+  for (const auto& r : source->records) {
+    if (!r.mode.empty()) modes.insert(r.mode);
+  }
+  const std::optional<std::string>& mode = flags.mode;
+  std::string chosen = mode ? *mode : (modes.size() == 1 ? *modes.begin() : "all");
+  if (mode && !modes.empty() && (modes.size() > 1 || *modes.begin() != *mode)) {
+    std::fprintf(stderr, "lane eval: warning: --mode %s, but the results were made in mode %s\n",
+                 mode->c_str(), absl::StrJoin(modes, ", ").c_str());
+  }
+  const std::optional<lane::Mode> parsed = lane::ParseMode(chosen);
+  if (!parsed) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("the results' mode \"", chosen, "\" is neither all nor two: give --mode"));
+  }
+  options->mode = *parsed;
+  return absl::OkStatus();
+}
+
+// Without --results: the detector of the config.
+absl::Status MakeDetector(lane::eval::EvalOptions* options, EvalSource* source) {
+  const lane::Config& config = *source->config;
+  absl::StatusOr<lane::Detector> created =
+      lane::Detector::Create(config.camera, config.ipm, config.detector);
+  if (!created.ok()) {
+    return absl::Status(created.status().code(),
+                        absl::StrCat("cannot build the detector: ", created.status().message()));
+  }
+  source->detector = std::move(*created);
+  options->mode = source->detector->options().mode;
+  return absl::OkStatus();
+}
+
+// The files written while frames are scored (--output, --overlay), the
+// progress bar and the problems met on the way.
+class EvalOutputs {
+ public:
+  explicit EvalOutputs(const EvalFlags& flags) : progress_(!flags.no_progress) {}
+
+  // Creates the folders and opens the results files; an error message or "".
+  std::string Open(const EvalFlags& flags, bool detector) {
+    if (const auto& out = flags.out) {
+      out_dir_ = *out;
+      if (const std::string e = MakeDir(out_dir_); !e.empty()) return e;
+      if (detector) {
+        jsonl_.open(out_dir_ / "results.jsonl", std::ios::binary | std::ios::trunc);
+        if (!jsonl_) return absl::StrCat("cannot write ", (out_dir_ / "results.jsonl").string());
+      }
+      txt_.open(out_dir_ / "results.txt", std::ios::binary | std::ios::trunc);
+      if (!txt_) return absl::StrCat("cannot write ", (out_dir_ / "results.txt").string());
     }
-    std::string chosen = *mode ? **mode : (modes.size() == 1 ? *modes.begin() : "all");
-    if (*mode && !modes.empty() && (modes.size() > 1 || *modes.begin() != **mode)) {
-      std::fprintf(stderr, "lane eval: warning: --mode %s, but the results were made in mode %s\n",
-                   (*mode)->c_str(), absl::StrJoin(modes, ", ").c_str());
+    if (const auto& overlays = flags.overlays) {
+      overlay_dir_ = *overlays;
+      if (const std::string e = MakeDir(overlay_dir_); !e.empty()) return e;
     }
-    const std::optional<lane::Mode> parsed = lane::ParseMode(chosen);
-    if (!parsed) {
-      return Failure("eval", absl::StrCat("the results' mode \"", chosen,
-                                          "\" is neither all nor two: give --mode"));
-    }
-    options.mode = *parsed;
-  } else {
-    absl::StatusOr<lane::Detector> created =
-        lane::Detector::Create(config->camera, config->ipm, config->detector);
-    if (!created.ok()) {
-      return Failure("eval",
-                     absl::StrCat("cannot build the detector: ", created.status().message()));
-    }
-    detector = std::move(*created);
-    options.mode = detector->options().mode;
+    return "";
   }
 
-  // Output files.
-  std::ofstream jsonl, txt;
-  fs::path out_dir;
-  if (const auto out = args->Get("out")) {
-    out_dir = *out;
-    if (const std::string e = MakeDir(out_dir); !e.empty()) return Failure("eval", e);
-    if (detector) {
-      jsonl.open(out_dir / "results.jsonl", std::ios::binary | std::ios::trunc);
-      if (!jsonl)
-        return Failure("eval", absl::StrCat("cannot write ", (out_dir / "results.jsonl").string()));
-    }
-    txt.open(out_dir / "results.txt", std::ios::binary | std::ios::trunc);
-    if (!txt)
-      return Failure("eval", absl::StrCat("cannot write ", (out_dir / "results.txt").string()));
-  }
-  fs::path overlay_dir;
-  if (const auto overlays = args->Get("overlays")) {
-    overlay_dir = *overlays;
-    if (const std::string e = MakeDir(overlay_dir); !e.empty()) return Failure("eval", e);
-  }
-
-  ProgressBar progress(!args->Has("no-progress"));
-  std::set<std::string> used_stems;
-  int run_failures = 0;
-  bool output_failed = false;
-  const auto report_problem = [&](const std::string& message) {
-    progress.Clear();
-    std::fprintf(stderr, "lane eval: %s\n", message.c_str());
-  };
-  const lane::eval::FrameCallback on_frame = [&](const lane::eval::FrameOutcome& o) {
+  void OnFrame(const lane::eval::FrameOutcome& o, const lane::eval::EvalOptions& options,
+               const std::optional<lane::Roi>& roi, bool detector) {
     if (!o.error.empty() && detector) {
-      ++run_failures;
-      report_problem(absl::StrCat(o.frame->name, ": ", o.error));
+      ++run_failures_;
+      ReportProblem(absl::StrCat(o.frame->name, ": ", o.error));
     }
-    if (jsonl.is_open()) {
-      jsonl << (o.detection != nullptr ? DetectionJsonLine(o.frame->name, o.width, o.height,
-                                                           options.mode, *o.detection, o.decode_ms)
-                                       : ErrorJsonLine(o.frame->name, o.image.cols, o.image.rows,
-                                                       options.mode, o.error))
-            << '\n';
+    if (jsonl_.is_open()) {
+      jsonl_ << (o.detection != nullptr ? DetectionJsonLine(o.frame->name, o.width, o.height,
+                                                            options.mode, *o.detection, o.decode_ms)
+                                        : ErrorJsonLine(o.frame->name, o.image.cols, o.image.rows,
+                                                        options.mode, o.error))
+             << '\n';
     }
-    if (txt.is_open()) txt << lane::eval::ResultsTxtFrame(o.index, o.lanes);
-    if (!overlay_dir.empty()) {
-      cv::Mat image = o.image;
-      if (image.empty()) {
-        try {
-          image = cv::imread(o.frame->image_path, cv::IMREAD_COLOR);
-        } catch (const cv::Exception&) {
-        }
-      }
-      if (image.empty()) {
-        report_problem(
-            absl::StrCat(o.frame->name, ": no overlay: cannot read ", o.frame->image_path));
-      } else {
-        const fs::path path = overlay_dir / (OverlayStem(o.frame->name, used_stems) + ".png");
-        bool written = false;
-        try {
-          written = cv::imwrite(path.string(), DrawEvaluation(image, o, options, roi));
-        } catch (const cv::Exception&) {
-        }
-        if (!written) {
-          output_failed = true;
-          report_problem(absl::StrCat("cannot write ", path.string()));
-        }
-      }
-    }
-    progress.Update(o.index + 1, o.total, o.frame->name);
-  };
+    if (txt_.is_open()) txt_ << lane::eval::ResultsTxtFrame(o.index, o.lanes);
+    if (!overlay_dir_.empty()) WriteOverlay(o, options, roi);
+    progress_.Update(o.index + 1, o.total, o.frame->name);
+  }
 
+  void ClearProgress() { progress_.Clear(); }
+
+  // Closes the results files and writes the tables to --output.
+  void Finish(const lane::eval::EvalReport& report, const std::string& markdown) {
+    if (out_dir_.empty()) return;
+    jsonl_.close();
+    txt_.close();
+    if (jsonl_.fail() || txt_.fail() || !WriteFile(out_dir_ / "table.md", markdown) ||
+        !WriteFile(out_dir_ / "table.json", lane::eval::ReportJson(report))) {
+      output_failed_ = true;
+      std::fprintf(stderr, "lane eval: error writing to %s\n", out_dir_.string().c_str());
+    }
+  }
+
+  int run_failures() const { return run_failures_; }
+  bool output_failed() const { return output_failed_; }
+  void set_output_failed() { output_failed_ = true; }
+
+ private:
+  void ReportProblem(const std::string& message) {
+    progress_.Clear();
+    std::fprintf(stderr, "lane eval: %s\n", message.c_str());
+  }
+
+  void WriteOverlay(const lane::eval::FrameOutcome& o, const lane::eval::EvalOptions& options,
+                    const std::optional<lane::Roi>& roi) {
+    cv::Mat image = o.image;
+    if (image.empty()) {
+      try {
+        image = cv::imread(o.frame->image_path, cv::IMREAD_COLOR);
+      } catch (const cv::Exception&) {
+      }
+    }
+    if (image.empty()) {
+      ReportProblem(absl::StrCat(o.frame->name, ": no overlay: cannot read ", o.frame->image_path));
+      return;
+    }
+    const fs::path path = overlay_dir_ / (OverlayStem(o.frame->name, used_stems_) + ".png");
+    bool written = false;
+    try {
+      written = cv::imwrite(path.string(), DrawEvaluation(image, o, options, roi));
+    } catch (const cv::Exception&) {
+    }
+    if (!written) {
+      output_failed_ = true;
+      ReportProblem(absl::StrCat("cannot write ", path.string()));
+    }
+  }
+
+  ProgressBar progress_;
+  std::ofstream jsonl_, txt_;
+  fs::path out_dir_;
+  fs::path overlay_dir_;
+  std::set<std::string> used_stems_;
+  int run_failures_ = 0;
+  bool output_failed_ = false;
+};
+
+// --write-baseline: the regression baseline with the command that made it;
+// false when it cannot be written.
+bool WriteBaseline(const std::string& baseline, const lane::eval::EvalReport& report,
+                   const std::vector<std::string>& argv) {
+  std::vector<std::string> words = {"lane", "eval"};
+  for (const std::string& a : argv) words.push_back(ShellWord(a));
+  const fs::path parent = fs::path(baseline).parent_path();
+  if (!parent.empty()) MakeDir(parent);
+  if (!WriteFile(baseline, lane::eval::BaselineJson(report, absl::StrJoin(words, " ")))) {
+    std::fprintf(stderr, "lane eval: cannot write %s\n", baseline.c_str());
+    return false;
+  }
+  return true;
+}
+
+int RunEval(const CLI::App& app, const EvalFlags& flags, const std::vector<std::string>& argv) {
+  if (const std::string e = FlagsError(flags); !e.empty()) return UsageError(app, e);
+
+  lane::eval::Dataset dataset;
+  if (const absl::Status s = LoadSelectedDataset(flags, &dataset); !s.ok()) {
+    return Failure("eval", std::string(s.message()));
+  }
+  lane::eval::EvalOptions options = ScoringOptions(flags);
+  EvalSource source;
+  absl::Status status = LoadConfig(flags, &options, &source);
+  if (status.ok()) {
+    status =
+        flags.results ? ReadResults(flags, &options, &source) : MakeDetector(&options, &source);
+  }
+  if (!status.ok()) return Failure("eval", std::string(status.message()));
+  const bool detector = source.detector.has_value();
+
+  EvalOutputs outputs(flags);
+  if (const std::string e = outputs.Open(flags, detector); !e.empty()) return Failure("eval", e);
+  const lane::eval::FrameCallback on_frame = [&](const lane::eval::FrameOutcome& o) {
+    outputs.OnFrame(o, options, source.roi, detector);
+  };
   absl::StatusOr<lane::eval::EvalReport> report =
-      detector ? lane::eval::EvaluateDetector(*dataset, *detector, options, on_frame)
-               : lane::eval::EvaluateResults(*dataset, records, options, on_frame);
-  progress.Clear();
+      detector ? lane::eval::EvaluateDetector(dataset, *source.detector, options, on_frame)
+               : lane::eval::EvaluateResults(dataset, source.records, options, on_frame);
+  outputs.ClearProgress();
   if (!report.ok()) return Failure("eval", std::string(report.status().message()));
-  report->source = detector ? absl::StrCat("detector, config ", *args->Get("config"), ", seed ",
-                                           config->detector.seed)
-                            : absl::StrCat("results ", *results_path);
+  report->source = detector ? absl::StrCat("detector, config ", *flags.config, ", seed ",
+                                           source.config->detector.seed)
+                            : absl::StrCat("results ", *flags.results);
 
   const std::string markdown = lane::eval::ReportMarkdown(*report);
   std::fputs(markdown.c_str(), stdout);
@@ -336,24 +382,9 @@ int RunEval(const std::vector<std::string>& argv) {
   for (const std::string& w : report->warnings) {
     std::fprintf(stderr, "lane eval: warning: %s\n", w.c_str());
   }
-  if (!out_dir.empty()) {
-    jsonl.close();
-    txt.close();
-    if (jsonl.fail() || txt.fail() || !WriteFile(out_dir / "table.md", markdown) ||
-        !WriteFile(out_dir / "table.json", lane::eval::ReportJson(*report))) {
-      output_failed = true;
-      std::fprintf(stderr, "lane eval: error writing to %s\n", out_dir.string().c_str());
-    }
-  }
-  if (const auto baseline = args->Get("write-baseline")) {
-    std::vector<std::string> words = {"lane", "eval"};
-    for (const std::string& a : argv) words.push_back(ShellWord(a));
-    const fs::path parent = fs::path(*baseline).parent_path();
-    if (!parent.empty()) MakeDir(parent);
-    if (!WriteFile(*baseline, lane::eval::BaselineJson(*report, absl::StrJoin(words, " ")))) {
-      output_failed = true;
-      std::fprintf(stderr, "lane eval: cannot write %s\n", baseline->c_str());
-    }
+  outputs.Finish(*report, markdown);
+  if (flags.write_baseline && !WriteBaseline(*flags.write_baseline, *report, argv)) {
+    outputs.set_output_failed();
   }
   const lane::eval::ClipCounts& t = report->total;
   std::fprintf(stderr,
@@ -361,7 +392,60 @@ int RunEval(const std::vector<std::string>& argv) {
                "CULane F1 %.3f\n",
                t.frames, t.paper.F1(), 100 * t.paper.CorrectRate(),
                t.paper.FalsePositivesPerFrame(t.frames), t.culane.F1());
-  return run_failures > 0 || output_failed ? kExitFailure : kExitOk;
+  return outputs.run_failures() > 0 || outputs.output_failed() ? kExitFailure : kExitOk;
+}
+
+}  // namespace
+
+Command AddEvalCommand(CLI::App& lane, const std::vector<std::string>& args) {
+  auto flags = std::make_shared<EvalFlags>();
+  CLI::App* app = AddCommand(lane, "eval",
+                             "score detections against a labelled data set (paper rule, CULane F1)",
+                             kDescription, kFooter);
+  AddOptional(app, "--config", &flags->config,
+              "detector config (docs/config.md). With --results it only gives the frame size "
+              "and the ROI (2-lanes scoring)")
+      ->type_name("CONFIG");
+  OneOf(AddOptional(app, "--mode", &flags->mode,
+                    "detector mode and what is scored: two = only the ego lane's two labelled "
+                    "boundaries. Default: the config's mode, or with --results the results' mode"),
+        {"all", "two"});
+  AddOptional(app, "--seed", &flags->seed, "RANSAC seed instead of the config's detector.seed")
+      ->type_name("N");
+  AddOptional(app, "--results", &flags->results,
+              "score FILE instead of running the detector: lane detect JSON Lines, or the "
+              "original tool's results (.txt)")
+      ->type_name("FILE");
+  AddOptional(app, "--output,--out", &flags->out,
+              "write DIR/table.md, DIR/table.json, DIR/results.txt (original format) and, when "
+              "the detector ran, DIR/results.jsonl")
+      ->type_name("DIR");
+  AddOptional(app, "--overlay,--overlays", &flags->overlays,
+              "write DIR/STEM.png per frame like the paper's Fig. 12: labels green, correct "
+              "detections green, false positives red, misses blue (paper rule)")
+      ->type_name("DIR");
+  OneOf(
+      AddOptional(app, "--format", &flags->format, "the data set's format instead of detecting it"),
+      {"caltech", "culane", "tusimple", "render"});
+  AddOptional(app, "--clip", &flags->clip, "score only this clip of the data set")
+      ->type_name("NAME");
+  OneOf(AddOptional(app, "--rule", &flags->rule,
+                    "paper rule: d^ and/or d- within bounds (or = the released Matlab code)"),
+        {"and", "or"})
+      ->default_str("and, the paper's");
+  OneOf(AddOptional(app, "--count", &flags->count,
+                    "paper rule: each label matches at most one detection, best pairs first, or "
+                    "the released code's many-to-one counting"),
+        {"one-to-one", "many-to-one"})
+      ->default_str("one-to-one");
+  AddOptional(app, "--write-baseline", &flags->write_baseline,
+              "also write the regression baseline (CULane F1 and paper figures of the total) to "
+              "FILE")
+      ->type_name("FILE");
+  app->add_flag("--no-progress", flags->no_progress,
+                "no progress bar (it is only drawn when stderr is a terminal anyway)");
+  app->add_option("DATASET", flags->dataset, "the data set's folder");
+  return {app, [app, flags, args] { return RunEval(*app, *flags, args); }};
 }
 
 }  // namespace lane_tools

@@ -2,13 +2,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
-#include "args.h"
-#include "cli_config.h"
+#include "cli/cli_config.h"
 #include "commands.h"
 #include "lane/config.h"
 #include "lane/synthetic.h"
@@ -16,62 +16,46 @@
 namespace lane_tools {
 namespace {
 
-constexpr char kUsage[] =
-    "usage: lane render --config CONFIG --count N --out DIR [options]\n"
-    "\n"
+constexpr char kDescription[] =
     "Renders N synthetic road frames through the config's camera, with exact\n"
     "ground truth. Writes DIR/000000.png ... (frame i uses seed S + i),\n"
     "DIR/labels.jsonl (one JSON object per frame: docs/results-format.md) and\n"
-    "DIR/list.txt (the frame names, one a line: an INPUT for 'lane detect').\n"
-    "\n"
-    "options:\n"
-    "  --config CONFIG     JSON config file whose camera is used, required\n"
-    "  --count N           number of frames (1..1000000), required\n"
-    "  --out DIR           output folder, created when missing, required\n"
-    "  --seed S            seed of the first frame (default 1)\n"
-    "  --num-lanes K       lanes on the road, 0 = random 1..5 per frame (default 0)\n"
-    "  --jpeg-quality Q    simulated JPEG artefacts, quality 1..100, 0 = none\n"
-    "                      (default 80). With --format jpg the file itself is\n"
-    "                      written at quality Q (95 when Q is 0) instead.\n"
-    "  --format png|jpg    image file format (default png)\n"
-    "  -h, --help          show this help\n";
+    "DIR/list.txt (the frame names, one a line: an INPUT for 'lane detect').";
 
-}  // namespace
+struct RenderFlags {
+  std::string config;
+  int64_t count = 0;
+  std::string output;
+  uint64_t seed = 1;
+  int num_lanes = lane::SyntheticOptions().num_lanes;
+  int jpeg_quality = lane::SyntheticOptions().jpeg_quality;
+  std::string format = "png";
+};
 
-int RunRender(const std::vector<std::string>& argv) {
-  const absl::StatusOr<Args> args = Args::Parse(
-      argv,
-      {{"config"}, {"count"}, {"seed"}, {"out"}, {"num-lanes"}, {"jpeg-quality"}, {"format"}});
-  if (!args.ok()) return UsageError("render", std::string(args.status().message()), kUsage);
-  if (args->help()) {
-    std::fputs(kUsage, stdout);
-    return kExitOk;
+// Creates `dir` and opens its labels.jsonl and list.txt; an error message or "".
+std::string OpenOutputs(const std::filesystem::path& dir, std::ofstream* labels,
+                        std::ofstream* list) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir)) {
+    return absl::StrCat("cannot create ", dir.string(), ec ? ": " + ec.message() : std::string());
   }
-  if (!args->positional().empty()) {
-    return UsageError("render", "unexpected argument " + args->positional()[0], kUsage);
+  labels->open(dir / "labels.jsonl", std::ios::binary | std::ios::trunc);
+  list->open(dir / "list.txt", std::ios::binary | std::ios::trunc);
+  if (!*labels || !*list) {
+    return absl::StrCat("cannot write labels.jsonl/list.txt in ", dir.string());
   }
-  for (const char* required : {"config", "count", "out"}) {
-    if (!args->Has(required)) {
-      return UsageError("render", absl::StrCat("--", required, " is required"), kUsage);
-    }
-  }
-  const auto count = args->GetInt("count", 1, 1000000);
-  const auto seed = args->GetUint64("seed");
-  const auto num_lanes = args->GetInt("num-lanes", 0, 20);
-  const auto quality = args->GetInt("jpeg-quality", 0, 100);
-  const auto format = args->GetChoice("format", {"png", "jpg"});
-  for (const absl::Status& s :
-       {count.status(), seed.status(), num_lanes.status(), quality.status(), format.status()}) {
-    if (!s.ok()) return UsageError("render", std::string(s.message()), kUsage);
-  }
+  return "";
+}
 
-  const absl::StatusOr<lane::Config> config = LoadEffectiveConfig(args->Get("config"), {});
+int RunRender(const RenderFlags& flags) {
+  const absl::StatusOr<lane::Config> config = LoadEffectiveConfig(flags.config, {});
   if (!config.ok()) return Failure("render", std::string(config.status().message()));
 
   lane::SyntheticOptions options;
-  if (*num_lanes) options.num_lanes = static_cast<int>(**num_lanes);
-  if (*quality) options.jpeg_quality = static_cast<int>(**quality);
-  const bool jpg = format->value_or("png") == "jpg";
+  options.num_lanes = flags.num_lanes;
+  options.jpeg_quality = flags.jpeg_quality;
+  const bool jpg = flags.format == "jpg";
   std::vector<int> write_params;
   if (jpg) {
     // One JPEG compression only: the file's.
@@ -79,23 +63,15 @@ int RunRender(const std::vector<std::string>& argv) {
     options.jpeg_quality = 0;
   }
 
-  const std::filesystem::path dir = *args->Get("out");
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec || !std::filesystem::is_directory(dir)) {
-    return Failure("render", absl::StrCat("cannot create ", dir.string(),
-                                          ec ? ": " + ec.message() : std::string()));
+  const std::filesystem::path dir = flags.output;
+  std::ofstream labels;
+  std::ofstream list;
+  if (const std::string e = OpenOutputs(dir, &labels, &list); !e.empty()) {
+    return Failure("render", e);
   }
-  std::ofstream labels(dir / "labels.jsonl", std::ios::binary | std::ios::trunc);
-  std::ofstream list(dir / "list.txt", std::ios::binary | std::ios::trunc);
-  if (!labels || !list) {
-    return Failure("render", absl::StrCat("cannot write labels.jsonl/list.txt in ", dir.string()));
-  }
-
-  const uint64_t first_seed = seed->value_or(1);
-  for (int64_t i = 0; i < **count; ++i) {
+  for (int64_t i = 0; i < flags.count; ++i) {
     absl::StatusOr<lane::SyntheticFrame> frame =
-        lane::RenderSyntheticFrame(config->camera, options, first_seed + static_cast<uint64_t>(i));
+        lane::RenderSyntheticFrame(config->camera, options, flags.seed + static_cast<uint64_t>(i));
     if (!frame.ok()) {
       return Failure("render", absl::StrCat("frame ", i, ": ", frame.status().message()));
     }
@@ -117,9 +93,40 @@ int RunRender(const std::vector<std::string>& argv) {
   if (!labels || !list) {
     return Failure("render", absl::StrCat("error writing labels.jsonl/list.txt in ", dir.string()));
   }
-  std::fprintf(stderr, "lane render: %lld frames in %s\n", static_cast<long long>(**count),
+  std::fprintf(stderr, "lane render: %lld frames in %s\n", static_cast<long long>(flags.count),
                dir.string().c_str());
   return kExitOk;
+}
+
+}  // namespace
+
+Command AddRenderCommand(CLI::App& lane) {
+  auto flags = std::make_shared<RenderFlags>();
+  CLI::App* app = AddCommand(lane, "render",
+                             "render synthetic road frames with ground-truth labels", kDescription);
+  app->add_option("--config", flags->config, "JSON config file whose camera is used")
+      ->type_name("CONFIG")
+      ->required();
+  app->add_option("--count", flags->count, "number of frames")
+      ->type_name("N")
+      ->required()
+      ->check(Between(1, 1000000));
+  app->add_option("--output,--out", flags->output, "output folder, created when missing")
+      ->type_name("DIR")
+      ->required();
+  app->add_option("--seed", flags->seed, "seed of the first frame")
+      ->type_name("S")
+      ->check(NonNegativeInteger());
+  app->add_option("--num-lanes", flags->num_lanes, "lanes on the road, 0 = random 1..5 per frame")
+      ->type_name("K")
+      ->check(Between(0, 20));
+  app->add_option("--jpeg-quality", flags->jpeg_quality,
+                  "simulated JPEG artefacts: quality, 0 = none. With --format jpg the "
+                  "file itself is written at quality Q (95 when Q is 0) instead.")
+      ->type_name("Q")
+      ->check(Between(0, 100));
+  OneOf(app->add_option("--format", flags->format, "image file format"), {"png", "jpg"});
+  return {app, [flags] { return RunRender(*flags); }};
 }
 
 }  // namespace lane_tools

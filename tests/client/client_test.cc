@@ -296,7 +296,7 @@ void RunRestart(const std::string& list, const std::vector<std::string>& names, 
   // written but not yet read by the server when it stops are resent.
   std::thread client([&] {
     code = RunCommand({"stream", "--target", target, "--camera", "cam", "--config", kConfig,
-                       "--inflight", "16", "--retry-timeout", "60s", "--output",
+                       "--window", "16", "--retry-timeout", "60s", "--output",
                        out / "results.jsonl", list});
   });
   // A failed ASSERT returns early: the client thread is joined first (a
@@ -364,7 +364,7 @@ TEST_F(ClientTest, BenchClosedLoopJsonReport) {
   ASSERT_NE(server, nullptr);
   TempDir out;
   const int code =
-      RunCommand({"bench", "--target", Target(*server), "--cameras", "2", "--inflight", "2",
+      RunCommand({"bench", "--target", Target(*server), "--cameras", "2", "--window", "2",
                   "--warmup", "300ms", "--duration", "1.5s", "--synthetic", "6", "--inprocess",
                   "--json", "--slo-p99-ms", "10000", "--output", out / "report.json"});
   EXPECT_EQ(code, kExitOk);
@@ -479,7 +479,7 @@ TEST_F(ClientTest, BenchCountsDroppedFrames) {
                                "4",
                                "--backpressure",
                                "drop_oldest",
-                               "--session-inflight",
+                               "--max-inflight-frames",
                                "1",
                                "--json",
                                "--output",
@@ -705,11 +705,55 @@ TEST(ClientUsageTest, BadCommandLinesExitTwo) {
   EXPECT_EQ(RunCommand({}), kExitUsage);
   EXPECT_EQ(RunCommand({"nope"}), kExitUsage);
   EXPECT_EQ(RunCommand({"stream"}), kExitUsage);
-  EXPECT_EQ(RunCommand({"bench", "--fps", "10", "--inflight", "2"}), kExitUsage);
+  EXPECT_EQ(RunCommand({"bench", "--fps", "10", "--window", "2"}), kExitUsage);
+  EXPECT_EQ(RunCommand({"bench", "--fps", "10", "--inflight", "2"}), kExitUsage);  // old spelling
   EXPECT_EQ(RunCommand({"bench", "--sweep", "1,x"}), kExitUsage);
   EXPECT_EQ(RunCommand({"session", "get"}), kExitUsage);
   EXPECT_EQ(RunCommand({"info", "--token-file"}), kExitUsage);
   EXPECT_EQ(RunCommand({"info", "--ca", "/nonexistent/ca.pem"}), kExitUsage);
+  EXPECT_EQ(RunCommand({"session", "nope"}), kExitUsage);
+  EXPECT_EQ(RunCommand({"stream", "--window", "0", "x.jpg"}), kExitUsage);
+  EXPECT_EQ(RunCommand({"stream", "--max-inflight-frames", "-1", "x.jpg"}), kExitUsage);
+  EXPECT_EQ(RunCommand({"bench", "--duration", "soon"}), kExitUsage);
+  EXPECT_EQ(RunCommand({"bench", "--json", "--csv"}), kExitUsage);
+  EXPECT_EQ(RunCommand({"bench", "--cameras", "2", "--sweep", "1,2"}), kExitUsage);
+}
+
+TEST(ClientUsageTest, HelpAndVersionExitZero) {
+  ::testing::internal::CaptureStdout();
+  EXPECT_EQ(RunCommand({"--help"}), kExitOk);
+  EXPECT_EQ(RunCommand({"help"}), kExitOk);
+  EXPECT_EQ(RunCommand({"bench", "--help"}), kExitOk);
+  EXPECT_EQ(RunCommand({"session", "create", "--help"}), kExitOk);
+  EXPECT_EQ(RunCommand({"--version"}), kExitOk);
+  const std::string out = ::testing::internal::GetCapturedStdout();
+  EXPECT_NE(out.find("--max-inflight-frames"), std::string::npos) << out;
+  EXPECT_NE(out.find("Security (every command)"), std::string::npos) << out;
+  EXPECT_NE(out.find("lane-client 0."), std::string::npos) << out;
+  // The old spellings are aliases, not shown in --help.
+  EXPECT_EQ(out.find("--session-inflight"), std::string::npos) << out;
+  EXPECT_EQ(out.find("--inflight"), std::string::npos) << out;
+}
+
+// The spellings before the renames (--inflight, --session-inflight) still
+// work, as hidden aliases of --window and --max-inflight-frames.
+TEST_F(ClientTest, OldFlagSpellingsAreAliases) {
+  auto server = StartServer("127.0.0.1:0");
+  ASSERT_NE(server, nullptr);
+  TempDir out;
+  EXPECT_EQ(RunCommand({"bench", "--target", Target(*server), "--cameras", "1", "--inflight", "3",
+                        "--session-inflight", "2", "--warmup", "0", "--duration", "300ms",
+                        "--synthetic", "2", "--json", "--output", out / "report.json"}),
+            kExitOk);
+  EXPECT_EQ(ReadJson(out / "report.json")["inflight_per_camera"], 3);
+  EXPECT_EQ(RunCommand({"stream", "--target", Target(*server), "--camera", "old", "--config",
+                        kConfig, "--inflight", "2", "--session-inflight", "4", "--output",
+                        out / "results.jsonl", frames_->str()}),
+            kExitOk);
+  EXPECT_EQ(ReadJsonLines(out / "results.jsonl").size(), static_cast<size_t>(kFrames));
+  const auto session = server->sessions().Find("old");
+  ASSERT_NE(session, nullptr);
+  EXPECT_EQ(session->stream.max_inflight_frames, 4u);
 }
 
 }  // namespace

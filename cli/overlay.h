@@ -1,9 +1,11 @@
 // Pictures of a detection for people: the frame with the lanes drawn on it,
 // and the detector's top view with the lanes drawn in it.
-#ifndef LANE_TOOLS_OVERLAY_H_
-#define LANE_TOOLS_OVERLAY_H_
+#ifndef LANE_CLI_OVERLAY_H_
+#define LANE_CLI_OVERLAY_H_
 
+#include <filesystem>
 #include <opencv2/core.hpp>
+#include <string>
 
 #include "lane/detector.h"
 
@@ -25,6 +27,12 @@ cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
 cv::Mat DrawIpmView(const cv::Mat& frame, const lane::Detection& detection,
                     const lane::Detector& detector, int scale = 4);
 
+// Writes DIR/STEM.png (DrawLanesOnImage) and DIR/STEM_ipm.png
+// (DrawIpmView); an error message or "".
+std::string WriteOverlays(const std::filesystem::path& dir, const std::string& stem,
+                          const cv::Mat& frame, const lane::Detection& detection,
+                          const lane::Detector& detector);
+
 }  // namespace lane_tools
 
-#endif  // LANE_TOOLS_OVERLAY_H_
+#endif  // LANE_CLI_OVERLAY_H_

@@ -1,11 +1,13 @@
-#include "overlay.h"
+#include "cli/overlay.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "lane/bezier.h"
 
 namespace lane_tools {
@@ -121,6 +123,24 @@ cv::Mat DrawIpmView(const cv::Mat& frame, const lane::Detection& detection,
                });
   }
   return canvas;
+}
+
+std::string WriteOverlays(const std::filesystem::path& dir, const std::string& stem,
+                          const cv::Mat& frame, const lane::Detection& detection,
+                          const lane::Detector& detector) {
+  const std::string image_path = (dir / (stem + ".png")).string();
+  const std::string ipm_path = (dir / (stem + "_ipm.png")).string();
+  try {
+    if (!cv::imwrite(image_path, DrawLanesOnImage(frame, detection, detector))) {
+      return absl::StrCat("cannot write ", image_path);
+    }
+    if (!cv::imwrite(ipm_path, DrawIpmView(frame, detection, detector))) {
+      return absl::StrCat("cannot write ", ipm_path);
+    }
+  } catch (const cv::Exception& e) {
+    return absl::StrCat("cannot write overlay ", image_path, ": ", e.what());
+  }
+  return "";
 }
 
 }  // namespace lane_tools

@@ -1,4 +1,4 @@
-#include "results_json.h"
+#include "cli/results_json.h"
 
 #include <array>
 #include <cmath>

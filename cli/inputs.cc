@@ -1,4 +1,4 @@
-#include "inputs.h"
+#include "cli/inputs.h"
 
 #include <algorithm>
 #include <cctype>
@@ -96,6 +96,12 @@ std::string MakeStem(const std::string& name) {
   const size_t first = stem.find_first_not_of("._");
   stem = first == std::string::npos ? std::string() : stem.substr(first);
   return stem.empty() ? std::string("frame") : stem;
+}
+
+std::string UniqueStem(const std::string& stem, std::set<std::string>& used) {
+  std::string candidate = stem;
+  for (int i = 2; !used.insert(candidate).second; ++i) candidate = absl::StrCat(stem, "-", i);
+  return candidate;
 }
 
 FrameReader::FrameReader(const std::vector<std::string>& inputs) : entries_(ExpandInputs(inputs)) {}

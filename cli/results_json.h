@@ -1,7 +1,7 @@
 // The results file of `lane detect`: JSON Lines, one object per frame.
 // docs/results-format.md describes schema 1.
-#ifndef LANE_TOOLS_RESULTS_JSON_H_
-#define LANE_TOOLS_RESULTS_JSON_H_
+#ifndef LANE_CLI_RESULTS_JSON_H_
+#define LANE_CLI_RESULTS_JSON_H_
 
 #include <string>
 
@@ -25,4 +25,4 @@ std::string ErrorJsonLine(const std::string& frame, int width, int height, lane:
 
 }  // namespace lane_tools
 
-#endif  // LANE_TOOLS_RESULTS_JSON_H_
+#endif  // LANE_CLI_RESULTS_JSON_H_

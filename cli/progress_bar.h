@@ -1,7 +1,7 @@
 // A one-line progress bar on stderr, drawn only when stderr is a terminal,
 // so logs and pipes never see it.
-#ifndef LANE_TOOLS_PROGRESS_BAR_H_
-#define LANE_TOOLS_PROGRESS_BAR_H_
+#ifndef LANE_CLI_PROGRESS_BAR_H_
+#define LANE_CLI_PROGRESS_BAR_H_
 
 #include <chrono>
 #include <string>
@@ -29,4 +29,4 @@ class ProgressBar {
 
 }  // namespace lane_tools
 
-#endif  // LANE_TOOLS_PROGRESS_BAR_H_
+#endif  // LANE_CLI_PROGRESS_BAR_H_

@@ -1,12 +1,13 @@
 // Frames from the command line's INPUT arguments: image files, directories of
 // images, list files and videos.
-#ifndef LANE_TOOLS_INPUTS_H_
-#define LANE_TOOLS_INPUTS_H_
+#ifndef LANE_CLI_INPUTS_H_
+#define LANE_CLI_INPUTS_H_
 
 #include <fstream>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,10 @@ std::vector<InputEntry> ExpandInputs(const std::vector<std::string>& inputs);
 // component dropped ("video.mp4#000012" -> "video_000012"), '/', '\', '#',
 // ':' and ' ' -> '_', leading '.' and '_' removed; "frame" if nothing is left.
 std::string MakeStem(const std::string& name);
+
+// A stem not used yet in this run: "name", "name-2", "name-3", ...; the one
+// returned is added to `used`.
+std::string UniqueStem(const std::string& stem, std::set<std::string>& used);
 
 // Expands the INPUT arguments:
 //  * an existing directory: its .jpg/.jpeg/.png files (not recursive), sorted
@@ -83,4 +88,4 @@ bool IsVideoExtension(const std::string& ext);
 
 }  // namespace lane_tools
 
-#endif  // LANE_TOOLS_INPUTS_H_
+#endif  // LANE_CLI_INPUTS_H_

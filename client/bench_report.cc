@@ -1,0 +1,225 @@
+#include "bench_report.h"
+
+#include <cmath>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "wire/frame_decoder.h"
+
+namespace lane_client {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+double Round3(double v) { return std::round(v * 1e3) / 1e3; }
+
+Json LatencyJson(const LatencySummary& s) {
+  Json j = Json::object();
+  j["count"] = s.count;
+  j["p50"] = Round3(s.p50);
+  j["p90"] = Round3(s.p90);
+  j["p99"] = Round3(s.p99);
+  j["p999"] = Round3(s.p999);
+  j["max"] = Round3(s.max);
+  j["mean"] = Round3(s.mean);
+  return j;
+}
+
+std::string ErrorsText(const std::map<std::string, uint64_t>& errors) {
+  std::vector<std::string> parts;
+  for (const auto& [code, n] : errors) parts.push_back(absl::StrCat(code, ":", n));
+  return absl::StrJoin(parts, ";");
+}
+
+}  // namespace
+
+FramesInfo DescribeFrames(const std::vector<BenchFrame>& frames, const std::string& source) {
+  FramesInfo info;
+  info.source = source;
+  double bytes = 0;
+  for (const BenchFrame& frame : frames) {
+    std::string kind = "raw";
+    if (frame.request.has_raw()) {
+      info.width = static_cast<int>(frame.request.raw().width());
+      info.height = static_cast<int>(frame.request.raw().height());
+    } else if (auto header = lane::wire::ReadEncodedHeader(frame.request.encoded()); header.ok()) {
+      kind = header->format == lane::wire::EncodedFormat::kJpeg ? "jpeg" : "png";
+      info.width = header->width;
+      info.height = header->height;
+    }
+    if (info.encoding.empty()) info.encoding = kind;
+    if (info.encoding != kind) info.encoding = "mixed";
+    bytes += static_cast<double>(frame.image_part.size());
+  }
+  info.mean_bytes = frames.empty() ? 0 : bytes / static_cast<double>(frames.size());
+  return info;
+}
+
+std::string JsonReport(const Report& r) {
+  Json j = Json::object();
+  j["schema"] = kBenchReportSchema;
+  j["targets"] = r.targets;
+  j["connections_per_target"] = r.connections;
+  j["mode"] = r.open_loop ? "open" : "closed";
+  j["inflight_per_camera"] = r.open_loop ? Json() : Json(r.inflight);
+  j["fps_per_camera"] = r.open_loop ? Json(r.fps) : Json();
+  j["warmup_s"] = r.warmup_s;
+  j["duration_s"] = r.duration_s;
+  Json frames = Json::object();
+  frames["source"] = r.frames.source;
+  frames["encoding"] = r.frames.encoding;
+  frames["width"] = r.frames.width;
+  frames["height"] = r.frames.height;
+  frames["mean_bytes"] = std::round(r.frames.mean_bytes);
+  j["frames"] = frames;
+  Json runs = Json::array();
+  for (const LoadResult& run : r.runs) {
+    Json x = Json::object();
+    x["cameras"] = run.cameras;
+    x["target_fps"] = run.open_loop ? Json(run.target_fps) : Json();
+    x["achieved_fps"] = Round3(run.achieved_fps);
+    x["measured_s"] = Round3(run.measured_s);
+    x["frames_scheduled"] = run.frames_scheduled;
+    x["frames_sent"] = run.frames_sent;
+    x["frames_ok"] = run.frames_ok;
+    x["errors_total"] = run.errors_total;
+    x["errors"] = Json::object();
+    for (const auto& [code, n] : run.errors) x["errors"][code] = n;
+    x["dropped"] = run.dropped;
+    x["unsent"] = run.unsent;
+    x["latency_ms"] = LatencyJson(run.latency_ms);
+    x["server_ms"] = LatencyJson(run.server_ms);
+    x["max_send_lag_ms"] = Round3(run.max_send_lag_ms);
+    x["stream_failures"] = run.stream_failures;
+    x["ok_by_target"] = Json::object();
+    for (const auto& [target, n] : run.ok_by_target) x["ok_by_target"][target] = n;
+    const std::optional<double> ratio = r.Ratio(run);
+    x["service_vs_inprocess"] = ratio ? Json(Round3(*ratio)) : Json();
+    x["slo_met"] = r.slo_p99_ms ? Json(r.SloMet(run)) : Json();
+    if (!run.timeline.empty()) {
+      Json timeline = Json::array();
+      for (const TimelinePoint& point : run.timeline) {
+        Json t = Json::object();
+        t["start_s"] = Round3(point.start_s);
+        t["end_s"] = Round3(point.end_s);
+        t["frames_ok"] = point.ok;
+        t["errors"] = point.errors;
+        t["latency_ms"] = LatencyJson(point.latency_ms);
+        timeline.push_back(std::move(t));
+      }
+      x["timeline"] = std::move(timeline);
+    }
+    runs.push_back(std::move(x));
+  }
+  j["runs"] = std::move(runs);
+  if (r.inprocess) {
+    Json x = Json::object();
+    x["workers"] = r.inprocess->workers;
+    x["fps"] = Round3(r.inprocess->fps);
+    x["frames"] = r.inprocess->frames;
+    x["latency_ms"] = LatencyJson(r.inprocess->latency_ms);
+    j["inprocess"] = std::move(x);
+  } else {
+    j["inprocess"] = Json();
+  }
+  j["slo_p99_ms"] = r.slo_p99_ms ? Json(*r.slo_p99_ms) : Json();
+  j["slo_met"] = r.slo_p99_ms ? Json(r.AllSloMet()) : Json();
+  return j.dump(2) + "\n";
+}
+
+std::string CsvReport(const Report& r) {
+  std::ostringstream out;
+  out << "mode,cameras,inflight_per_camera,fps_per_camera,target_fps,achieved_fps,p50_ms,p90_ms,"
+         "p99_ms,p999_ms,max_ms,mean_ms,frames_scheduled,frames_sent,frames_ok,errors_total,"
+         "dropped,unsent,errors,inprocess_fps,service_vs_inprocess,slo_met\n";
+  for (const LoadResult& run : r.runs) {
+    const std::optional<double> ratio = r.Ratio(run);
+    out << (r.open_loop ? "open" : "closed") << ',' << run.cameras << ','
+        << (r.open_loop ? std::string() : absl::StrCat(r.inflight)) << ','
+        << (r.open_loop ? absl::StrCat(r.fps) : std::string()) << ','
+        << (r.open_loop ? absl::StrFormat("%.3f", run.target_fps) : std::string()) << ','
+        << absl::StrFormat("%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f", run.achieved_fps,
+                           run.latency_ms.p50, run.latency_ms.p90, run.latency_ms.p99,
+                           run.latency_ms.p999, run.latency_ms.max, run.latency_ms.mean)
+        << ',' << run.frames_scheduled << ',' << run.frames_sent << ',' << run.frames_ok << ','
+        << run.errors_total << ',' << run.dropped << ',' << run.unsent << ','
+        << ErrorsText(run.errors) << ','
+        << (r.inprocess ? absl::StrFormat("%.3f", r.inprocess->fps) : std::string()) << ','
+        << (ratio ? absl::StrFormat("%.3f", *ratio) : std::string()) << ','
+        << (r.slo_p99_ms ? (r.SloMet(run) ? "true" : "false") : "") << '\n';
+  }
+  return out.str();
+}
+
+std::string TextReport(const Report& r) {
+  std::ostringstream out;
+  out << "lane-client bench: " << absl::StrJoin(r.targets, ",");
+  out << (r.connections_given ? absl::StrCat(" (", r.connections, " connection(s) per target)")
+                              : std::string(" (a connection per camera)"));
+  out << ", "
+      << (r.open_loop ? absl::StrFormat("open loop at %g fps per camera", r.fps)
+                      : absl::StrFormat("closed loop, %d in flight per camera", r.inflight))
+      << "\n  frames: " << r.frames.source << ", " << r.frames.encoding << " " << r.frames.width
+      << "x" << r.frames.height << absl::StrFormat(", %.1f KB mean", r.frames.mean_bytes / 1e3)
+      << absl::StrFormat("; warm-up %g s, measured %g s\n\n", r.warmup_s, r.duration_s);
+  out << absl::StrFormat("%7s %10s %10s %8s %8s %8s %8s %8s %8s %8s %8s %8s\n", "cameras",
+                         "target/s", "achieved/s", "p50 ms", "p90 ms", "p99 ms", "p99.9 ms",
+                         "max ms", "sent", "ok", "errors", "dropped");
+  for (const LoadResult& run : r.runs) {
+    out << absl::StrFormat(
+        "%7d %10s %10.1f %8.2f %8.2f %8.2f %8.2f %8.2f %8d %8d %8d %8d\n", run.cameras,
+        run.open_loop ? absl::StrFormat("%.1f", run.target_fps) : std::string("max"),
+        run.achieved_fps, run.latency_ms.p50, run.latency_ms.p90, run.latency_ms.p99,
+        run.latency_ms.p999, run.latency_ms.max, run.frames_sent, run.frames_ok, run.errors_total,
+        run.dropped);
+  }
+  for (const LoadResult& run : r.runs) {
+    std::vector<std::string> notes;
+    if (!run.errors.empty()) notes.push_back("errors " + ErrorsText(run.errors));
+    if (run.unsent > 0) notes.push_back(absl::StrCat(run.unsent, " frames unsent"));
+    if (run.stream_failures > 0) {
+      notes.push_back(absl::StrCat(run.stream_failures, " stream failures"));
+    }
+    if (run.open_loop && run.max_send_lag_ms > 1) {
+      notes.push_back(absl::StrFormat("sender up to %.1f ms behind schedule", run.max_send_lag_ms));
+    }
+    notes.push_back(
+        absl::StrFormat("server p50 %.2f ms p99 %.2f ms", run.server_ms.p50, run.server_ms.p99));
+    if (run.ok_by_target.size() > 1) {
+      std::vector<std::string> parts;
+      for (const auto& [target, n] : run.ok_by_target)
+        parts.push_back(absl::StrCat(target, " ", n));
+      notes.push_back("ok by target: " + absl::StrJoin(parts, ", "));
+    }
+    if (const std::optional<double> ratio = r.Ratio(run)) {
+      notes.push_back(absl::StrFormat("service/in-process %.1f %%", *ratio * 100));
+    }
+    out << absl::StrFormat("  %d cameras: ", run.cameras) << absl::StrJoin(notes, "; ") << "\n";
+    if (!run.timeline.empty()) {
+      out << absl::StrFormat("    %15s %8s %8s %8s %8s %8s\n", "interval s", "ok", "errors",
+                             "p50 ms", "p99 ms", "max ms");
+      for (const TimelinePoint& p : run.timeline) {
+        out << absl::StrFormat("    %7.0f-%-7.0f %8d %8d %8.2f %8.2f %8.2f\n", p.start_s, p.end_s,
+                               p.ok, p.errors, p.latency_ms.p50, p.latency_ms.p99,
+                               p.latency_ms.max);
+      }
+    }
+  }
+  if (r.inprocess) {
+    out << absl::StrFormat(
+        "in-process: %d workers, %.1f frames/s, decode+detect p50 %.2f ms p99 %.2f ms\n",
+        r.inprocess->workers, r.inprocess->fps, r.inprocess->latency_ms.p50,
+        r.inprocess->latency_ms.p99);
+  }
+  if (r.slo_p99_ms) {
+    out << absl::StrFormat("SLO p99 <= %g ms: %s\n", *r.slo_p99_ms,
+                           r.AllSloMet() ? "met" : "BREACHED");
+  }
+  return out.str();
+}
+
+}  // namespace lane_client
