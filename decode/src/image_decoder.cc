@@ -176,37 +176,143 @@ absl::Status CheckFrameSize(int64_t width, int64_t height, const DecodeOptions& 
   return absl::OkStatus();
 }
 
-absl::StatusOr<cv::Mat> DecodeImage(absl::string_view bytes, const DecodeOptions& options) {
-  const absl::Time start = absl::Now();
-  if (absl::Status s = options.Validate(); !s.ok()) return s;
+namespace {
+
+// The checks DecodeImage and DecodeImageRegion share, on the options and the
+// header: the header, or why the frame is refused before decoding.
+absl::StatusOr<EncodedHeader> CheckedHeader(absl::string_view bytes, const DecodeOptions& options) {
   if (bytes.empty()) return absl::InvalidArgumentError("encoded frame is empty");
   absl::StatusOr<EncodedHeader> header = ReadEncodedHeader(bytes);
   if (!header.ok()) return header.status();
   if (absl::Status s = CheckFrameSize(header->width, header->height, options); !s.ok()) return s;
-  const char* name = FormatName(header->format);
   const int64_t max_bytes = MaxEncodedBytes(*header);
   if (static_cast<int64_t>(bytes.size()) > max_bytes) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "the ", name, " frame is ", bytes.size(), " bytes, more than the ", max_bytes,
-        " allowed for ", header->width, "x", header->height, " (twice the raw size + 1 MiB)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("the ", FormatName(header->format), " frame is ", bytes.size(),
+                     " bytes, more than the ", max_bytes, " allowed for ", header->width, "x",
+                     header->height, " (twice the raw size + 1 MiB)"));
   }
+  return header;
+}
 
+internal::CodecRequest RequestFor(absl::string_view bytes, const EncodedHeader& header,
+                                  const DecodeOptions& options, absl::Time start) {
   internal::CodecRequest request;
   request.bytes = bytes;
-  request.width = header->width;
-  request.height = header->height;
-  request.gray = options.gray;
+  request.width = header.width;
+  request.height = header.height;
+  request.output = options.gray ? internal::Output::kGray : internal::Output::kBgr;
   request.accept_damaged = options.accept_damaged;
   request.max_progressive_scans = options.max_progressive_scans;
   request.deadline = start + options.deadline;
   request.budget = options.deadline;
+  request.scale_denom = 1;
+  request.top = 0;
+  request.bottom = header.height;
+  request.left = 0;
+  request.right = header.width;
+  request.read_to_end = true;
+  return request;
+}
 
+absl::Status RunCodec(const EncodedHeader& header, const internal::CodecRequest& request,
+                      cv::Mat& out, cv::Rect& decoded) {
+  return header.format == EncodedFormat::kJpeg ? internal::DecodeJpeg(request, out, decoded)
+                                               : internal::DecodePng(request, out, decoded);
+}
+
+int CeilDiv(int a, int b) { return (a + b - 1) / b; }
+
+}  // namespace
+
+absl::StatusOr<cv::Mat> DecodeImage(absl::string_view bytes, const DecodeOptions& options) {
+  const absl::Time start = absl::Now();
+  if (absl::Status s = options.Validate(); !s.ok()) return s;
+  absl::StatusOr<EncodedHeader> header = CheckedHeader(bytes, options);
+  if (!header.ok()) return header.status();
+  const internal::CodecRequest request = RequestFor(bytes, *header, options, start);
   cv::Mat image(header->height, header->width, options.gray ? CV_8UC1 : CV_8UC3);
-  const absl::Status status = header->format == EncodedFormat::kJpeg
-                                  ? internal::DecodeJpeg(request, image)
-                                  : internal::DecodePng(request, image);
-  if (!status.ok()) return status;
+  cv::Rect decoded;
+  if (absl::Status s = RunCodec(*header, request, image, decoded); !s.ok()) return s;
   return image;
+}
+
+absl::Status DecodeRegion::Validate() const {
+  if (top < 0 || bottom < 0 || (bottom != 0 && bottom <= top)) {
+    return absl::InvalidArgumentError(absl::StrCat("DecodeRegion: rows [", top, ", ", bottom,
+                                                   ") are not a non-empty range (bottom 0: all)"));
+  }
+  if (left < 0 || right < 0 || (right != 0 && right <= left)) {
+    return absl::InvalidArgumentError(absl::StrCat("DecodeRegion: columns [", left, ", ", right,
+                                                   ") are not a non-empty range (right 0: all)"));
+  }
+  if (scale_denom != 1 && scale_denom != 2 && scale_denom != 4 && scale_denom != 8) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("DecodeRegion: scale_denom ", scale_denom, " must be 1, 2, 4 or 8"));
+  }
+  switch (output) {
+    case Output::kBgr:
+    case Output::kGray:
+    case Output::kRed:
+      return absl::OkStatus();
+  }
+  return absl::InvalidArgumentError("DecodeRegion: unknown output");
+}
+
+absl::StatusOr<DecodedRegion> DecodeImageRegion(absl::string_view bytes,
+                                                const DecodeOptions& options,
+                                                const DecodeRegion& region) {
+  const absl::Time start = absl::Now();
+  if (absl::Status s = options.Validate(); !s.ok()) return s;
+  if (absl::Status s = region.Validate(); !s.ok()) return s;
+  if (options.gray && region.output != DecodeRegion::Output::kGray) {
+    return absl::InvalidArgumentError(
+        "DecodeOptions.gray asks for grey but the DecodeRegion for another output");
+  }
+  absl::StatusOr<EncodedHeader> header = CheckedHeader(bytes, options);
+  if (!header.ok()) return header.status();
+  const int width = header->width;
+  const int height = header->height;
+  const int bottom = region.bottom == 0 ? height : region.bottom;
+  const int right = region.right == 0 ? width : region.right;
+  if (region.top >= height || bottom > height || region.left >= width || right > width) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("the region, rows [", region.top, ", ", bottom, ") and columns [", region.left,
+                     ", ", right, "), is not inside the ", width, "x", height, " frame"));
+  }
+
+  const int s = region.scale_denom;
+  internal::CodecRequest request = RequestFor(bytes, *header, options, start);
+  switch (region.output) {
+    case DecodeRegion::Output::kBgr:
+      request.output = internal::Output::kBgr;
+      break;
+    case DecodeRegion::Output::kGray:
+      request.output = internal::Output::kGray;
+      break;
+    case DecodeRegion::Output::kRed:
+      request.output = internal::Output::kRed;
+      break;
+  }
+  request.scale_denom = s;
+  request.top = region.top / s;
+  request.bottom = CeilDiv(bottom, s);
+  request.left = region.left / s;
+  request.right = CeilDiv(right, s);
+  request.read_to_end = region.read_to_end;
+
+  DecodedRegion result;
+  result.scale_denom = s;
+  result.frame_size = cv::Size(width, height);
+  result.image.create(CeilDiv(height, s), CeilDiv(width, s),
+                      region.output == DecodeRegion::Output::kBgr ? CV_8UC3 : CV_8UC1);
+  if (absl::Status st = RunCodec(*header, request, result.image, result.rect); !st.ok()) return st;
+  const cv::Rect& r = result.rect;
+  const int x0 = r.x * s;
+  const int y0 = r.y * s;
+  result.frame_rect = cv::Rect(x0, y0, std::min(width, (r.x + r.width) * s) - x0,
+                               std::min(height, (r.y + r.height) * s) - y0);
+  return result;
 }
 
 }  // namespace lane::decode

@@ -8,6 +8,13 @@
 // in IDAT"); what follows is only CRC-checked, at memory speed, and the byte
 // cap bounds that. png_read_end is never called.
 //
+// A region: every row down to the region's last is still inflated and
+// unfiltered (each row's filter refers to the one above), only the region's
+// rows are stored, and unless the request reads to the end no more input is
+// fed after the slice (kFeedBytes) in which the last pass delivered the
+// region's last row. Red output and scaling go through a full-resolution BGR
+// or grey copy of the region's rows, reduced afterwards.
+//
 // libpng reports errors through our error callback, which longjmps to the
 // setjmp in RunPng (png_jmpbuf). Everything the decode touches between the
 // two lives in one trivially destructible PngState, and the functions it may
@@ -16,8 +23,10 @@
 
 #include <algorithm>
 #include <csetjmp>
+#include <cstdint>
 #include <cstring>
 #include <type_traits>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
 #include "codecs.h"
@@ -40,18 +49,22 @@ struct PngState {
   // Inputs.
   const unsigned char* data;
   size_t size;
-  unsigned char* out;  // height rows of stride bytes
+  unsigned char* out;  // height rows of stride bytes, full resolution
   size_t stride;
   int width;
   int height;
   bool gray;
+  int first_row;  // rows [first_row, end_row) are stored
+  int end_row;
+  bool read_to_end;
   bool accept_damaged;
   absl::Time deadline;
 
   // Progress.
   bool interlaced;
-  bool rows_done;  // the last row of the last pass was delivered
-  bool end_seen;   // IEND was read
+  bool rows_done;    // the last row of the last pass was delivered
+  bool region_done;  // end_row - 1 of the last pass was delivered
+  bool end_seen;     // IEND was read
 
   // Outcome.
   Failure failure;
@@ -147,12 +160,18 @@ void OnRow(png_structp png, png_bytep new_row, png_uint_32 row, int pass) {
   PngState* state = StateOf(png);
   CheckDeadline(png, state);
   if (row >= static_cast<png_uint_32>(state->height)) Fail(png, Failure::kUnexpected);
-  if (new_row != nullptr) {
+  const bool stored = row >= static_cast<png_uint_32>(state->first_row) &&
+                      row < static_cast<png_uint_32>(state->end_row);
+  if (new_row != nullptr && stored) {
     png_progressive_combine_row(png, state->out + row * state->stride, new_row);
   }
-  if (row + 1 == static_cast<png_uint_32>(state->height) && pass == (state->interlaced ? 6 : 0)) {
-    state->rows_done = true;
-  }
+  const int last_pass = state->interlaced ? 6 : 0;
+  if (pass != last_pass) return;
+  if (row + 1 == static_cast<png_uint_32>(state->height)) state->rows_done = true;
+  // Not png_process_data_pause: called here, in the middle of an IDAT chunk,
+  // libpng 1.6.39 then subtracts the chunk from the buffer size the pause
+  // zeroed, and runs on through memory. DecodeSteps stops feeding instead.
+  if (row + 1 == static_cast<png_uint_32>(state->end_row)) state->region_done = true;
 }
 
 void OnEnd(png_structp png, png_infop /*info*/) { StateOf(png)->end_seen = true; }
@@ -175,7 +194,7 @@ void DecodeSteps(PngState* state) {
     png_set_keep_unknown_chunks(png, PNG_HANDLE_CHUNK_AS_DEFAULT, kGammaChunks, 2);
   }
   size_t pos = 0;
-  while (pos < state->size && !state->end_seen) {
+  while (pos < state->size && !state->end_seen && (state->read_to_end || !state->region_done)) {
     const size_t count = std::min(kFeedBytes, state->size - pos);
     // libpng only reads the buffer; its API predates const.
     png_process_data(png, state->info, const_cast<png_bytep>(state->data + pos), count);
@@ -207,17 +226,77 @@ bool RunPng(PngState* state) {
   return true;
 }
 
+// The R channel of BGR rows [first, end) of `bgr`, into `red`.
+void TakeRed(const cv::Mat& bgr, int first, int end, cv::Mat& red) {
+  for (int y = first; y < end; ++y) {
+    const unsigned char* in = bgr.ptr(y);
+    unsigned char* r = red.ptr(y);
+    for (int x = 0; x < bgr.cols; ++x) r[x] = in[3 * x + 2];
+  }
+}
+
+// `full` rows [first, end) (full resolution) reduced by `scale` into `out`
+// rows [first / scale, ceil(end / scale)): each output sample the mean of
+// the samples of its scale x scale block inside the image, rounded to
+// nearest. `first` is a multiple of scale, and `end` too unless it is the
+// image's height.
+void BoxReduce(const cv::Mat& full, int first, int end, int scale, cv::Mat& out) {
+  const int channels = full.channels();
+  const int out_cols = out.cols;
+  std::vector<uint32_t> sums(static_cast<size_t>(out_cols) * channels);
+  for (int oy = first / scale; oy * scale < end; ++oy) {
+    std::fill(sums.begin(), sums.end(), 0);
+    const int y_end = std::min(end, (oy + 1) * scale);
+    for (int y = oy * scale; y < y_end; ++y) {
+      const unsigned char* in = full.ptr(y);
+      for (int x = 0; x < full.cols; ++x) {
+        for (int c = 0; c < channels; ++c) {
+          sums[static_cast<size_t>(x / scale) * channels + c] += in[x * channels + c];
+        }
+      }
+    }
+    const int rows = y_end - oy * scale;
+    unsigned char* o = out.ptr(oy);
+    for (int ox = 0; ox < out_cols; ++ox) {
+      const int cols = std::min(full.cols, (ox + 1) * scale) - ox * scale;
+      const uint32_t count = static_cast<uint32_t>(rows * cols);
+      for (int c = 0; c < channels; ++c) {
+        const size_t i = static_cast<size_t>(ox) * channels + c;
+        o[i] = static_cast<unsigned char>((sums[i] + count / 2) / count);
+      }
+    }
+  }
+}
+
 }  // namespace
 
-absl::Status DecodePng(const CodecRequest& request, cv::Mat& out) {
+absl::Status DecodePng(const CodecRequest& request, cv::Mat& out, cv::Rect& decoded) {
+  // Rows [first, end) of the full-resolution image hold the output's rows
+  // [request.top, request.bottom).
+  const int scale = request.scale_denom;
+  const int first = request.top * scale;
+  const int end = std::min(request.height, request.bottom * scale);
+  const bool gray = request.output == Output::kGray;
+  // Where libpng's rows go: `out` itself, or a full-resolution copy of the
+  // rows for red output (BGR) and scaling.
+  cv::Mat work;
+  if (request.output == Output::kRed || scale != 1) {
+    work.create(request.height, request.width, gray ? CV_8UC1 : CV_8UC3);
+  } else {
+    work = out;
+  }
+
   PngState state{};
   state.data = reinterpret_cast<const unsigned char*>(request.bytes.data());
   state.size = request.bytes.size();
-  state.out = out.data;
-  state.stride = out.step[0];
+  state.out = work.data;
+  state.stride = work.step[0];
   state.width = request.width;
   state.height = request.height;
-  state.gray = request.gray;
+  state.gray = gray;
+  state.first_row = first;
+  state.end_row = end;
+  state.read_to_end = request.read_to_end;
   state.accept_damaged = request.accept_damaged;
   state.deadline = request.deadline;
   if (!RunPng(&state)) {
@@ -234,13 +313,21 @@ absl::Status DecodePng(const CodecRequest& request, cv::Mat& out) {
     }
     return absl::InvalidArgumentError(absl::StrCat("cannot decode the PNG frame: ", state.message));
   }
-  if (!state.rows_done) {
+  if (!(request.read_to_end ? state.rows_done : state.region_done)) {
     return absl::InvalidArgumentError(
         "truncated PNG frame: the image data ends before the last row");
   }
-  if (!state.end_seen && !state.accept_damaged) {
+  if (request.read_to_end && !state.end_seen && !state.accept_damaged) {
     return absl::InvalidArgumentError("truncated PNG frame: no IEND chunk after the image data");
   }
+
+  if (request.output == Output::kRed) {
+    cv::Mat red = scale == 1 ? out : cv::Mat(request.height, request.width, CV_8UC1);
+    TakeRed(work, first, end, red);
+    work = red;
+  }
+  if (scale != 1) BoxReduce(work, first, end, scale, out);
+  decoded = cv::Rect(0, request.top, out.cols, request.bottom - request.top);
   return absl::OkStatus();
 }
 

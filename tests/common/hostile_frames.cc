@@ -101,6 +101,10 @@ struct EncodeJob {
   const jpeg_scan_info* scans;     // null: libjpeg's default (baseline)
   int quality;
   bool full_chroma;  // 4:4:4 instead of libjpeg's default 4:2:0
+  int luma_h;        // luma sampling factors; 0: libjpeg's default
+  int luma_v;
+  bool progressive;  // libjpeg's standard progression (scans == null only)
+  int restart_rows;
   int num_scans;
   unsigned char* out;  // malloc'ed by jpeg_mem_dest
   unsigned long out_size;
@@ -133,11 +137,18 @@ bool RunEncode(EncodeJob* job) {
     job->cinfo.comp_info[0].h_samp_factor = 1;
     job->cinfo.comp_info[0].v_samp_factor = 1;
   }
+  if (job->luma_h != 0 && job->components == 3) {
+    job->cinfo.comp_info[0].h_samp_factor = job->luma_h;
+    job->cinfo.comp_info[0].v_samp_factor = job->luma_v;
+  }
   if (job->file_color_space != JCS_UNKNOWN) jpeg_set_colorspace(&job->cinfo, job->file_color_space);
   if (job->scans != nullptr) {
     job->cinfo.scan_info = job->scans;
     job->cinfo.num_scans = job->num_scans;
+  } else if (job->progressive) {
+    jpeg_simple_progression(&job->cinfo);
   }
+  job->cinfo.restart_in_rows = job->restart_rows;
   jpeg_start_compress(&job->cinfo, TRUE);
   while (job->cinfo.next_scanline < job->cinfo.image_height) {
     JSAMPROW row = const_cast<JSAMPROW>(job->pixels) +
@@ -164,6 +175,28 @@ std::string LibjpegEncode(const cv::Mat& pixels, J_COLOR_SPACE in_color_space,
   job.num_scans = static_cast<int>(scans.size());
   job.quality = quality;
   job.full_chroma = full_chroma;
+  const bool ok = RunEncode(&job);
+  EXPECT_TRUE(ok) << "libjpeg could not encode";
+  std::string bytes = ok ? std::string(reinterpret_cast<char*>(job.out), job.out_size) : "";
+  std::free(job.out);
+  return bytes;
+}
+
+std::string LibjpegEncodeLayout(const cv::Mat& image, const JpegLayout& layout) {
+  EXPECT_TRUE(image.isContinuous());
+  EXPECT_TRUE(image.type() == CV_8UC3 || image.type() == CV_8UC1);
+  EncodeJob job{};
+  job.pixels = image.data;
+  job.width = image.cols;
+  job.height = image.rows;
+  job.components = image.channels();
+  job.in_color_space = image.channels() == 3 ? JCS_EXT_BGR : JCS_GRAYSCALE;
+  job.file_color_space = JCS_UNKNOWN;
+  job.quality = layout.quality;
+  job.luma_h = layout.luma_h;
+  job.luma_v = layout.luma_v;
+  job.progressive = layout.progressive;
+  job.restart_rows = layout.restart_rows;
   const bool ok = RunEncode(&job);
   EXPECT_TRUE(ok) << "libjpeg could not encode";
   std::string bytes = ok ? std::string(reinterpret_cast<char*>(job.out), job.out_size) : "";

@@ -45,6 +45,19 @@ std::string LibjpegEncode(const cv::Mat& pixels, J_COLOR_SPACE in_color_space,
                           const std::vector<jpeg_scan_info>& scans = {},
                           J_COLOR_SPACE file_color_space = JCS_UNKNOWN, int quality = 90,
                           bool full_chroma = false);
+// How LibjpegEncodeLayout lays a JPEG out.
+struct JpegLayout {
+  // Luma sampling factors, chroma 1x1: 2x2 is 4:2:0 (libjpeg's default),
+  // 2x1 4:2:2, 1x2 4:4:0, 4x1 4:1:1, 1x1 4:4:4.
+  int luma_h = 2;
+  int luma_v = 2;
+  bool progressive = false;  // libjpeg's standard progression
+  int restart_rows = 0;      // a restart marker every so many MCU rows; 0: none
+  int quality = 90;
+};
+// `image` (BGR CV_8UC3, or grey CV_8UC1: a one-component file) encoded by
+// libjpeg as `layout` says.
+std::string LibjpegEncodeLayout(const cv::Mat& image, const JpegLayout& layout);
 jpeg_scan_info Scan(std::initializer_list<int> components, int ss, int se, int ah, int al);
 // A valid progression with 2090 scans.
 std::vector<jpeg_scan_info> ManyScansScript();

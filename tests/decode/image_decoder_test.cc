@@ -21,6 +21,7 @@
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "decode_test_util.h"
 #include "hostile_frames.h"
 
 // clang-format off
@@ -31,51 +32,8 @@
 namespace lane::decode {
 namespace {
 
-using namespace lane::testing;  // NOLINT: the frame builders of hostile_frames.h
-
-using Clock = std::chrono::steady_clock;
-
-// What one hostile frame may cost a worker at most (the hardening issue's
-// bound). The refusals below take milliseconds; the bound is loose so that a
-// loaded or sanitized CI machine cannot make the tests flaky. Decoding speed
-// itself is measured in bench/, not here.
-constexpr double kFrameBudgetMs = 1000;
-
-double MillisecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-cv::Mat CvDecode(const std::string& bytes, bool gray) {
-  const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data()));
-  return cv::imdecode(
-      buffer, (gray ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR) | cv::IMREAD_IGNORE_ORIENTATION);
-}
-
-DecodeOptions For(int width, int height, bool gray = false) {
-  DecodeOptions options;
-  options.width = width;
-  options.height = height;
-  options.gray = gray;
-  return options;
-}
-
-::testing::AssertionResult Identical(const cv::Mat& actual, const cv::Mat& expected) {
-  if (actual.size() != expected.size() || actual.type() != expected.type()) {
-    return ::testing::AssertionFailure()
-           << "got " << actual.cols << "x" << actual.rows << " type " << actual.type()
-           << ", expected " << expected.cols << "x" << expected.rows << " type " << expected.type();
-  }
-  cv::Mat diff;
-  cv::absdiff(actual.reshape(1), expected.reshape(1), diff);
-  const int differing = cv::countNonZero(diff);
-  if (differing != 0) {
-    double max_diff = 0;
-    cv::minMaxLoc(diff, nullptr, &max_diff);
-    return ::testing::AssertionFailure()
-           << differing << " of " << diff.total() << " samples differ, by up to " << max_diff;
-  }
-  return ::testing::AssertionSuccess();
-}
+using namespace lane::testing;            // NOLINT: the frame builders of hostile_frames.h
+using namespace lane::decode::test_util;  // NOLINT: decode_test_util.h
 
 // Decodes with DecodeImage and compares with cv::imdecode of the same bytes.
 ::testing::AssertionResult SameAsOpenCv(const std::string& bytes, int width, int height,
@@ -85,10 +43,6 @@ DecodeOptions For(int width, int height, bool gray = false) {
   const cv::Mat theirs = CvDecode(bytes, gray);
   if (theirs.empty()) return ::testing::AssertionFailure() << "cv::imdecode failed";
   return Identical(*ours, theirs);
-}
-
-void ExpectShortMessage(const absl::Status& status) {
-  EXPECT_LT(status.message().size(), 200u) << status;
 }
 
 // ---- Headers, options, size checks --------------------------------------------

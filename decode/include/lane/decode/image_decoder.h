@@ -138,6 +138,110 @@ absl::Status CheckFrameSize(int64_t width, int64_t height, const DecodeOptions& 
 // characters and never quote the input.
 absl::StatusOr<cv::Mat> DecodeImage(absl::string_view bytes, const DecodeOptions& options);
 
+// ---- Region of interest --------------------------------------------------------
+//
+// What a consumer will read of a frame: a rectangle of it, at a resolution,
+// one channel or all three. DecodeImageRegion decodes that and as little else
+// as the format allows.
+struct DecodeRegion {
+  enum class Output {
+    kBgr,   // CV_8UC3: DecodeImage's pixels
+    kGray,  // CV_8UC1: DecodeImage's with options.gray (JPEG: Y alone)
+    kRed,   // CV_8UC1: the R channel of DecodeImage's BGR pixels
+  };
+  // Rows [top, bottom) and columns [left, right) of the full-size frame;
+  // bottom 0 means the frame's height, right 0 its width. Must lie inside
+  // the frame and not be empty (INVALID_ARGUMENT otherwise).
+  int top = 0;
+  int bottom = 0;
+  int left = 0;
+  int right = 0;
+  // 1, 2, 4 or 8: the output is 1/scale_denom of the frame's size, each side
+  // rounded up (ceil(width / scale_denom) x ceil(height / scale_denom)).
+  // JPEG: libjpeg's DCT scaling, the pixels of cv::imdecode with
+  // IMREAD_REDUCED_COLOR_n / IMREAD_REDUCED_GRAYSCALE_n. PNG: the mean of
+  // each scale_denom x scale_denom block (of the pixels inside the frame),
+  // rounded to nearest.
+  int scale_denom = 1;
+  Output output = Output::kBgr;
+  // What happens to the part of the file below the region's last row.
+  //   true: it is read as DecodeImage reads it, so damage anywhere in the
+  //     file is refused exactly as there (unless accept_damaged). Baseline
+  //     JPEG: entropy-decoded without being transformed (at most two iMCU
+  //     rows of it are); PNG: inflated, not stored.
+  //   false: decoding stops after the region's last row, and damage
+  //     detection is weaker than DecodeImage's, not only below the region:
+  //     * a file truncated more than one iMCU row (JPEG; libjpeg may read
+  //       that far ahead) or 64 KiB of data (PNG, fed in slices) below the
+  //       region's last row decodes without an error, and the region's
+  //       pixels are those of the intact file (the libraries decode in
+  //       order: data below a row never changes it);
+  //     * corrupt data anywhere, inside the region too, may go unnoticed,
+  //       the region's pixels then garbage: libjpeg mostly notices corrupt
+  //       entropy-coded data only where the decoder, out of step, meets the
+  //       scan's end marker, and libpng checks an IDAT chunk's CRC and the
+  //       zlib checksum only at their ends.
+  //     A progressive JPEG is read whole before its first row whatever this
+  //     says, so its damage is noticed as by DecodeImage.
+  // Irrelevant when bottom is the frame's height (the usual lane detector
+  // region): the whole file is read then. Use false only where damaged
+  // frames are acceptable anyway.
+  bool read_to_end = true;
+
+  // OK, or INVALID_ARGUMENT naming the first field that makes no sense on
+  // its own (the frame size is checked against the header).
+  absl::Status Validate() const;
+};
+
+struct DecodedRegion {
+  // The frame at 1/scale_denom of its size, CV_8UC3 for kBgr, CV_8UC1 else.
+  // Only `rect` is written: the pixels outside are unspecified (uninitialised
+  // memory, possibly an earlier frame's pixels) and must not be read or sent
+  // anywhere. Sampling by frame coordinates needs no translation:
+  // image.at<uchar>(y / scale_denom, x / scale_denom).
+  cv::Mat image;
+  // In image's coordinates: the rectangle decoded. It contains the requested
+  // region (scaled: rows floor(top / s) to ceil(bottom / s), the same for
+  // columns) and is at most one iMCU (JPEG: 8 to 32 pixels at scale 1) wider
+  // on either side, because libjpeg decodes whole iMCU columns (and at
+  // least 2 * the largest horizontal sampling factor + 1 of them); a PNG
+  // region spans every column. Its rows are the requested ones exactly. Every pixel
+  // in it is byte-identical to the same pixel of the full decode of an intact
+  // file (DecodeImage at scale 1, libjpeg's scaled decode otherwise; PNG: its
+  // box reduction).
+  cv::Rect rect;
+  // The part of the full-size frame that rect covers: rect * scale_denom,
+  // clipped to the frame.
+  cv::Rect frame_rect;
+  int scale_denom = 1;
+  cv::Size frame_size;  // the full-size frame's, from its header
+
+  // The decoded rectangle as a view into image (no copy).
+  cv::Mat Region() const { return image(rect); }
+};
+
+// Decodes the part of `bytes` (JPEG or PNG) that `region` asks for, with the
+// checks, limits, deadline and damaged-data handling of DecodeImage (the
+// same errors, from the same limits; options.gray must be false or agree
+// with region.output == kGray).
+//
+// JPEG: the iMCU rows above the region are entropy-decoded but not
+// transformed (jpeg_skip_scanlines), the columns outside it are not
+// transformed (jpeg_crop_scanline), decoding stops after its last row
+// (unless read_to_end asks for the tail), kGray transforms only Y. kRed is
+// the R channel of libjpeg's RGB output for the region (see the .cc for the
+// measured alternative). Baseline files profit fully. A progressive file has
+// all of its scans entropy-decoded into the whole coefficient buffer before
+// the first row, whatever the region: only the transform (IDCT, upsampling,
+// colour conversion) is saved there, a fraction of its cost.
+//
+// PNG: every row down to the region's last is inflated and unfiltered (PNG
+// cannot skip), only the region's rows are stored; an interlaced PNG is read
+// to its last pass. Below the region, as read_to_end says.
+absl::StatusOr<DecodedRegion> DecodeImageRegion(absl::string_view bytes,
+                                                const DecodeOptions& options,
+                                                const DecodeRegion& region);
+
 }  // namespace lane::decode
 
 #endif  // LANE_DECODE_IMAGE_DECODER_H_
