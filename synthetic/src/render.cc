@@ -1,0 +1,385 @@
+// Drawing the synthetic frame (sky, ground, markings, objects, sensor) and
+// its ground truth.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
+#include "lane/bezier.h"
+#include "scene.h"
+
+namespace lane {
+namespace synthetic_internal {
+
+// ---------------------------------------------------------------------------
+// Rendering.
+
+void RenderSky(const CameraModel& cam, const Look& look, cv::Mat3f& img) {
+  const int w = img.cols;
+  const double horizon = cam.HorizonRow();
+  const int last = std::min(img.rows - 1, static_cast<int>(std::floor(horizon + 0.5)));
+  if (last < 0) return;
+  const double span = std::max(1.0, 0.7 * img.rows);
+  std::vector<double> top(w);
+  for (int u = 0; u < w; ++u) {
+    const double n = 0.6 * ValueNoise(u * look.treeline_scale, 0.5, 1.0, look.salt + 11) +
+                     0.4 * ValueNoise(u * look.treeline_scale * 4.0, 0.5, 1.0, look.salt + 12);
+    top[u] = horizon - look.treeline_base - look.treeline_amp * std::max(0.0, n + 0.3);
+  }
+  // Clouds: stretched fractal noise, evaluated on a coarse grid (it is smooth)
+  // and interpolated.
+  cv::Mat1f clouds;
+  if (look.clouds > 0) {
+    constexpr int kStep = 4;
+    cv::Mat1f coarse(last / kStep + 2, w / kStep + 2);
+    for (int i = 0; i < coarse.rows; ++i) {
+      for (int j = 0; j < coarse.cols; ++j) {
+        const double cx = j * kStep * look.cloud_scale, cy = i * kStep * look.cloud_scale * 2.5;
+        const double n = 0.55 * ValueNoise(cx, cy, 1.0, look.salt + 14) +
+                         0.3 * ValueNoise(cx * 2.3, cy * 2.3, 1.0, look.salt + 15) +
+                         0.15 * ValueNoise(cx * 5.1, cy * 5.1, 1.0, look.salt + 16);
+        coarse(i, j) = static_cast<float>(look.clouds * std::clamp((n + 0.1) * 2.5, 0.0, 1.0));
+      }
+    }
+    cv::resize(coarse, clouds, cv::Size(coarse.cols * kStep, coarse.rows * kStep), 0, 0,
+               cv::INTER_LINEAR);
+  }
+  for (int v = 0; v <= last; ++v) {
+    const double t = std::pow(std::clamp((horizon - v) / span, 0.0, 1.0), 0.7);
+    const cv::Vec3f clear = Lerp(look.haze, look.sky_top, t);
+    auto* row = img.ptr<cv::Vec3f>(v);
+    const float* cloud_row = clouds.empty() ? nullptr : clouds.ptr<float>(v);
+    for (int u = 0; u < w; ++u) {
+      cv::Vec3f sky = clear;
+      if (cloud_row) sky = Lerp(sky, look.cloud, cloud_row[u] * (0.3 + 0.7 * t));
+      const double cover = SoftStep(v - top[u], 1.0);
+      if (cover <= 0) {
+        row[u] = sky;
+        continue;
+      }
+      // Distant trees/hills: hazy, textured.
+      const double tex = 12.0 * ValueNoise(u, v, 0.25, look.salt + 13);
+      cv::Vec3f c = Lerp(look.treeline, look.haze, 0.35) + cv::Vec3f::all(static_cast<float>(tex));
+      row[u] = Lerp(sky, c, cover);
+    }
+  }
+}
+
+void RenderGround(const CameraModel& cam, const Road& road, const Look& look,
+                  const std::vector<Shadow>& shadows, cv::Mat3f& img) {
+  const int w = img.cols;
+  const int h = img.rows;
+  const double horizon = cam.HorizonRow();
+  const int first = std::max(0, static_cast<int>(std::floor(horizon + 0.5)) + 1);
+  const double du = w > 1 ? w - 1 : 1;
+  // Ground point of pixel (u, v) is a(v) + b(v) * u (the homography's
+  // denominator depends on v only).
+  auto row_affine = [&](double v, Eigen::Vector2d* a, Eigen::Vector2d* b) {
+    *a = cam.ImageToGround({0.0, v});
+    *b = (cam.ImageToGround({du, v}) - *a) / du;
+  };
+  std::vector<const Boundary*> visible;
+  for (const Boundary& m : road.boundaries) {
+    if (m.visible) visible.push_back(&m);
+  }
+  const Boundary& b0 = road.boundaries.front();
+  const uint64_t salt = look.salt;
+  for (int v = first; v < h; ++v) {
+    Eigen::Vector2d a, b, am, bm, ap, bp;
+    row_affine(v, &a, &b);
+    row_affine(v - 0.5, &am, &bm);
+    row_affine(v + 0.5, &ap, &bp);
+    auto* row = img.ptr<cv::Vec3f>(v);
+    // Atmospheric haze exp(-y / haze_dist); y is affine in u along the row.
+    double clear = std::exp(-a.y() / look.haze_dist);
+    const double clear_step = std::exp(-b.y() / look.haze_dist);
+    // Rows at the horizon span huge distances: evaluate those directly.
+    const bool recur = clear > 1e-200 && clear_step < 1e10 && clear_step > 1e-10;
+    for (int u = 0; u < w; ++u, clear *= clear_step) {
+      const double x = a.x() + b.x() * u;
+      const double y = a.y() + b.y() * u;
+      if (!(y > 0) || !std::isfinite(x)) continue;
+      // Pixel footprint on the ground: Jacobian columns.
+      const double jux = b.x(), juy = b.y();
+      const double jvx = (ap.x() - am.x()) + (bp.x() - bm.x()) * u;
+      const double jvy = (ap.y() - am.y()) + (bp.y() - bm.y()) * u;
+      const double area = std::abs(jux * jvy - juy * jvx);
+      const double foot = std::sqrt(area);
+      const double ext_x = std::abs(jux) + std::abs(jvx);
+
+      // Asphalt: low-frequency patches, mid-scale mottling and fine grain,
+      // each attenuated once the pixel averages over many cells.
+      double grey = look.asphalt + look.patch_amp * ValueNoise(x, y, 1.0 / 7.0, salt + 1);
+      const double mid = look.mid_amp * std::min(1.0, 1.2 / foot);
+      if (mid > 0.2) grey += mid * ValueNoise(x, y, 1.0 / 1.2, salt + 2);
+      const double grain = look.grain_amp * std::min(1.0, 0.07 / foot);
+      if (grain > 0.2) grey += grain * ValueNoise(x, y, 1.0 / 0.07, salt + 3);
+      const double fine = look.grain_amp * std::min(1.0, 0.02 / foot);
+      if (fine > 0.2) grey += fine * ValueNoise(x, y, 1.0 / 0.02, salt + 6);
+      // Darker tyre tracks in every lane.
+      const double slope = road.Slope(y);
+      const double inv_norm = 1.0 / std::sqrt(1.0 + slope * slope);
+      const double lane_pos = (x - road.X(b0.offset, y)) * inv_norm;
+      const double in_lane = lane_pos - road.lane_width * std::floor(lane_pos / road.lane_width);
+      const double track = std::min(std::abs(in_lane - 0.5 * road.lane_width + 0.85),
+                                    std::abs(in_lane - 0.5 * road.lane_width - 0.85));
+      const double bump = std::max(0.0, 1.0 - track * track / 0.3);
+      grey -= look.track_dark * bump * bump;
+      cv::Vec3f colour = look.asphalt_tint * static_cast<float>(grey);
+
+      // Verge beyond the asphalt edges.
+      const double fd0 = std::max(1e-4, ext_x * inv_norm + 1e-3);
+      const double el = (x - road.X(road.edge_left, y)) * inv_norm;
+      const double er = (road.X(road.edge_right, y) - x) * inv_norm;
+      const double on_road = SoftStep(el, fd0) * SoftStep(er, fd0);
+      if (on_road < 1.0) {
+        const double vt = look.verge_amp *
+                          (0.6 * ValueNoise(x, y, 1.0 / 0.8, salt + 4) +
+                           0.4 * std::min(1.0, 0.1 / foot) * ValueNoise(x, y, 1.0 / 0.1, salt + 5));
+        const cv::Vec3f verge = look.verge + cv::Vec3f::all(static_cast<float>(vt));
+        colour = Lerp(verge, colour, on_road);
+      }
+
+      // Markings: box-filtered coverage across (lateral) and along (dashes).
+      for (const Boundary* m : visible) {
+        const double d = (x - road.X(m->offset, y)) * inv_norm;
+        const double nx = inv_norm, ny = -slope * inv_norm;  // unit normal
+        const double fd =
+            std::max(1e-4, std::abs(nx * jux + ny * juy) + std::abs(nx * jvx + ny * jvy));
+        const double half = 0.5 * m->width;
+        if (std::abs(d) >= half + 0.5 * fd) continue;
+        const double lo = std::max(d - 0.5 * fd, -half);
+        const double hi = std::min(d + 0.5 * fd, half);
+        double cover = std::max(0.0, hi - lo) / fd;
+        if (m->dashed) {
+          const double tx = slope * inv_norm, ty = inv_norm;  // unit tangent
+          const double fa = std::abs(tx * jux + ty * juy) + std::abs(tx * jvx + ty * jvy);
+          if (fa < 1e-6) {
+            cover *= (PaintedUpTo(*m, y + 1e-6) - PaintedUpTo(*m, y)) > 0 ? 1.0 : 0.0;
+          } else {
+            cover *= (PaintedUpTo(*m, y + 0.5 * fa) - PaintedUpTo(*m, y - 0.5 * fa)) / fa;
+          }
+        }
+        if (cover <= 0) continue;
+        double alpha = m->alpha;
+        if (m->wear > 0) {
+          alpha *= 1.0 - m->wear * std::max(0.0, ValueNoise(x, y, 1.0 / 0.4, m->salt));
+        }
+        colour = Lerp(colour, m->colour, alpha * cover);
+      }
+
+      colour *= static_cast<float>(ShadowFactor(shadows, x, y, foot));
+      const double haze = 1.0 - (recur ? clear : std::exp(-y / look.haze_dist));
+      row[u] = Lerp(colour, look.haze, haze);
+    }
+  }
+}
+
+void DrawVehicle(const CameraModel& cam, const Object& o, cv::Mat& img) {
+  const Eigen::Vector2d bl = cam.GroundToImage({o.x - 0.5 * o.size, o.y});
+  const Eigen::Vector2d br = cam.GroundToImage({o.x + 0.5 * o.size, o.y});
+  const Eigen::Vector2d top = Project(cam, o.x, o.y, o.height);
+  const double u0 = bl.x(), u1 = br.x();
+  const double vb = 0.5 * (bl.y() + br.y());
+  const double vt = top.y();
+  const double w = u1 - u0;
+  const double hh = vb - vt;
+  if (w < 1.0 || hh < 1.0) return;
+  const double uc = 0.5 * (u0 + u1);
+  // Contact shadow on the road.
+  cv::ellipse(img, Fp(uc, vb),
+              cv::Size(cvRound(0.6 * w * 16), cvRound(std::max(1.0, 0.05 * hh) * 16)), 0, 0, 360,
+              cv::Scalar(18, 18, 18), cv::FILLED, cv::LINE_AA, kShift);
+  // Wheels, body, rear window, lights, plate.
+  const cv::Scalar tyre(12, 12, 12);
+  FillRect(img, u0 + 0.05 * w, vb - 0.25 * hh, u0 + 0.22 * w, vb, tyre);
+  FillRect(img, u1 - 0.22 * w, vb - 0.25 * hh, u1 - 0.05 * w, vb, tyre);
+  FillRoundedRect(img, u0, vt, u1, vb - 0.12 * hh, 0.12 * w, o.colour);
+  FillRoundedRect(img, u0 + 0.12 * w, vt + 0.08 * hh, u1 - 0.12 * w, vt + 0.40 * hh, 0.06 * w,
+                  o.colour2);
+  const cv::Scalar red(35, 35, 175);
+  FillRect(img, u0 + 0.04 * w, vt + 0.48 * hh, u0 + 0.2 * w, vt + 0.58 * hh, red);
+  FillRect(img, u1 - 0.2 * w, vt + 0.48 * hh, u1 - 0.04 * w, vt + 0.58 * hh, red);
+  FillRect(img, uc - 0.11 * w, vt + 0.62 * hh, uc + 0.11 * w, vt + 0.71 * hh,
+           cv::Scalar(170, 170, 170));
+  FillRect(img, u0 + 0.02 * w, vt + 0.76 * hh, u1 - 0.02 * w, vt + 0.82 * hh, o.colour * 0.6);
+}
+
+void DrawTree(const CameraModel& cam, const Object& o, cv::Mat& img) {
+  const double trunk = 0.18;
+  const double crown_z = o.height - o.size;
+  FillPoly(img,
+           {Project(cam, o.x - trunk, o.y, 0), Project(cam, o.x + trunk, o.y, 0),
+            Project(cam, o.x + trunk, o.y, crown_z), Project(cam, o.x - trunk, o.y, crown_z)},
+           o.colour2);
+  const Eigen::Vector2d c = Project(cam, o.x, o.y, crown_z);
+  const double r = (Project(cam, o.x + o.size, o.y, crown_z) - c).norm();
+  if (r < 0.5) return;
+  // A few overlapping blobs of slightly different greens.
+  for (int k = 0; k < 4; ++k) {
+    const double a = 1.7 * k + o.x;
+    const Eigen::Vector2d p = c + 0.35 * r * Eigen::Vector2d(std::cos(a), std::sin(a) - 0.3);
+    const double shade = 0.85 + 0.1 * k;
+    cv::circle(img, Fp(p.x(), p.y()), cvRound(0.75 * r * 16), o.colour * shade, cv::FILLED,
+               cv::LINE_AA, kShift);
+  }
+}
+
+void DrawBuilding(const CameraModel& cam, const Object& o, cv::Mat& img) {
+  const double y0 = o.y, y1 = o.y + o.size, x0 = o.x, x1 = o.x + o.extra, z = o.height;
+  if (Depth(cam, x0, y0, z) < 1.0 || Depth(cam, x1, y0, z) < 1.0) return;
+  // Face towards the camera (perpendicular to the road) and the side facade.
+  FillPoly(img,
+           {Project(cam, x0, y0, 0), Project(cam, x1, y0, 0), Project(cam, x1, y0, z),
+            Project(cam, x0, y0, z)},
+           o.colour);
+  FillPoly(img,
+           {Project(cam, x0, y0, 0), Project(cam, x0, y1, 0), Project(cam, x0, y1, z),
+            Project(cam, x0, y0, z)},
+           o.colour2);
+  // Windows on the side facade.
+  const cv::Scalar glass = o.colour2 * 0.45;
+  for (double wz = 1.5; wz + 1.2 < z; wz += 3.0) {
+    for (double wy = y0 + 1.0; wy + 1.5 < y1; wy += 3.0) {
+      FillPoly(img,
+               {Project(cam, x0, wy, wz), Project(cam, x0, wy + 1.5, wz),
+                Project(cam, x0, wy + 1.5, wz + 1.2), Project(cam, x0, wy, wz + 1.2)},
+               glass);
+    }
+  }
+}
+
+void DrawPole(const CameraModel& cam, const Object& o, cv::Mat& img) {
+  FillPoly(img,
+           {Project(cam, o.x - o.size, o.y, 0), Project(cam, o.x + o.size, o.y, 0),
+            Project(cam, o.x + o.size, o.y, o.height), Project(cam, o.x - o.size, o.y, o.height)},
+           o.colour);
+}
+
+void DrawObjects(const CameraModel& cam, std::vector<Object> objects, cv::Mat& img) {
+  std::stable_sort(objects.begin(), objects.end(),
+                   [](const Object& a, const Object& b) { return a.y > b.y; });
+  for (const Object& o : objects) {
+    if (Depth(cam, o.x, o.y, 0) < 1.0 || Depth(cam, o.x, o.y, o.height) < 1.0) continue;
+    switch (o.kind) {
+      case Object::kVehicle:
+        DrawVehicle(cam, o, img);
+        break;
+      case Object::kTree:
+        DrawTree(cam, o, img);
+        break;
+      case Object::kBuilding:
+        DrawBuilding(cam, o, img);
+        break;
+      case Object::kPole:
+        DrawPole(cam, o, img);
+        break;
+    }
+  }
+}
+
+}  // namespace synthetic_internal
+
+using namespace synthetic_internal;  // NOLINT: this file's own helpers
+
+absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
+                                                    const SyntheticOptions& options,
+                                                    uint64_t seed) {
+  if (absl::Status s = camera.Validate(); !s.ok()) return s;
+  if (absl::Status s = ValidateOptions(options); !s.ok()) return s;
+  const int w = camera.image_width;
+  const int h = camera.image_height;
+  const double horizon = camera.HorizonRow();
+  Rng rng(seed);
+
+  Road road = SampleRoad(options, rng);
+  const Look look = SampleLook(rng, h);
+
+  // Nearest visible ground distance (bottom row, centre column).
+  double y_bottom = 0.5;
+  const bool ground_visible = h - 1 > horizon + 0.5;
+  if (ground_visible) {
+    const double yb = camera.ImageToGround({0.5 * (w - 1), h - 1.0}).y();
+    if (std::isfinite(yb) && yb > 0) y_bottom = yb;
+  }
+  const std::vector<Shadow> shadows = SampleShadows(options, road, y_bottom, rng);
+  const std::vector<Object> objects = SampleObjects(options, road, y_bottom, rng);
+  const uint64_t noise_seed = rng();
+
+  // Ground truth decides which boundaries exist in the frame.
+  SyntheticFrame frame;
+  const double y_near = std::max({options.truth_near_m, y_bottom, 0.1});
+  const double y_far = options.truth_far_m;
+  for (int i = 0; i < static_cast<int>(road.boundaries.size()); ++i) {
+    Boundary& m = road.boundaries[i];
+    m.visible = ground_visible && y_near < y_far && FitTruth(camera, road, y_near, y_far, &m);
+    if (!m.visible) continue;
+    if (i == road.ego_left) frame.ego_left = static_cast<int>(frame.boundaries.size());
+    if (i == road.ego_right) frame.ego_right = static_cast<int>(frame.boundaries.size());
+    SyntheticBoundary out;
+    out.image = m.truth.p;
+    out.dashed = m.dashed;
+    out.yellow = m.yellow;
+    out.lateral_offset_m = m.offset;
+    frame.boundaries.push_back(out);
+  }
+
+  cv::Mat3f canvas(h, w, cv::Vec3f(look.haze));
+  RenderSky(camera, look, canvas);
+  RenderGround(camera, road, look, shadows, canvas);
+  cv::Mat img;
+  canvas.convertTo(img, CV_8UC3);
+  DrawObjects(camera, objects, img);
+  cv::GaussianBlur(img, img, cv::Size(3, 3), look.blur_sigma);
+
+  // Exposure and sensor noise.
+  cv::Mat f;
+  img.convertTo(f, CV_32FC3, look.gain);
+  if (options.noise_sigma > 0) {
+    cv::Mat noise(f.size(), CV_32FC3);
+    cv::RNG cvrng(noise_seed);
+    cvrng.fill(noise, cv::RNG::NORMAL, 0.0, options.noise_sigma);
+    f += noise;
+  }
+  f.convertTo(img, CV_8UC3);
+  if (options.jpeg_quality > 0) {
+    std::vector<uchar> buf;
+    cv::imencode(".jpg", img, buf, {cv::IMWRITE_JPEG_QUALITY, options.jpeg_quality});
+    img = cv::imdecode(buf, cv::IMREAD_COLOR);
+  }
+  frame.bgr = img;
+  return frame;
+}
+
+std::string SyntheticLabelsJson(const std::string& frame_name, const SyntheticFrame& frame) {
+  auto round2 = [](double v) { return std::round(v * 100.0) / 100.0; };
+  nlohmann::ordered_json j;
+  j["frame"] = frame_name;
+  j["width"] = frame.bgr.cols;
+  j["height"] = frame.bgr.rows;
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (int i = 0; i < static_cast<int>(frame.boundaries.size()); ++i) {
+    const SyntheticBoundary& b = frame.boundaries[i];
+    nlohmann::ordered_json pts = nlohmann::ordered_json::array();
+    for (const auto& p : b.image) pts.push_back({round2(p.x()), round2(p.y())});
+    nlohmann::ordered_json e;
+    e["points"] = pts;
+    e["dashed"] = b.dashed;
+    e["color"] = b.yellow ? "yellow" : "white";
+    e["ego"] = i == frame.ego_left ? "left" : (i == frame.ego_right ? "right" : "none");
+    list.push_back(e);
+  }
+  j["boundaries"] = list;
+  return j.dump();
+}
+
+}  // namespace lane

@@ -1,0 +1,149 @@
+// The synthetic renderer's internals: the scene (road, boundaries, shadows,
+// objects, look) and the helpers that the sampling (scene.cc) and the
+// drawing (render.cc) share.
+#ifndef LANE_SYNTHETIC_SCENE_H_
+#define LANE_SYNTHETIC_SCENE_H_
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <random>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "lane/bezier.h"
+#include "lane/camera.h"
+#include "lane/synthetic.h"
+
+namespace lane::synthetic_internal {
+
+using Rng = std::mt19937_64;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDegToRad = kPi / 180.0;
+
+// Ground truth sampling and the visibility rule shared by truth and pixels.
+constexpr int kTruthSamples = 120;
+constexpr int kMinVisibleSamples = 8;
+constexpr double kMinVisibleRows = 30.0;
+
+// Fixed-point (4 fractional bits) drawing coordinates.
+constexpr int kShift = 4;
+
+// Vehicles (metres).
+constexpr double kVehicleWidth = 1.8;
+constexpr double kVehicleHeight = 1.5;
+
+// ---------------------------------------------------------------------------
+// Scene description.
+
+struct Boundary {
+  double offset = 0;  // lateral position at y = 0, metres
+  double width = 0.12;
+  bool dashed = false;
+  bool yellow = false;
+  double dash = 3.0;   // painted length, metres
+  double gap = 9.0;    // unpainted length, metres
+  double phase = 0.0;  // metres
+  double alpha = 1.0;  // paint opacity
+  double wear = 0.0;   // 0 = fresh paint
+  cv::Vec3f colour;
+  uint64_t salt = 0;
+  bool visible = false;
+  Bezier truth;
+};
+
+struct Road {
+  double heading = 0;    // radians, shared by all boundaries
+  double curvature = 0;  // 1/m
+  double lane_width = 3.6;
+  std::vector<Boundary> boundaries;
+  double edge_left = 0;  // asphalt edges, lateral offsets at y = 0
+  double edge_right = 0;
+  int ego_left = -1;
+  int ego_right = -1;
+
+  double X(double offset, double y) const { return offset + heading * y + 0.5 * curvature * y * y; }
+  double Slope(double y) const { return heading + curvature * y; }
+};
+
+struct Shadow {
+  bool band = true;
+  // Band: q = y - slope * x in [q0, q0 + depth], and x in [xa, xb].
+  double slope = 0, q0 = 0, depth = 0, xa = 0, xb = 0;
+  // Ellipse.
+  double cx = 0, cy = 0, rx = 1, ry = 1;
+  double factor = 0.55;  // brightness multiplier inside
+  double soft = 0.2;     // penumbra, metres
+  double ragged = 0.0;   // amplitude of the leafy edge, metres
+  uint64_t salt = 0;
+};
+
+struct Look {
+  double asphalt = 100;  // mean grey
+  cv::Vec3f asphalt_tint{1, 1, 1};
+  double patch_amp = 10, mid_amp = 5, grain_amp = 10;
+  double track_dark = 0;         // tyre tracks
+  cv::Vec3f verge{70, 120, 95};  // BGR
+  double verge_amp = 18;
+  cv::Vec3f haze{200, 200, 200};
+  double haze_dist = 500;  // metres
+  cv::Vec3f sky_top{220, 170, 120};
+  double treeline_base = 0, treeline_amp = 0;  // pixels
+  double treeline_scale = 0.02;                // 1/pixels
+  cv::Vec3f treeline{60, 80, 60};
+  double clouds = 0;  // opacity
+  double cloud_scale = 0.01;
+  cv::Vec3f cloud{235, 235, 235};
+  double blur_sigma = 0.6;
+  double gain = 1.0;
+  uint64_t salt = 0;
+};
+
+// An object standing on the ground drawn over the rendered road.
+struct Object {
+  enum Kind { kVehicle, kTree, kBuilding, kPole } kind = kVehicle;
+  double x = 0, y = 0;  // ground position of its base (nearest point), metres
+  double size = 0;      // building length / tree crown radius
+  double height = 0;
+  double extra = 0;  // building: depth (signed, away from the road); vehicle: lane
+  cv::Scalar colour, colour2;
+};
+
+double Uniform(Rng& rng, double lo, double hi);
+int UniformInt(Rng& rng, int lo, int hi);
+bool Chance(Rng& rng, double p);
+
+// Hash-based value noise in ground coordinates (no tables: defined
+// everywhere on the unbounded road plane).
+double ValueNoise(double x, double y, double inv_cell, uint64_t salt);
+double SoftStep(double s, double w);
+cv::Vec3f Lerp(const cv::Vec3f& a, const cv::Vec3f& b, double t);
+
+// Geometry and drawing helpers.
+double Depth(const CameraModel& cam, double x, double y, double z);
+Eigen::Vector2d Project(const CameraModel& cam, double x, double y, double z);
+cv::Point Fp(double u, double v);
+void FillPoly(cv::Mat& img, const std::vector<Eigen::Vector2d>& pts, const cv::Scalar& colour);
+void FillRoundedRect(cv::Mat& img, double u0, double v0, double u1, double v1, double r,
+                     const cv::Scalar& colour);
+void FillRect(cv::Mat& img, double u0, double v0, double u1, double v1, const cv::Scalar& colour);
+
+// Scene sampling: everything random comes from one engine, so a seed fully
+// determines the frame.
+absl::Status ValidateOptions(const SyntheticOptions& o);
+Road SampleRoad(const SyntheticOptions& o, Rng& rng);
+Look SampleLook(Rng& rng, int image_height);
+std::vector<Shadow> SampleShadows(const SyntheticOptions& o, const Road& road, double y_min,
+                                  Rng& rng);
+std::vector<Object> SampleObjects(const SyntheticOptions& o, const Road& road, double y_min,
+                                  Rng& rng);
+double ShadowFactor(const std::vector<Shadow>& shadows, double x, double y, double foot);
+double PaintedUpTo(const Boundary& m, double s);
+// Fits the boundary's image-space Bezier truth between y_near and y_far;
+// false when too little of it is visible.
+bool FitTruth(const CameraModel& cam, const Road& road, double y_near, double y_far, Boundary* m);
+
+}  // namespace lane::synthetic_internal
+
+#endif  // LANE_SYNTHETIC_SCENE_H_
