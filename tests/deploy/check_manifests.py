@@ -135,6 +135,12 @@ for var, flag in (("LANE_GRPC_PORT", "address"), ("LANE_METRICS_PORT", "metrics_
     check(var in env, "Dockerfile: no ENV %s" % var)
 for src in re.findall(r"^COPY\s+(?!--from)(\S+)", dockerfile, re.M):
     check(os.path.exists(os.path.join(ROOT, src)), "Dockerfile: COPY %s: no such file" % src)
+# Every folder the top-level CMakeLists.txt adds is copied into the build stage
+# (tests, bench and fuzz are switched off there).
+copied = set(s.rstrip("/") for s in re.findall(r"^COPY\s+(?!--from)(\S+)", dockerfile, re.M))
+for sub in re.findall(r"^\s*add_subdirectory\((\w+)\)", read("CMakeLists.txt"), re.M):
+    if sub not in ("tests", "bench", "fuzz"):
+        check(sub in copied, "Dockerfile: the build needs %s/ but does not COPY it" % sub)
 image_default_config = env.get("LANE_DEFAULT_CONFIG")
 check(re.search(r"^COPY\s+configs/\S+\s+%s\s*$" % re.escape(image_default_config or "-"),
                 dockerfile, re.M) is not None,
