@@ -242,7 +242,7 @@ grpc::ServerUnaryReactor* LaneServiceImpl::GetServerInfo(grpc::CallbackServerCon
 void LaneServiceImpl::FillServerInfo(v1::ServerInfo* response) const {
   const BuildInfo& build = options_.build;
   response->set_version(build.version);
-  response->set_build(build.build_type + ", gRPC " + build.grpc_version + ", OpenCV " +
+  response->set_build("git " + build.git_revision + ", " + build.build_type + ", gRPC " + build.grpc_version + ", OpenCV " +
                       build.opencv_version);
   response->add_encoded_formats("jpeg");
   response->add_encoded_formats("png");

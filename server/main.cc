@@ -84,9 +84,19 @@ int main(int argc, char** argv) {
   usage.contains_help_flags = [](absl::string_view file) {
     return absl::EndsWith(file, "server/main.cc");
   };
+  // "Flags from server/main.cc", not the build machine's path.
+  usage.normalize_filename = [](absl::string_view file) {
+    const size_t at = file.rfind("server/main.cc");
+    return std::string(at == absl::string_view::npos ? file : file.substr(at));
+  };
+  const lane::server::BuildInfo build = lane::server::CurrentBuildInfo();
+  usage.version_string = [build] {
+    return "lane-server " + build.version + " (git " + build.git_revision + ", " +
+           build.build_type + ")\n";
+  };
   absl::SetFlagsUsageConfig(usage);
-  absl::SetProgramUsageMessage(
-      "lane-server: lane-marker detection over gRPC. See docs/service.md.");
+  // absl prints the program's name before this.
+  absl::SetProgramUsageMessage("lane-marker detection over gRPC. See docs/service.md.");
   absl::ParseCommandLine(argc, argv);
 
   // SIGTERM and SIGINT are taken by a thread of ours (sigwait), so block them
@@ -140,7 +150,7 @@ int main(int argc, char** argv) {
       options.auth_tokens.push_back(std::move(token));
     }
   }
-  options.build = lane::server::CurrentBuildInfo();
+  options.build = build;
 
   auto registry = std::make_shared<prometheus::Registry>();
   absl::StatusOr<std::unique_ptr<lane::server::LaneServer>> started =

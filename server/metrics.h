@@ -25,6 +25,7 @@ namespace lane::server {
 // Labels of lanesvc_build_info.
 struct BuildInfo {
   std::string version;
+  std::string git_revision;  // `git describe` at configure time, or "unknown"
   std::string build_type;
   std::string grpc_version;
   std::string opencv_version;

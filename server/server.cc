@@ -17,6 +17,9 @@
 #ifndef LANE_VERSION
 #define LANE_VERSION "0.0.0"
 #endif
+#ifndef LANE_GIT_REVISION
+#define LANE_GIT_REVISION "unknown"
+#endif
 #ifndef LANE_BUILD_TYPE
 #define LANE_BUILD_TYPE "unknown"
 #endif
@@ -68,6 +71,7 @@ int ToMillis(absl::Duration d) {
 BuildInfo CurrentBuildInfo() {
   BuildInfo info;
   info.version = LANE_VERSION;
+  info.git_revision = LANE_GIT_REVISION;
   info.build_type = LANE_BUILD_TYPE;
   info.grpc_version = grpc::Version();
   info.opencv_version = CV_VERSION;
