@@ -76,6 +76,7 @@ Metrics::Metrics(prometheus::Registry& registry, const BuildInfo& build)
       .Help("Always 1; the labels describe the build.")
       .Register(registry)
       .Add({{"version", build.version},
+            {"git_revision", build.git_revision},
             {"build_type", build.build_type},
             {"grpc_version", build.grpc_version},
             {"opencv_version", build.opencv_version}})

@@ -11,7 +11,7 @@ using testing::MetricValue;
 
 TEST(MetricsTest, FamiliesOnTheInjectedRegistry) {
   prometheus::Registry registry;
-  Metrics metrics(registry, {"1.2.3", "Release", "1.51.1", "4.6.0"});
+  Metrics metrics(registry, {"1.2.3", "abc1234", "Release", "1.51.1", "4.6.0"});
   std::set<std::string> names;
   for (const prometheus::MetricFamily& f : registry.Collect()) names.insert(f.name);
   for (const char* name :
