@@ -25,6 +25,7 @@
 #include "lane/eval/report.h"
 #include "lane/eval/results_jsonl.h"
 #include "lane/eval/results_txt.h"
+#include "lane/eval/seeds.h"
 #include "lane/ipm.h"
 #include "progress_bar.h"
 #include "results_json.h"
@@ -53,6 +54,11 @@ constexpr char kUsage[] =
     "                    lane's two labelled boundaries. Default: the config's\n"
     "                    mode, or with --results the results' mode\n"
     "  --seed N          RANSAC seed instead of the config's detector.seed\n"
+    "  --seeds K         run the detector with K seeds (N, N+1, ..., N+K-1, N the\n"
+    "                    --seed or the config's) and report the mean, standard\n"
+    "                    deviation and range of every figure; results, overlays\n"
+    "                    and the full tables are those of the first seed, the\n"
+    "                    baseline (--write-baseline) holds the means\n"
     "  --results FILE    score FILE instead of running the detector: lane detect\n"
     "                    JSON Lines, or the original tool's results (.txt)\n"
     "  --out DIR         write DIR/table.md, DIR/table.json, DIR/results.txt\n"
@@ -128,6 +134,7 @@ int RunEval(const std::vector<std::string>& argv) {
   const absl::StatusOr<Args> args = Args::Parse(argv, {{"config"},
                                                        {"mode"},
                                                        {"seed"},
+                                                       {"seeds"},
                                                        {"results"},
                                                        {"out"},
                                                        {"overlays"},
@@ -167,6 +174,16 @@ int RunEval(const std::vector<std::string>& argv) {
   if (!count.ok()) return UsageError("eval", std::string(count.status().message()), kUsage);
   if (results_path && *seed) {
     return UsageError("eval", "--seed has no effect with --results", kUsage);
+  }
+  const auto seed_count = args->GetUint64("seeds");
+  if (!seed_count.ok()) {
+    return UsageError("eval", std::string(seed_count.status().message()), kUsage);
+  }
+  if (*seed_count && (**seed_count < 1 || **seed_count > 1000)) {
+    return UsageError("eval", "--seeds must lie in 1..1000", kUsage);
+  }
+  if (results_path && *seed_count) {
+    return UsageError("eval", "--seeds has no effect with --results", kUsage);
   }
 
   // The data set.
@@ -217,6 +234,8 @@ int RunEval(const std::vector<std::string>& argv) {
     options.default_height = config->camera.image_height;
   }
   std::optional<lane::Detector> detector;
+  std::vector<lane::Detector> more_seeds;  // --seeds: the second seed's detector onwards
+  std::vector<uint64_t> seeds;
   std::vector<lane::eval::FrameResult> records;
   if (results_path) {
     const bool txt = absl::AsciiStrToLower(fs::path(*results_path).extension().string()) == ".txt";
@@ -250,6 +269,18 @@ int RunEval(const std::vector<std::string>& argv) {
     }
     detector = std::move(*created);
     options.mode = detector->options().mode;
+    if (*seed_count) {
+      const uint64_t first = config->detector.seed;
+      seeds.push_back(first);
+      for (uint64_t k = 1; k < **seed_count; ++k) {
+        lane::DetectorOptions o = config->detector;
+        o.seed = first + k;
+        absl::StatusOr<lane::Detector> d = lane::Detector::Create(config->camera, config->ipm, o);
+        if (!d.ok()) return Failure("eval", std::string(d.status().message()));
+        more_seeds.push_back(std::move(*d));
+        seeds.push_back(o.seed);
+      }
+    }
   }
 
   // Output files.
@@ -321,26 +352,47 @@ int RunEval(const std::vector<std::string>& argv) {
     progress.Update(o.index + 1, o.total, o.frame->name);
   };
 
-  absl::StatusOr<lane::eval::EvalReport> report =
-      detector ? lane::eval::EvaluateDetector(*dataset, *detector, options, on_frame)
-               : lane::eval::EvaluateResults(*dataset, records, options, on_frame);
+  absl::StatusOr<lane::eval::EvalReport> report;
+  std::optional<lane::eval::SeedSummary> summary;
+  if (detector) {
+    std::vector<const lane::Detector*> all = {&*detector};
+    for (const lane::Detector& d : more_seeds) all.push_back(&d);
+    absl::StatusOr<std::vector<lane::eval::EvalReport>> reports =
+        lane::eval::EvaluateDetectors(*dataset, all, options, on_frame);
+    if (reports.ok()) {
+      if (!seeds.empty()) summary = lane::eval::SummariseSeeds(*reports, seeds);
+      report = std::move(reports->front());
+    } else {
+      report = reports.status();
+    }
+  } else {
+    report = lane::eval::EvaluateResults(*dataset, records, options, on_frame);
+  }
   progress.Clear();
   if (!report.ok()) return Failure("eval", std::string(report.status().message()));
+  const lane::eval::SeedSummary* seeds_summary = summary ? &*summary : nullptr;
   report->source = detector ? absl::StrCat("detector, config ", *args->Get("config"), ", seed ",
                                            config->detector.seed)
                             : absl::StrCat("results ", *results_path);
 
-  const std::string markdown = lane::eval::ReportMarkdown(*report);
+  const std::string markdown = lane::eval::ReportMarkdown(*report, seeds_summary);
   std::fputs(markdown.c_str(), stdout);
   std::fflush(stdout);
   for (const std::string& w : report->warnings) {
     std::fprintf(stderr, "lane eval: warning: %s\n", w.c_str());
   }
   if (!out_dir.empty()) {
-    jsonl.close();
-    txt.close();
-    if (jsonl.fail() || txt.fail() || !WriteFile(out_dir / "table.md", markdown) ||
-        !WriteFile(out_dir / "table.json", lane::eval::ReportJson(*report))) {
+    // Only streams that were opened are closed and checked: close() on a
+    // stream that never opened (results.jsonl when scoring --results) sets
+    // its failbit, which used to fail every --results --out run.
+    bool streams_ok = true;
+    for (std::ofstream* stream : {&jsonl, &txt}) {
+      if (!stream->is_open()) continue;
+      stream->close();
+      streams_ok = streams_ok && !stream->fail();
+    }
+    if (!streams_ok || !WriteFile(out_dir / "table.md", markdown) ||
+        !WriteFile(out_dir / "table.json", lane::eval::ReportJson(*report, seeds_summary))) {
       output_failed = true;
       std::fprintf(stderr, "lane eval: error writing to %s\n", out_dir.string().c_str());
     }
@@ -350,7 +402,8 @@ int RunEval(const std::vector<std::string>& argv) {
     for (const std::string& a : argv) words.push_back(ShellWord(a));
     const fs::path parent = fs::path(*baseline).parent_path();
     if (!parent.empty()) MakeDir(parent);
-    if (!WriteFile(*baseline, lane::eval::BaselineJson(*report, absl::StrJoin(words, " ")))) {
+    if (!WriteFile(*baseline,
+                   lane::eval::BaselineJson(*report, absl::StrJoin(words, " "), seeds_summary))) {
       output_failed = true;
       std::fprintf(stderr, "lane eval: cannot write %s\n", baseline->c_str());
     }
@@ -361,6 +414,16 @@ int RunEval(const std::vector<std::string>& argv) {
                "CULane F1 %.3f\n",
                t.frames, t.paper.F1(), 100 * t.paper.CorrectRate(),
                t.paper.FalsePositivesPerFrame(t.frames), t.culane.F1());
+  if (summary) {
+    const lane::eval::ClipSpread& m = summary->total;
+    std::fprintf(stderr,
+                 "lane eval: over %zu seeds: correct %.2f%% [%.2f, %.2f], FP rate %.2f%% [%.2f, "
+                 "%.2f], CULane F1 %.3f ± %.3f [%.3f, %.3f]\n",
+                 summary->seeds.size(), 100 * m.correct_rate.mean, 100 * m.correct_rate.min,
+                 100 * m.correct_rate.max, 100 * m.false_positive_rate.mean,
+                 100 * m.false_positive_rate.min, 100 * m.false_positive_rate.max, m.culane_f1.mean,
+                 m.culane_f1.std, m.culane_f1.min, m.culane_f1.max);
+  }
   return run_failures > 0 || output_failed ? kExitFailure : kExitOk;
 }
 
