@@ -51,7 +51,20 @@ LANE_FIELDS(Roi) {
   v.Field("bottom", s.bottom);
 }
 
+LANE_FIELDS(GroundView) {
+  v.Field("x_min_m", s.x_min_m);
+  v.Field("x_max_m", s.x_max_m);
+  v.Field("y_min_m", s.y_min_m);
+  v.Field("y_max_m", s.y_max_m);
+  v.Field("metres_per_px_x", s.metres_per_px_x);
+  v.Field("metres_per_px_y", s.metres_per_px_y);
+}
+
+// `view` is also set before everything else by ConfigFromJson: a "ground"
+// section without "view" selects the ground view.
 LANE_FIELDS(IpmOptions) {
+  v.Field("view", s.view);
+  v.Section("ground", s.ground);
   v.Field("width", s.width);
   v.Field("height", s.height);
   v.Section("roi", s.roi);
@@ -154,12 +167,29 @@ LANE_FIELDS(Config) {
 // Enums <-> names.
 
 const char* InterpolationName(Interpolation interpolation) {
-  return interpolation == Interpolation::kNearest ? "nearest" : "bilinear";
+  switch (interpolation) {
+    case Interpolation::kNearest:
+      return "nearest";
+    case Interpolation::kBilinear:
+      return "bilinear";
+    case Interpolation::kArea:
+      return "area";
+  }
+  return "bilinear";
 }
 
 std::optional<Interpolation> ParseInterpolation(const std::string& name) {
   if (name == "nearest") return Interpolation::kNearest;
   if (name == "bilinear") return Interpolation::kBilinear;
+  if (name == "area") return Interpolation::kArea;
+  return std::nullopt;
+}
+
+const char* IpmViewName(IpmView view) { return view == IpmView::kGround ? "ground" : "roi"; }
+
+std::optional<IpmView> ParseIpmView(const std::string& name) {
+  if (name == "roi") return IpmView::kRoi;
+  if (name == "ground") return IpmView::kGround;
   return std::nullopt;
 }
 
@@ -182,7 +212,13 @@ template <>
 struct EnumTraits<Interpolation> {
   static const char* Name(Interpolation i) { return InterpolationName(i); }
   static std::optional<Interpolation> Parse(const std::string& s) { return ParseInterpolation(s); }
-  static constexpr const char* kAllowed = "\"bilinear\" or \"nearest\"";
+  static constexpr const char* kAllowed = "\"bilinear\", \"nearest\" or \"area\"";
+};
+template <>
+struct EnumTraits<IpmView> {
+  static const char* Name(IpmView v) { return IpmViewName(v); }
+  static std::optional<IpmView> Parse(const std::string& s) { return ParseIpmView(s); }
+  static constexpr const char* kAllowed = "\"roi\" or \"ground\"";
 };
 
 // ---------------------------------------------------------------------------
@@ -306,6 +342,12 @@ absl::StatusOr<Config> ConfigFromJson(const Json& doc) {
       if (absl::Status s = ReadValue(*mode, "detector.mode", m); !s.ok()) return s;
       config.detector = DetectorOptions::ForMode(m);
     }
+  }
+  // A "ground" section without "view" means the ground view ("view" itself,
+  // when present, is read below and wins).
+  const auto ipm = doc.is_object() ? doc.find("ipm") : doc.end();
+  if (ipm != doc.end() && ipm->is_object() && ipm->contains("ground") && !ipm->contains("view")) {
+    config.ipm.view = IpmView::kGround;
   }
   if (absl::Status s = ReadObject(doc, "", config); !s.ok()) return s;
   if (absl::Status s = config.Validate(); !s.ok()) return s;

@@ -9,12 +9,70 @@
 
 namespace lane {
 
+namespace {
+
+// Top-view size along one axis for a ground range and resolution.
+int GroundPixels(double range_m, double metres_per_px) {
+  const double n = range_m / metres_per_px;
+  return n < 1e6 ? static_cast<int>(std::lround(n)) : 1000000;
+}
+
+// The bilinear taps of image point `p` (inside the image), scaled by `w`.
+template <class Add>
+void BilinearTaps(const Eigen::Vector2d& p, int image_width, int image_height, float w, Add add) {
+  const int x0 = std::clamp(static_cast<int>(p.x()), 0, std::max(0, image_width - 2));
+  const int y0 = std::clamp(static_cast<int>(p.y()), 0, std::max(0, image_height - 2));
+  const float fx = static_cast<float>(std::clamp(p.x() - x0, 0.0, 1.0));
+  const float fy = static_cast<float>(std::clamp(p.y() - y0, 0.0, 1.0));
+  add(x0, y0, w * (1 - fx) * (1 - fy));
+  add(x0 + 1, y0, w * fx * (1 - fy));
+  add(x0, y0 + 1, w * (1 - fx) * fy);
+  add(x0 + 1, y0 + 1, w * fx * fy);
+}
+
+// At most this many sub-samples per axis of one top-view pixel in area
+// sampling: beyond, the average is good enough and the taps only cost time.
+constexpr int kMaxSubsamples = 12;
+
+}  // namespace
+
 absl::Status IpmOptions::Validate() const {
+  if (!std::isfinite(horizon_margin_px) || horizon_margin_px < 0) {
+    return absl::InvalidArgumentError("ipm.horizon_margin_px must be a finite number >= 0");
+  }
+  if (view == IpmView::kGround) {
+    const GroundView& g = ground;
+    const double v[] = {g.x_min_m, g.x_max_m,         g.y_min_m,
+                        g.y_max_m, g.metres_per_px_x, g.metres_per_px_y};
+    for (double x : v) {
+      if (!std::isfinite(x)) return absl::InvalidArgumentError("ipm.ground values must be finite");
+    }
+    if (!(g.x_max_m > g.x_min_m) || !(g.y_min_m > 0) || !(g.y_max_m > g.y_min_m)) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "ipm.ground must have x_max_m > x_min_m and y_max_m > y_min_m > 0 (metres ahead of "
+          "the camera), got x ",
+          g.x_min_m, "..", g.x_max_m, ", y ", g.y_min_m, "..", g.y_max_m));
+    }
+    if (!(g.metres_per_px_x >= 0.001 && g.metres_per_px_x <= 10 && g.metres_per_px_y >= 0.001 &&
+          g.metres_per_px_y <= 10)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("ipm.ground.metres_per_px_x and _y must lie in [0.001, 10] metres, got ",
+                       g.metres_per_px_x, " and ", g.metres_per_px_y));
+    }
+    const int w = GroundPixels(g.x_max_m - g.x_min_m, g.metres_per_px_x);
+    const int h = GroundPixels(g.y_max_m - g.y_min_m, g.metres_per_px_y);
+    if (w < 8 || h < 8 || w > 2048 || h > 2048) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "ipm.ground gives a ", w, "x", h,
+          " pixel top view; ranges / metres_per_px must give 8..2048 pixels each way"));
+    }
+    return absl::OkStatus();
+  }
   if (width < 8 || height < 8 || width > 2048 || height > 2048) {
     return absl::InvalidArgumentError(
         absl::StrCat("ipm size must be within 8..2048 pixels, got ", width, "x", height));
   }
-  const double v[] = {roi.left, roi.right, roi.top, roi.bottom, horizon_margin_px};
+  const double v[] = {roi.left, roi.right, roi.top, roi.bottom};
   for (double x : v) {
     if (!std::isfinite(x)) return absl::InvalidArgumentError("ipm.roi values must be finite");
   }
@@ -22,9 +80,6 @@ absl::Status IpmOptions::Validate() const {
     return absl::InvalidArgumentError(
         absl::StrCat("ipm.roi must have right > left and bottom > top, got left=", roi.left,
                      " right=", roi.right, " top=", roi.top, " bottom=", roi.bottom));
-  }
-  if (horizon_margin_px < 0) {
-    return absl::InvalidArgumentError("ipm.horizon_margin_px must be >= 0");
   }
   return absl::OkStatus();
 }
@@ -37,109 +92,207 @@ absl::StatusOr<IpmMapping> IpmMapping::Create(const CameraModel& camera,
   IpmMapping m;
   m.camera_ = camera;
   m.options_ = options;
-
-  // Clip the ROI to the image and to below the horizon.
   const double horizon = camera.HorizonRow();
-  Roi roi = options.roi;
-  roi.left = std::max(roi.left, 0.0);
-  roi.right = std::min(roi.right, camera.image_width - 1.0);
-  roi.bottom = std::min(roi.bottom, camera.image_height - 1.0);
-  roi.top = std::max(roi.top, horizon + options.horizon_margin_px);
-  if (roi.right - roi.left < 2 || roi.bottom - roi.top < 2) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "ipm.roi (left=", options.roi.left, " right=", options.roi.right, " top=", options.roi.top,
-        " bottom=", options.roi.bottom, ") has no usable part inside the ", camera.image_width, "x",
-        camera.image_height, " image below the horizon (row ", horizon, " + margin ",
-        options.horizon_margin_px, ")"));
-  }
-  m.roi_ = roi;
+  const double top_limit = horizon + options.horizon_margin_px;
 
-  // Ground footprint of the ROI: its corners and the vanishing point's column
-  // on its top and bottom rows.
-  const double vp_u = std::clamp(camera.VanishingPoint().x(), roi.left, roi.right);
-  const Eigen::Vector2d corners[] = {{roi.left, roi.top},     {roi.right, roi.top},
-                                     {vp_u, roi.top},         {roi.left, roi.bottom},
-                                     {roi.right, roi.bottom}, {vp_u, roi.bottom}};
-  m.x_min_ = m.y_min_ = std::numeric_limits<double>::infinity();
-  m.x_max_ = m.y_max_ = -std::numeric_limits<double>::infinity();
-  for (const auto& c : corners) {
-    const Eigen::Vector2d g = camera.ImageToGround(c);
-    if (!g.allFinite() || g.y() <= 0) {
-      return absl::InvalidArgumentError("ipm.roi maps to points behind the camera");
-    }
-    m.x_min_ = std::min(m.x_min_, g.x());
-    m.x_max_ = std::max(m.x_max_, g.x());
-    m.y_min_ = std::min(m.y_min_, g.y());
-    m.y_max_ = std::max(m.y_max_, g.y());
-  }
-  m.mpp_x_ = (m.x_max_ - m.x_min_) / options.width;
-  m.mpp_y_ = (m.y_max_ - m.y_min_) / options.height;
-  if (!(m.mpp_x_ > 0) || !(m.mpp_y_ > 0)) {
-    return absl::InvalidArgumentError("ipm.roi has an empty ground footprint");
-  }
-
-  // The per-pixel source coordinates and weights, computed once per
-  // calibration.
-  const int n = options.width * options.height;
-  m.src_x_.assign(n, -1);
-  m.src_y_.assign(n, -1);
-  m.weights_.assign(n, {0.f, 0.f, 0.f, 0.f});
-  m.valid_ = cv::Mat::zeros(options.height, options.width, CV_8U);
-  m.valid_count_ = 0;
-  const bool bilinear = options.interpolation == Interpolation::kBilinear;
-  for (int r = 0; r < options.height; ++r) {
-    for (int c = 0; c < options.width; ++c) {
-      const Eigen::Vector2d img = m.IpmToImage(Eigen::Vector2d(c, r));
-      const bool inside = img.allFinite() && img.x() >= roi.left && img.x() <= roi.right &&
-                          img.y() >= roi.top && img.y() <= roi.bottom;
-      if (!inside) continue;
-      const int i = r * options.width + c;
-      if (bilinear) {
-        // The ROI lies inside the image, so x0 + 1 and y0 + 1 do too except
-        // on the last column/row, where the weight of the outer pixel is 0.
-        const int x0 = std::min(static_cast<int>(img.x()), camera.image_width - 2);
-        const int y0 = std::min(static_cast<int>(img.y()), camera.image_height - 2);
-        const float fx = static_cast<float>(img.x() - x0);
-        const float fy = static_cast<float>(img.y() - y0);
-        m.src_x_[i] = x0;
-        m.src_y_[i] = y0;
-        m.weights_[i] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
-      } else {
-        m.src_x_[i] = static_cast<int>(std::lround(img.x()));
-        m.src_y_[i] = static_cast<int>(std::lround(img.y()));
-        m.weights_[i] = {1.f, 0.f, 0.f, 0.f};
+  if (options.view == IpmView::kGround) {
+    // The ground rectangle as given; the ROI is the bounding box of its
+    // projection, clipped to the image and to below the horizon.
+    const GroundView& g = options.ground;
+    m.width_ = GroundPixels(g.x_max_m - g.x_min_m, g.metres_per_px_x);
+    m.height_ = GroundPixels(g.y_max_m - g.y_min_m, g.metres_per_px_y);
+    m.x_min_ = g.x_min_m;
+    m.x_max_ = g.x_max_m;
+    m.y_min_ = g.y_min_m;
+    m.y_max_ = g.y_max_m;
+    m.mpp_x_ = (m.x_max_ - m.x_min_) / m.width_;
+    m.mpp_y_ = (m.y_max_ - m.y_min_) / m.height_;
+    Roi box{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+            std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+    for (const double x : {g.x_min_m, g.x_max_m}) {
+      for (const double y : {g.y_min_m, g.y_max_m}) {
+        const Eigen::Vector2d p = camera.GroundToImage({x, y});
+        if (!p.allFinite() || !(p.y() > horizon)) {
+          return absl::InvalidArgumentError(
+              absl::StrCat("ipm.ground corner (", x, ", ", y,
+                           ") m does not project below the horizon: is the camera's pitch right?"));
+        }
+        box.left = std::min(box.left, p.x());
+        box.right = std::max(box.right, p.x());
+        box.top = std::min(box.top, p.y());
+        box.bottom = std::max(box.bottom, p.y());
       }
-      m.valid_.at<uint8_t>(r, c) = 255;
-      ++m.valid_count_;
+    }
+    Roi roi;
+    roi.left = std::max(box.left, 0.0);
+    roi.right = std::min(box.right, camera.image_width - 1.0);
+    roi.top = std::max(box.top, std::max(0.0, top_limit));
+    roi.bottom = std::min(box.bottom, camera.image_height - 1.0);
+    if (roi.right - roi.left < 2 || roi.bottom - roi.top < 2) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "ipm.ground (x ", g.x_min_m, "..", g.x_max_m, " m, y ", g.y_min_m, "..", g.y_max_m,
+          " m) projects to image rows ", box.top, "..", box.bottom, ", columns ", box.left, "..",
+          box.right, ": no usable part inside the ", camera.image_width, "x", camera.image_height,
+          " image below the horizon (row ", horizon, " + margin ", options.horizon_margin_px, ")"));
+    }
+    m.roi_ = roi;
+  } else {
+    // Clip the ROI to the image and to below the horizon.
+    Roi roi = options.roi;
+    roi.left = std::max(roi.left, 0.0);
+    roi.right = std::min(roi.right, camera.image_width - 1.0);
+    roi.bottom = std::min(roi.bottom, camera.image_height - 1.0);
+    roi.top = std::max(roi.top, top_limit);
+    if (roi.right - roi.left < 2 || roi.bottom - roi.top < 2) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "ipm.roi (left=", options.roi.left, " right=", options.roi.right,
+          " top=", options.roi.top, " bottom=", options.roi.bottom,
+          ") has no usable part inside the ", camera.image_width, "x", camera.image_height,
+          " image below the horizon (row ", horizon, " + margin ", options.horizon_margin_px, ")"));
+    }
+    m.roi_ = roi;
+    m.width_ = options.width;
+    m.height_ = options.height;
+
+    // Ground footprint of the ROI: its corners and the vanishing point's column
+    // on its top and bottom rows.
+    const double vp_u = std::clamp(camera.VanishingPoint().x(), roi.left, roi.right);
+    const Eigen::Vector2d corners[] = {{roi.left, roi.top},     {roi.right, roi.top},
+                                       {vp_u, roi.top},         {roi.left, roi.bottom},
+                                       {roi.right, roi.bottom}, {vp_u, roi.bottom}};
+    m.x_min_ = m.y_min_ = std::numeric_limits<double>::infinity();
+    m.x_max_ = m.y_max_ = -std::numeric_limits<double>::infinity();
+    for (const auto& c : corners) {
+      const Eigen::Vector2d g = camera.ImageToGround(c);
+      if (!g.allFinite() || g.y() <= 0) {
+        return absl::InvalidArgumentError("ipm.roi maps to points behind the camera");
+      }
+      m.x_min_ = std::min(m.x_min_, g.x());
+      m.x_max_ = std::max(m.x_max_, g.x());
+      m.y_min_ = std::min(m.y_min_, g.y());
+      m.y_max_ = std::max(m.y_max_, g.y());
+    }
+    m.mpp_x_ = (m.x_max_ - m.x_min_) / m.width_;
+    m.mpp_y_ = (m.y_max_ - m.y_min_) / m.height_;
+    if (!(m.mpp_x_ > 0) || !(m.mpp_y_ > 0)) {
+      return absl::InvalidArgumentError("ipm.roi has an empty ground footprint");
     }
   }
-  if (m.valid_count_ == 0) return absl::InvalidArgumentError("ipm.roi maps to no IPM pixel");
-  cv::bitwise_not(m.valid_, m.invalid_);
+  m.BuildTaps();
+  if (m.valid_count_ == 0) return absl::InvalidArgumentError("ipm maps to no image pixel");
   return m;
+}
+
+void IpmMapping::BuildTaps() {
+  // The per-pixel taps, computed once per calibration.
+  const int n = width_ * height_;
+  const Roi& roi = roi_;
+  const int iw = camera_.image_width;
+  const int ih = camera_.image_height;
+  const auto inside = [&roi](const Eigen::Vector2d& img) {
+    return img.allFinite() && img.x() >= roi.left && img.x() <= roi.right && img.y() >= roi.top &&
+           img.y() <= roi.bottom;
+  };
+  tap_start_.assign(n + 1, 0);
+  taps_.clear();
+  taps_.reserve(4 * n);
+  valid_ = cv::Mat::zeros(height_, width_, CV_8U);
+  valid_count_ = 0;
+  std::vector<std::pair<int64_t, float>> acc;  // (image pixel index, weight), area sampling
+  for (int r = 0; r < height_; ++r) {
+    for (int c = 0; c < width_; ++c) {
+      const int i = r * width_ + c;
+      tap_start_[i] = static_cast<int32_t>(taps_.size());
+      const Eigen::Vector2d img = IpmToImage(Eigen::Vector2d(c, r));
+      if (!inside(img)) continue;
+      const auto add = [this](int x, int y, float w) {
+        if (w > 0) taps_.push_back({x, y, w});
+      };
+      switch (options_.interpolation) {
+        case Interpolation::kNearest:
+          add(static_cast<int>(std::lround(img.x())), static_cast<int>(std::lround(img.y())), 1.f);
+          break;
+        case Interpolation::kBilinear:
+          BilinearTaps(img, iw, ih, 1.f, add);
+          break;
+        case Interpolation::kArea: {
+          // The footprint's extent in the image along the top view's two
+          // axes; sub-samples at most one image pixel apart cover it.
+          const Eigen::Vector2d du = IpmToImage({c + 0.5, r}) - IpmToImage({c - 0.5, r});
+          const Eigen::Vector2d dv = IpmToImage({c, r + 0.5}) - IpmToImage({c, r - 0.5});
+          const int nu =
+              std::clamp(static_cast<int>(std::ceil(du.cwiseAbs().maxCoeff())), 1, kMaxSubsamples);
+          const int nv =
+              std::clamp(static_cast<int>(std::ceil(dv.cwiseAbs().maxCoeff())), 1, kMaxSubsamples);
+          if (nu == 1 && nv == 1) {
+            BilinearTaps(img, iw, ih, 1.f, add);
+            break;
+          }
+          acc.clear();
+          int used = 0;
+          for (int b = 0; b < nv; ++b) {
+            for (int a = 0; a < nu; ++a) {
+              const Eigen::Vector2d q =
+                  IpmToImage({c - 0.5 + (a + 0.5) / nu, r - 0.5 + (b + 0.5) / nv});
+              if (!inside(q)) continue;
+              ++used;
+              BilinearTaps(q, iw, ih, 1.f, [&acc, iw](int x, int y, float w) {
+                if (w > 0) acc.emplace_back(static_cast<int64_t>(y) * iw + x, w);
+              });
+            }
+          }
+          std::sort(acc.begin(), acc.end(),
+                    [](const auto& p, const auto& q) { return p.first < q.first; });
+          const float norm = 1.f / std::max(1, used);
+          for (size_t k = 0; k < acc.size();) {
+            float w = 0;
+            size_t e = k;
+            for (; e < acc.size() && acc[e].first == acc[k].first; ++e) w += acc[e].second;
+            add(static_cast<int>(acc[k].first % iw), static_cast<int>(acc[k].first / iw), w * norm);
+            k = e;
+          }
+          break;
+        }
+      }
+      if (static_cast<int32_t>(taps_.size()) == tap_start_[i]) continue;
+      valid_.at<uint8_t>(r, c) = 255;
+      ++valid_count_;
+    }
+  }
+  tap_start_[n] = static_cast<int32_t>(taps_.size());
+  cv::bitwise_not(valid_, invalid_);
+}
+
+double IpmMapping::mean_taps() const {
+  return valid_count_ > 0 ? static_cast<double>(taps_.size()) / valid_count_ : 0.0;
 }
 
 cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel) const {
   CV_Assert(image.depth() == CV_8U && image.cols == camera_.image_width &&
             image.rows == camera_.image_height && channel >= 0 && channel < image.channels());
-  cv::Mat out(options_.height, options_.width, CV_32F);
+  cv::Mat out(height_, width_, CV_32F);
   const int cn = image.channels();
   const size_t step = image.step[0];
   const uint8_t* base = image.data + channel;
   float* dst = out.ptr<float>(0);  // continuous: freshly allocated
-  const int n = options_.width * options_.height;
+  const int n = width_ * height_;
   double sum = 0;
+  const Tap* taps = taps_.data();
   for (int i = 0; i < n; ++i) {
-    if (src_x_[i] < 0) continue;
-    const uint8_t* p = base + src_y_[i] * step + src_x_[i] * cn;
-    const auto& w = weights_[i];
-    const float v =
-        (w[0] * p[0] + w[1] * p[cn] + w[2] * p[step] + w[3] * p[step + cn]) * (1.f / 255.f);
+    const int a = tap_start_[i], b = tap_start_[i + 1];
+    if (a == b) {
+      dst[i] = -1.f;  // invalid, filled below
+      continue;
+    }
+    float v = 0.f;
+    for (int k = a; k < b; ++k) v += taps[k].w * base[taps[k].y * step + taps[k].x * cn];
+    v *= 1.f / 255.f;
     dst[i] = v;
     sum += v;
   }
   const float mean = static_cast<float>(sum / valid_count_);
   for (int i = 0; i < n; ++i) {
-    if (src_x_[i] < 0) dst[i] = mean;
+    if (tap_start_[i] == tap_start_[i + 1]) dst[i] = mean;
   }
   return out;
 }
