@@ -127,6 +127,11 @@ LANE_FIELDS(PostprocessOptions) {
   v.Field("extend_min_cos_down", s.extend_min_cos_down);
   v.Field("extend_min_row", s.extend_min_row);
   v.Field("extend_max_row", s.extend_max_row);
+  v.Field("extend_geometric", s.extend_geometric);
+  v.Field("extend_search_m", s.extend_search_m);
+  v.Field("extend_gap_m", s.extend_gap_m);
+  v.Field("extend_to_max_row", s.extend_to_max_row);
+  v.Field("clip_to_image", s.clip_to_image);
   v.Field("min_image_length_px", s.min_image_length_px);
   v.Field("localize_in_image", s.localize_in_image);
   v.Field("extend_in_image", s.extend_in_image);
@@ -206,7 +211,7 @@ template <>
 struct EnumTraits<Channel> {
   static const char* Name(Channel c) { return ChannelName(c); }
   static std::optional<Channel> Parse(const std::string& s) { return ParseChannel(s); }
-  static constexpr const char* kAllowed = "\"red\", \"green\", \"blue\" or \"gray\"";
+  static constexpr const char* kAllowed = "\"red\", \"green\", \"blue\", \"gray\" or \"min_rg\"";
 };
 template <>
 struct EnumTraits<Interpolation> {

@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
+#include "lane/image_extension.h"
 
 namespace lane {
 namespace {
@@ -91,6 +92,8 @@ const char* ChannelName(Channel channel) {
       return "blue";
     case Channel::kGray:
       return "gray";
+    case Channel::kMinRedGreen:
+      return "min_rg";
   }
   return "red";
 }
@@ -100,6 +103,7 @@ std::optional<Channel> ParseChannel(const std::string& name) {
   if (name == "green") return Channel::kGreen;
   if (name == "blue") return Channel::kBlue;
   if (name == "gray" || name == "grey") return Channel::kGray;
+  if (name == "min_rg") return Channel::kMinRedGreen;
   return std::nullopt;
 }
 
@@ -170,6 +174,13 @@ cv::Mat Detector::ExtractChannel(const cv::Mat& frame) const {
     case Channel::kGray:
       cv::cvtColor(frame, out, cv::COLOR_BGR2GRAY);
       break;
+    case Channel::kMinRedGreen: {
+      cv::Mat red, green;
+      cv::extractChannel(frame, red, 2);
+      cv::extractChannel(frame, green, 1);
+      cv::min(red, green, out);
+      break;
+    }
   }
   return out;
 }
@@ -183,6 +194,8 @@ ChannelView Detector::ViewChannel(const cv::Mat& frame) const {
       return ChannelView(frame, 1);
     case Channel::kBlue:
       return ChannelView(frame, 0);
+    case Channel::kMinRedGreen:
+      return ChannelView(frame, 2, 1);
     case Channel::kGray:
       break;
   }
@@ -211,7 +224,7 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
   // 1. Channel and top view, mean removed.
   auto t = Clock::now();
   const ChannelView channel = ViewChannel(frame);
-  cv::Mat ipm = ipm_.Apply(channel.image, channel.channel);
+  cv::Mat ipm = ipm_.Apply(channel.image, channel.channel, channel.channel2);
   ipm -= cv::mean(ipm)[0];
   det.timings.ipm_ms = MsSince(t);
 
@@ -356,7 +369,12 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
       }
       if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
     }
-    if (pp.extend_in_image && contrast > 0) {
+    if (pp.extend_in_image && pp.extend_geometric) {
+      c.image = TopDown(ExtendInImage(
+          c.image, channel, cam,
+          ImageExtendOptionsFrom(pp, scale, min_row, max_row, opt.filter.marking_width_m)));
+      if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
+    } else if (pp.extend_in_image && contrast > 0) {
       ExtendOptions eo;
       eo.step_px = pp.extend_step_px * scale;
       eo.search_px = pp.extend_search_px * scale;
@@ -368,6 +386,11 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
       eo.max_row = max_row;
       c.image = TopDown(ExtendSpline(c.image, channel, eo));
       if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
+    }
+    if (pp.clip_to_image) {
+      const std::optional<Bezier> clipped = ClipToImageContent(c.image, channel);
+      if (!clipped) continue;
+      c.image = TopDown(*clipped);
     }
     bool dup = false;
     for (const auto& d : done) {

@@ -267,9 +267,10 @@ double IpmMapping::mean_taps() const {
   return valid_count_ > 0 ? static_cast<double>(taps_.size()) / valid_count_ : 0.0;
 }
 
-cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel) const {
+cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel, int channel2) const {
   CV_Assert(image.depth() == CV_8U && image.cols == camera_.image_width &&
-            image.rows == camera_.image_height && channel >= 0 && channel < image.channels());
+            image.rows == camera_.image_height && channel >= 0 && channel < image.channels() &&
+            channel2 < image.channels());
   cv::Mat out(height_, width_, CV_32F);
   const int cn = image.channels();
   const size_t step = image.step[0];
@@ -285,7 +286,15 @@ cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel) const {
       continue;
     }
     float v = 0.f;
-    for (int k = a; k < b; ++k) v += taps[k].w * base[taps[k].y * step + taps[k].x * cn];
+    if (channel2 >= 0) {
+      const int d = channel2 - channel;
+      for (int k = a; k < b; ++k) {
+        const uint8_t* p = base + taps[k].y * step + taps[k].x * cn;
+        v += taps[k].w * std::min(p[0], p[d]);
+      }
+    } else {
+      for (int k = a; k < b; ++k) v += taps[k].w * base[taps[k].y * step + taps[k].x * cn];
+    }
     v *= 1.f / 255.f;
     dst[i] = v;
     sum += v;

@@ -4,6 +4,7 @@
 #ifndef LANE_POSTPROCESS_H_
 #define LANE_POSTPROCESS_H_
 
+#include <algorithm>
 #include <opencv2/core.hpp>
 #include <optional>
 
@@ -65,6 +66,26 @@ struct PostprocessOptions {
   // camera, whose horizon is at row 171 and ROI bottom at 350).
   double extend_min_row = -1;
   double extend_max_row = -1;
+  // Extension in the image along the road's geometry (lane/image_extension.h)
+  // instead of the reference's walk (stop at the first step without a
+  // profile peak): each step looks for a bright bar as wide as a marking
+  // across a normal `extend_search_m` metres long on the road (so the window
+  // follows the perspective: the reference's fixed 20 px are +-1.4 m at the
+  // Caltech camera's far rows and +-0.2 m at its near rows), walks through
+  // up to `extend_gap_m` metres without one (the gap between two dashes: 6
+  // to 9 m on US and Chinese roads; beyond that the lane is not followed),
+  // and, with `extend_to_max_row`, extrapolates the final straight segment
+  // down to `extend_max_row` (the road continues straight under the last
+  // evidence; lane labels such as CULane's run to the image bottom).
+  bool extend_geometric = true;
+  double extend_search_m = 0.4;
+  double extend_gap_m = 6.0;
+  bool extend_to_max_row = false;
+  // The final image spline is cut to the part inside the image and on image
+  // content (not black: outside a lens's image circle). A top-view spline
+  // spans the whole top view, which extends beyond the image's sides where
+  // the ground rectangle does; a lane stops where the image does.
+  bool clip_to_image = true;
   // A final image spline shorter than this (pixels at 640 width) is replaced
   // by the line.
   double min_image_length_px = 40.0;
@@ -77,16 +98,20 @@ struct PostprocessOptions {
 };
 
 // One channel of an image without copying it out: a CV_8UC1 or CV_32FC1
-// image (channel 0), or channel `channel` of a CV_8UC3 image.
+// image (channel 0), or channel `channel` of a CV_8UC3 image, or with
+// `channel2` >= 0 the per-pixel minimum of two channels of a CV_8UC3 image.
 struct ChannelView {
-  ChannelView(const cv::Mat& m, int c = 0) : image(m), channel(c) {}  // NOLINT: implicit
+  ChannelView(const cv::Mat& m, int c = 0, int c2 = -1)  // NOLINT: implicit
+      : image(m), channel(c), channel2(c2) {}
   cv::Mat image;
   int channel = 0;
+  int channel2 = -1;
   int cols() const { return image.cols; }
   int rows() const { return image.rows; }
   float At(int x, int y) const {
     if (image.depth() == CV_32F) return image.ptr<float>(y)[x];
-    return image.ptr<uint8_t>(y)[x * image.channels() + channel];
+    const uint8_t* p = image.ptr<uint8_t>(y) + x * image.channels();
+    return channel2 >= 0 ? std::min(p[channel], p[channel2]) : p[channel];
   }
   // Bilinear sample; 0 outside the image.
   float Bilinear(double x, double y) const;
