@@ -80,6 +80,9 @@ LANE_FIELDS(FilterOptions) {
   v.Field("kernel_extent_sigmas", s.kernel_extent_sigmas);
   v.Field("zero_border_x_px", s.zero_border_x_px);
   v.Field("zero_border_bottom_px", s.zero_border_bottom_px);
+  v.Field("bar_side_m", s.bar_side_m);
+  v.Field("void_level", s.void_level);
+  v.Field("void_margin_y_px", s.void_margin_y_px);
 }
 
 LANE_FIELDS(ThresholdOptions) { v.Field("quantile", s.quantile); }

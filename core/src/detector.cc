@@ -155,7 +155,14 @@ absl::StatusOr<Detector> Detector::Create(const CameraModel& camera, const IpmOp
   if (!mapping.ok()) return mapping.status();
   FilterKernels kernels =
       MakeFilterKernels(options.filter, mapping->metres_per_px_x(), mapping->metres_per_px_y());
-  return Detector(*std::move(mapping), options, std::move(kernels));
+  const ExtensionRows rows = ImageExtensionRows(camera, mapping->roi(), options.postprocess);
+  const double search =
+      2 * std::max(options.postprocess.localize_search_px, options.postprocess.extend_search_px) *
+      camera.image_width / 640.0;
+  const int first_row =
+      std::clamp(static_cast<int>(std::floor(std::min(mapping->roi().top, rows.min_row) - search)),
+                 0, camera.image_height - 1);
+  return Detector(*std::move(mapping), options, std::move(kernels), first_row);
 }
 
 cv::Mat Detector::ExtractChannel(const cv::Mat& frame) const {
@@ -187,6 +194,14 @@ cv::Mat Detector::ExtractChannel(const cv::Mat& frame) const {
 
 ChannelView Detector::ViewChannel(const cv::Mat& frame) const {
   if (frame.channels() == 1) return ChannelView(frame);
+  if (options_.channel == Channel::kGray && first_row_ > 0) {
+    // Only the rows the detector reads; those above read as black.
+    cv::Mat gray(frame.rows, frame.cols, CV_8U);
+    gray.rowRange(0, first_row_).setTo(0);
+    cv::Mat below = gray.rowRange(first_row_, frame.rows);
+    cv::cvtColor(frame.rowRange(first_row_, frame.rows), below, cv::COLOR_BGR2GRAY);
+    return ChannelView(gray);
+  }
   switch (options_.channel) {
     case Channel::kRed:
       return ChannelView(frame, 2);
@@ -225,13 +240,29 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
   auto t = Clock::now();
   const ChannelView channel = ViewChannel(frame);
   cv::Mat ipm = ipm_.Apply(channel.image, channel.channel, channel.channel2);
-  ipm -= cv::mean(ipm)[0];
+  cv::Mat void_mask;  // empty: no void handling beyond the ROI's
+  if (opt.filter.void_level >= 0) {
+    void_mask = VoidMask(ipm, ipm_.invalid_mask(), opt.filter.void_level);
+    const double content_mean = cv::mean(ipm, ~void_mask)[0];
+    ipm.setTo(content_mean, void_mask);
+    ipm -= content_mean;
+  } else {
+    ipm -= cv::mean(ipm)[0];
+  }
   det.timings.ipm_ms = MsSince(t);
 
   // 2. Filter.
   t = Clock::now();
   cv::Mat filtered = FilterTopView(ipm, kernels_, opt.filter);
-  filtered.setTo(0, ipm_.invalid_mask());
+  if (void_mask.empty()) {
+    filtered.setTo(0, ipm_.invalid_mask());
+  } else {
+    filtered.setTo(0, GrowMask(void_mask, kernels_.kx.rows / 2, opt.filter.void_margin_y_px));
+  }
+  if (opt.filter.bar_side_m > 0) {
+    SuppressSteps(ipm, filtered, opt.filter.bar_side_m / ipm_.metres_per_px_x(),
+                  static_cast<int>(std::lround(kernels_.sigma_y_px)));
+  }
   det.timings.filter_ms = MsSince(t);
 
   // 3. Threshold.
@@ -318,12 +349,9 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
   t = Clock::now();
   const double ipm_min_len = pp.min_length_fraction * ipm_.height();
   const double scale = cam.image_width / 640.0;
-  const double horizon = cam.HorizonRow();
-  const double roi_bottom = ipm_.roi().bottom;
-  const double min_row =
-      pp.extend_min_row >= 0 ? pp.extend_min_row : horizon + 0.15 * (roi_bottom - horizon);
-  const double max_row =
-      pp.extend_max_row >= 0 ? pp.extend_max_row : roi_bottom + 0.2 * (roi_bottom - horizon);
+  const ExtensionRows rows = ImageExtensionRows(cam, ipm_.roi(), pp);
+  const double min_row = rows.min_row;
+  const double max_row = rows.max_row;
   std::vector<Candidate> done;
   for (Candidate c : cands) {
     if (AngleFromVerticalDeg(c.ipm) > pp.ipm_max_angle_from_vertical_deg) continue;

@@ -75,6 +75,17 @@ std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
 
 }  // namespace
 
+ExtensionRows ImageExtensionRows(const CameraModel& camera, const Roi& roi,
+                                 const PostprocessOptions& pp) {
+  const double horizon = camera.HorizonRow();
+  ExtensionRows rows;
+  rows.min_row =
+      pp.extend_min_row >= 0 ? pp.extend_min_row : horizon + 0.15 * (roi.bottom - horizon);
+  rows.max_row =
+      pp.extend_max_row >= 0 ? pp.extend_max_row : roi.bottom + 0.2 * (roi.bottom - horizon);
+  return rows;
+}
+
 ImageExtendOptions ImageExtendOptionsFrom(const PostprocessOptions& pp, double scale,
                                           double min_row, double max_row, double marking_width_m) {
   ImageExtendOptions o;

@@ -198,7 +198,6 @@ void IpmMapping::BuildTaps() {
   taps_.reserve(4 * n);
   valid_ = cv::Mat::zeros(height_, width_, CV_8U);
   valid_count_ = 0;
-  std::vector<std::pair<int64_t, float>> acc;  // (image pixel index, weight), area sampling
   for (int r = 0; r < height_; ++r) {
     for (int c = 0; c < width_; ++c) {
       const int i = r * width_ + c;
@@ -215,44 +214,9 @@ void IpmMapping::BuildTaps() {
         case Interpolation::kBilinear:
           BilinearTaps(img, iw, ih, 1.f, add);
           break;
-        case Interpolation::kArea: {
-          // The footprint's extent in the image along the top view's two
-          // axes; sub-samples at most one image pixel apart cover it.
-          const Eigen::Vector2d du = IpmToImage({c + 0.5, r}) - IpmToImage({c - 0.5, r});
-          const Eigen::Vector2d dv = IpmToImage({c, r + 0.5}) - IpmToImage({c, r - 0.5});
-          const int nu =
-              std::clamp(static_cast<int>(std::ceil(du.cwiseAbs().maxCoeff())), 1, kMaxSubsamples);
-          const int nv =
-              std::clamp(static_cast<int>(std::ceil(dv.cwiseAbs().maxCoeff())), 1, kMaxSubsamples);
-          if (nu == 1 && nv == 1) {
-            BilinearTaps(img, iw, ih, 1.f, add);
-            break;
-          }
-          acc.clear();
-          int used = 0;
-          for (int b = 0; b < nv; ++b) {
-            for (int a = 0; a < nu; ++a) {
-              const Eigen::Vector2d q =
-                  IpmToImage({c - 0.5 + (a + 0.5) / nu, r - 0.5 + (b + 0.5) / nv});
-              if (!inside(q)) continue;
-              ++used;
-              BilinearTaps(q, iw, ih, 1.f, [&acc, iw](int x, int y, float w) {
-                if (w > 0) acc.emplace_back(static_cast<int64_t>(y) * iw + x, w);
-              });
-            }
-          }
-          std::sort(acc.begin(), acc.end(),
-                    [](const auto& p, const auto& q) { return p.first < q.first; });
-          const float norm = 1.f / std::max(1, used);
-          for (size_t k = 0; k < acc.size();) {
-            float w = 0;
-            size_t e = k;
-            for (; e < acc.size() && acc[e].first == acc[k].first; ++e) w += acc[e].second;
-            add(static_cast<int>(acc[k].first % iw), static_cast<int>(acc[k].first / iw), w * norm);
-            k = e;
-          }
+        case Interpolation::kArea:  // the taps mark validity; BuildSegments samples
+          BilinearTaps(img, iw, ih, 1.f, add);
           break;
-        }
       }
       if (static_cast<int32_t>(taps_.size()) == tap_start_[i]) continue;
       valid_.at<uint8_t>(r, c) = 255;
@@ -261,16 +225,141 @@ void IpmMapping::BuildTaps() {
   }
   tap_start_[n] = static_cast<int32_t>(taps_.size());
   cv::bitwise_not(valid_, invalid_);
+  if (options_.interpolation == Interpolation::kArea) BuildSegments();
+}
+
+void IpmMapping::BuildSegments() {
+  // The footprint of IPM pixel (c, r) is the image of the ground cell
+  // [c - 0.5, c + 0.5] x [r - 0.5, r + 0.5]. Lines of constant ground y are
+  // (nearly) horizontal in the image (the camera does not roll), so the
+  // footprint is cut into `nv` sub-rows of constant y, each a horizontal
+  // segment of the image between the images of its left and right corners:
+  // a box along the image row, and linear interpolation between the two
+  // image rows around it. nv follows the footprint's height in image rows,
+  // so every image row of the footprint is read.
+  const int n = width_ * height_;
+  const int iw = camera_.image_width;
+  const int ih = camera_.image_height;
+  seg_start_.assign(n + 1, 0);
+  segments_.clear();
+  segments_.reserve(4 * n);
+  seg_row0_ = ih;
+  seg_row1_ = -1;
+  seg_col1_ = 0;
+  for (int r = 0; r < height_; ++r) {
+    for (int c = 0; c < width_; ++c) {
+      const int i = r * width_ + c;
+      seg_start_[i] = static_cast<int32_t>(segments_.size());
+      if (tap_start_[i] == tap_start_[i + 1]) continue;  // invalid
+      const double v_top = IpmToImage({c, r - 0.5}).y(), v_bot = IpmToImage({c, r + 0.5}).y();
+      const int nv =
+          std::clamp(static_cast<int>(std::ceil(std::abs(v_bot - v_top))), 1, kMaxSubsamples);
+      const size_t first = segments_.size();
+      double total = 0;
+      for (int b = 0; b < nv; ++b) {
+        const double t = r - 0.5 + (b + 0.5) / nv;
+        Eigen::Vector2d a = IpmToImage({c - 0.5, t}), z = IpmToImage({c + 0.5, t});
+        if (!a.allFinite() || !z.allFinite()) continue;
+        if (a.x() > z.x()) std::swap(a, z);
+        const double v = 0.5 * (a.y() + z.y());
+        // Clipped to the image; a segment narrower than a pixel is widened
+        // around its centre to one pixel (then it reads like bilinear).
+        double u0 = std::max(0.0, a.x()), u1 = std::min(iw - 1.0, z.x());
+        if (u1 - u0 < 1.0) {
+          const double m = std::clamp(0.5 * (u0 + u1), 0.5, iw - 1.5);
+          u0 = m - 0.5;
+          u1 = m + 0.5;
+        }
+        if (!(v >= 0 && v <= ih - 1)) continue;
+        const int v0 = std::min(static_cast<int>(v), ih - 2);
+        const double fv = v - v0;
+        for (const auto& [row, w] : {std::pair<int, double>{v0, 1 - fv}, {v0 + 1, fv}}) {
+          if (w <= 0) continue;
+          // Pixel k covers [k - 0.5, k + 0.5]: the box [u0, u1] in prefix
+          // coordinates is [u0 + 0.5, u1 + 0.5].
+          segments_.push_back({row, static_cast<float>(u0 + 0.5), static_cast<float>(u1 + 0.5),
+                               static_cast<float>(w)});
+          total += w;
+          seg_row0_ = std::min(seg_row0_, row);
+          seg_row1_ = std::max(seg_row1_, row);
+          seg_col1_ = std::max(seg_col1_, static_cast<int>(std::ceil(u1 + 0.5)) + 1);
+        }
+      }
+      for (size_t k = first; k < segments_.size(); ++k) {
+        Segment& sg = segments_[k];
+        sg.w = static_cast<float>(sg.w / total / (sg.u1 - sg.u0));
+      }
+    }
+  }
+  seg_start_[n] = static_cast<int32_t>(segments_.size());
+  seg_col1_ = std::min(seg_col1_, iw);
+}
+
+cv::Mat IpmMapping::ApplySegments(const cv::Mat& image, int channel, int channel2) const {
+  // Prefix sums of the rows read: P[k] = sum of pixels 0 .. k - 1 of a row
+  // (exact in int32: at most 16384 * 255).
+  const int cols = seg_col1_ + 1;
+  const int rows = seg_row1_ - seg_row0_ + 1;
+  thread_local std::vector<int32_t> prefix;
+  prefix.resize(static_cast<size_t>(std::max(0, rows)) * cols);
+  const int cn = image.channels();
+  for (int v = 0; v < rows; ++v) {
+    const uint8_t* src = image.ptr<uint8_t>(seg_row0_ + v) + channel;
+    int32_t* p = prefix.data() + static_cast<size_t>(v) * cols;
+    int32_t acc = 0;
+    p[0] = 0;
+    if (channel2 >= 0) {
+      const int d = channel2 - channel;
+      for (int k = 0; k + 1 < cols; ++k) p[k + 1] = acc += std::min(src[k * cn], src[k * cn + d]);
+    } else if (cn == 1) {
+      for (int k = 0; k + 1 < cols; ++k) p[k + 1] = acc += src[k];
+    } else {
+      for (int k = 0; k + 1 < cols; ++k) p[k + 1] = acc += src[k * cn];
+    }
+  }
+  const auto at = [&](const int32_t* p, float u) {
+    const int k = std::min(static_cast<int>(u), cols - 2);
+    const float f = u - k;
+    return p[k] + f * static_cast<float>(p[k + 1] - p[k]);
+  };
+  cv::Mat out(height_, width_, CV_32F);
+  float* dst = out.ptr<float>(0);
+  const int n = width_ * height_;
+  double sum = 0;
+  for (int i = 0; i < n; ++i) {
+    const int a = seg_start_[i], b = seg_start_[i + 1];
+    if (a == b) continue;
+    float value = 0;
+    for (int k = a; k < b; ++k) {
+      const Segment& sg = segments_[k];
+      const int32_t* p = prefix.data() + static_cast<size_t>(sg.row - seg_row0_) * cols;
+      value += sg.w * (at(p, sg.u1) - at(p, sg.u0));
+    }
+    value *= 1.f / 255.f;
+    dst[i] = value;
+    sum += value;
+  }
+  const float mean = static_cast<float>(sum / valid_count_);
+  for (int i = 0; i < n; ++i) {
+    if (seg_start_[i] == seg_start_[i + 1]) dst[i] = mean;
+  }
+  return out;
 }
 
 double IpmMapping::mean_taps() const {
-  return valid_count_ > 0 ? static_cast<double>(taps_.size()) / valid_count_ : 0.0;
+  if (valid_count_ == 0) return 0.0;
+  if (options_.interpolation == Interpolation::kArea) {
+    return static_cast<double>(segments_.size()) / valid_count_;
+  }
+  return static_cast<double>(taps_.size()) / valid_count_;
 }
 
 cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel, int channel2) const {
   CV_Assert(image.depth() == CV_8U && image.cols == camera_.image_width &&
             image.rows == camera_.image_height && channel >= 0 && channel < image.channels() &&
             channel2 < image.channels());
+  if (options_.interpolation == Interpolation::kArea)
+    return ApplySegments(image, channel, channel2);
   cv::Mat out(height_, width_, CV_32F);
   const int cn = image.channels();
   const size_t step = image.step[0];

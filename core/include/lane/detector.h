@@ -142,12 +142,18 @@ class Detector {
   ChannelView ViewChannel(const cv::Mat& frame) const;
 
  private:
-  Detector(IpmMapping ipm, DetectorOptions options, FilterKernels kernels)
-      : ipm_(std::move(ipm)), options_(std::move(options)), kernels_(std::move(kernels)) {}
+  Detector(IpmMapping ipm, DetectorOptions options, FilterKernels kernels, int first_row)
+      : ipm_(std::move(ipm)),
+        options_(std::move(options)),
+        kernels_(std::move(kernels)),
+        first_row_(first_row) {}
 
   IpmMapping ipm_;
   DetectorOptions options_;
   FilterKernels kernels_;
+  // The first image row any stage reads (the ROI's or the extension's top,
+  // less the localisation search): kGray is converted from there down only.
+  int first_row_ = 0;
 };
 
 }  // namespace lane

@@ -14,6 +14,7 @@
 
 #include "lane/bezier.h"
 #include "lane/camera.h"
+#include "lane/ipm.h"
 #include "lane/postprocess.h"
 
 namespace lane {
@@ -39,6 +40,18 @@ struct ImageExtendOptions {
   bool extrapolate_down = false;
   int max_steps = 80;
 };
+
+// The image rows the extension stays within: extend_min_row and
+// extend_max_row of `pp`, or when negative derived from the camera's horizon
+// and the ROI's bottom (min: horizon + 0.15 (bottom - horizon); max: bottom +
+// 0.2 (bottom - horizon), the reference's rows 200..380 for the Caltech
+// camera).
+struct ExtensionRows {
+  double min_row = 0;
+  double max_row = 0;
+};
+ExtensionRows ImageExtensionRows(const CameraModel& camera, const Roi& roi,
+                                 const PostprocessOptions& pp);
 
 // The options of the post-processing's image extension: pixel values of
 // `pp` scaled by `scale` (image width / 640), rows as given, the bar as wide

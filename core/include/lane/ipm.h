@@ -131,6 +131,8 @@ class IpmMapping {
  private:
   IpmMapping() = default;
   void BuildTaps();
+  void BuildSegments();
+  cv::Mat ApplySegments(const cv::Mat& image, int channel, int channel2) const;
 
   CameraModel camera_;
   IpmOptions options_;
@@ -148,6 +150,20 @@ class IpmMapping {
   };
   std::vector<int32_t> tap_start_;
   std::vector<Tap> taps_;
+  // kArea: per IPM pixel, segments seg_start_[i] .. seg_start_[i + 1] - 1,
+  // each the average of one image row between columns u0 and u1 (a box
+  // along the row, read from the row's prefix sums at Apply), weighted by
+  // w / (u1 - u0). Sub-rows of the footprint between two image rows give
+  // two segments. Rows seg_row0_ .. seg_row1_ and columns up to seg_col1_
+  // are read.
+  struct Segment {
+    int32_t row;
+    float u0, u1;
+    float w;
+  };
+  std::vector<int32_t> seg_start_;
+  std::vector<Segment> segments_;
+  int seg_row0_ = 0, seg_row1_ = -1, seg_col1_ = 0;
   cv::Mat valid_;
   cv::Mat invalid_;
   int valid_count_ = 0;
