@@ -131,6 +131,9 @@ LANE_FIELDS(PostprocessOptions) {
   v.Field("extend_min_row", s.extend_min_row);
   v.Field("extend_max_row", s.extend_max_row);
   v.Field("extend_geometric", s.extend_geometric);
+  v.Field("localize_geometric", s.localize_geometric);
+  v.Field("localize_search_m", s.localize_search_m);
+  v.Field("localize_sigma_m", s.localize_sigma_m);
   v.Field("extend_search_m", s.extend_search_m);
   v.Field("extend_gap_m", s.extend_gap_m);
   v.Field("extend_to_max_row", s.extend_to_max_row);

@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
 #include "lane/image_extension.h"
+#include "lane/marking_check.h"
 
 namespace lane {
 namespace {
@@ -389,7 +392,15 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
     const Bezier fallback = TopDown(*image_line);
     const double min_len = pp.min_image_length_px * scale;
     contrast = 0;
-    if (pp.localize_in_image) {
+    if (pp.localize_in_image && pp.localize_geometric) {
+      if (auto loc =
+              LocalizeInImage(c.image, channel, cam, pp.localize_points, pp.localize_search_m,
+                              pp.localize_sigma_m, pp.profile_sigma_px * scale,
+                              2 * pp.localize_search_px * scale, pp.localize_min_cos)) {
+        c.image = TopDown(*loc);
+      }
+      if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
+    } else if (pp.localize_in_image) {
       if (auto loc =
               LocalizeSpline(c.image, channel, pp.localize_points, pp.localize_search_px * scale,
                              pp.profile_sigma_px * scale, pp.localize_min_cos, &contrast)) {
@@ -414,6 +425,11 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
       eo.max_row = max_row;
       c.image = TopDown(ExtendSpline(c.image, channel, eo));
       if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
+    }
+    if (std::getenv("LANE_DEBUG_WIDTH")) {
+      const BarWidthReport w = MeasureBarWidths(c.image, channel, cam, BarWidthOptions{});
+      std::fprintf(stderr, "WIDTH %.0f %.0f %d %d %.3f\n", c.image.p[3].x(), c.image.p[3].y(),
+                   w.structured, w.narrow_bars, w.median_width_m);
     }
     if (pp.clip_to_image) {
       const std::optional<Bezier> clipped = ClipToImageContent(c.image, channel);

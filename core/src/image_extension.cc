@@ -75,6 +75,36 @@ std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
 
 }  // namespace
 
+std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& image,
+                                      const CameraModel& camera, int n, double search_m,
+                                      double sigma_m, double min_sigma_px, double max_search_px,
+                                      double min_cos) {
+  std::vector<Eigen::Vector2d> pts;
+  for (int i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) / (n - 1);
+    const Eigen::Vector2d p = spline.Eval(t);
+    Eigen::Vector2d tangent = spline.Derivative(t);
+    if (tangent.norm() < 1e-9 || !InImage(p, image)) continue;
+    tangent.normalize();
+    const double ppm = PixelsPerMetreAcross(camera, p);
+    if (!(ppm > 0)) continue;
+    const Eigen::Vector2d normal = Normal(tangent);
+    const double sigma = std::max(min_sigma_px, sigma_m * ppm);
+    const double half = std::clamp(search_m * ppm, 2.0, max_search_px);
+    const auto peak = FindProfilePeak(SampleProfile(image, p, normal, half), sigma);
+    if (!peak) continue;
+    const double offset = peak->offset;
+    const Eigen::Vector2d q = p + offset * normal;
+    if (!pts.empty()) {
+      const Eigen::Vector2d step = q - pts.back();
+      if (step.norm() < 1e-9 || step.normalized().dot(tangent) < min_cos) continue;
+    }
+    pts.push_back(q);
+  }
+  if (pts.size() < 4) return std::nullopt;
+  return FitBezier(pts);
+}
+
 ExtensionRows ImageExtensionRows(const CameraModel& camera, const Roi& roi,
                                  const PostprocessOptions& pp) {
   const double horizon = camera.HorizonRow();

@@ -80,6 +80,8 @@ absl::Status PostprocessOptions::Validate() const {
       {"side_offset_m", side_offset_m, 0, 10},
       {"min_side_contrast", min_side_contrast, 0, 1},
       {"extend_search_m", extend_search_m, 0.01, 10},
+      {"localize_search_m", localize_search_m, 0.01, 10},
+      {"localize_sigma_m", localize_sigma_m, 0, 2},
       {"extend_gap_m", extend_gap_m, 0, 100},
   };
   for (const auto& c : checks) {

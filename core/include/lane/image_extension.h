@@ -41,6 +41,19 @@ struct ImageExtendOptions {
   int max_steps = 80;
 };
 
+// Localisation in the image (paper section II-E.1) with the camera's
+// geometry: `n` samples of `spline` move to the peak of the profile across
+// it, searched +-search_m on the road and smoothed with sigma_m on the road
+// (at least min_sigma_px), converted to pixels at each sample. A smoothing
+// as wide as a marking merges the two lines of a double line into one peak
+// at their centre, where such a boundary is labelled, and leaves a single
+// line's peak at its centre. Points that turn the curve by more than
+// acos(min_cos) are rejected; nullopt if fewer than 4 remain.
+std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& image,
+                                      const CameraModel& camera, int n, double search_m,
+                                      double sigma_m, double min_sigma_px, double max_search_px,
+                                      double min_cos);
+
 // The image rows the extension stays within: extend_min_row and
 // extend_max_row of `pp`, or when negative derived from the camera's horizon
 // and the ROI's bottom (min: horizon + 0.15 (bottom - horizon); max: bottom +

@@ -78,6 +78,15 @@ struct PostprocessOptions {
   // down to `extend_max_row` (the road continues straight under the last
   // evidence; lane labels such as CULane's run to the image bottom).
   bool extend_geometric = true;
+  // Localisation in the image along the road's geometry (LocalizeInImage)
+  // instead of with the fixed pixel values above: the normal is searched
+  // +-localize_search_m on the road and the profile smoothed with
+  // localize_sigma_m on the road (at least profile_sigma_px), so the two
+  // lines of a double line merge into one peak at their centre (0.1 m: a
+  // marking's width; the lines of a double line are 10-15 cm apart).
+  bool localize_geometric = true;
+  double localize_search_m = 0.4;
+  double localize_sigma_m = 0.1;
   double extend_search_m = 0.4;
   double extend_gap_m = 6.0;
   bool extend_to_max_row = false;
