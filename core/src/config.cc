@@ -138,6 +138,7 @@ LANE_FIELDS(PostprocessOptions) {
   v.Field("extend_gap_m", s.extend_gap_m);
   v.Field("extend_to_max_row", s.extend_to_max_row);
   v.Field("clip_to_image", s.clip_to_image);
+  v.Field("check_ground_angle", s.check_ground_angle);
   v.Field("min_image_length_px", s.min_image_length_px);
   v.Field("localize_in_image", s.localize_in_image);
   v.Field("extend_in_image", s.extend_in_image);

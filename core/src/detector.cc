@@ -426,15 +426,28 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
       c.image = TopDown(ExtendSpline(c.image, channel, eo));
       if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
     }
-    if (std::getenv("LANE_DEBUG_WIDTH")) {
-      const BarWidthReport w = MeasureBarWidths(c.image, channel, cam, BarWidthOptions{});
-      std::fprintf(stderr, "WIDTH %.0f %.0f %d %d %.3f\n", c.image.p[3].x(), c.image.p[3].y(),
-                   w.structured, w.narrow_bars, w.median_width_m);
-    }
     if (pp.clip_to_image) {
       const std::optional<Bezier> clipped = ClipToImageContent(c.image, channel);
       if (!clipped) continue;
       c.image = TopDown(*clipped);
+    }
+    // The top view's direction check on the final spline: image localisation
+    // and extension must not have turned it away from the road.
+    if (pp.check_ground_angle &&
+        GroundAngleFromRoadDeg(c.image, cam) > pp.ipm_max_angle_from_vertical_deg) {
+      continue;
+    }
+    if (const char* env = std::getenv("LANE_WIDTH_CHECK")) {
+      double max_w = 0.3, min_frac = 0.5;
+      std::sscanf(env, "%lf,%lf", &max_w, &min_frac);
+      BarWidthOptions bo;
+      bo.max_width_m = max_w;
+      const BarWidthReport w = MeasureBarWidths(c.image, channel, cam, bo);
+      if (std::getenv("LANE_WIDTH_PRINT")) {
+        c.score = w.structured * 100 + w.narrow_bars + std::min(0.99, w.median_width_m);
+      } else if (w.structured >= 4 && w.NarrowFraction() < min_frac) {
+        continue;
+      }
     }
     bool dup = false;
     for (const auto& d : done) {

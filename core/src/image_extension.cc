@@ -105,6 +105,29 @@ std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& i
   return FitBezier(pts);
 }
 
+namespace {
+
+// Whether the ground step from image point a to b runs within max_deg of the
+// road's direction (the ground y axis).
+bool AlongTheRoad(const CameraModel& camera, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                  double max_deg) {
+  if (max_deg <= 0) return true;
+  const Eigen::Vector2d ga = camera.ImageToGround(a), gb = camera.ImageToGround(b);
+  if (!ga.allFinite() || !gb.allFinite() || ga.y() <= 0 || gb.y() <= 0) return false;
+  const Eigen::Vector2d d = gb - ga;
+  return std::atan2(std::abs(d.x()), std::abs(d.y())) * 180.0 / M_PI <= max_deg;
+}
+
+}  // namespace
+
+double GroundAngleFromRoadDeg(const Bezier& spline, const CameraModel& camera) {
+  const Eigen::Vector2d a = camera.ImageToGround(spline.p[0]);
+  const Eigen::Vector2d b = camera.ImageToGround(spline.p[3]);
+  if (!a.allFinite() || !b.allFinite() || a.y() <= 0 || b.y() <= 0) return 90.0;
+  const Eigen::Vector2d d = b - a;
+  return std::atan2(std::abs(d.x()), std::abs(d.y())) * 180.0 / M_PI;
+}
+
 ExtensionRows ImageExtensionRows(const CameraModel& camera, const Roi& roi,
                                  const PostprocessOptions& pp) {
   const double horizon = camera.HorizonRow();
@@ -129,6 +152,7 @@ ImageExtendOptions ImageExtendOptionsFrom(const PostprocessOptions& pp, double s
   o.max_gap_m = pp.extend_gap_m;
   o.min_cos_up = pp.extend_min_cos_up;
   o.min_cos_down = pp.extend_min_cos_down;
+  o.max_ground_angle_deg = pp.ipm_max_angle_from_vertical_deg;
   o.min_row = min_row;
   o.max_row = max_row;
   o.extrapolate_down = pp.extend_to_max_row;
@@ -220,7 +244,9 @@ Bezier ExtendInImage(const Bezier& spline, const ChannelView& image, const Camer
       if (supported) {
         q = guess + bar->offset * Normal(dir);
         const Eigen::Vector2d d = q - anchor;
-        supported = d.norm() > 1e-9 && d.normalized().dot(main_dir) >= min_cos && InImage(q, image);
+        supported = d.norm() > 1e-9 && d.normalized().dot(main_dir) >= min_cos &&
+                    InImage(q, image) &&
+                    AlongTheRoad(camera, anchor, q, options.max_ground_angle_deg);
       }
       if (supported) {
         dir = (dir + (q - cur).normalized()).normalized();

@@ -33,7 +33,12 @@ struct ImageExtendOptions {
   double max_gap_m = 6;        // unsupported distance along the road walked through
   double min_cos_up = 0.86;    // direction change allowed going up (towards t = 0)
   double min_cos_down = 0.95;  // going down
-  double min_row = 0;          // the walk stays within these image rows
+  // The walk follows the road: each new point, seen on the ground from the
+  // last supported one, must run within this angle of the road's direction
+  // (the top view's check, paper II-E.3, applied while extending; without it
+  // a walk near the horizon slides along vehicles' lower edges). <= 0: off.
+  double max_ground_angle_deg = 20;
+  double min_row = 0;  // the walk stays within these image rows
   double max_row = 1e9;
   // Below the last supported point, extend the final straight segment down
   // to max_row (or the image's bottom row, whichever is higher).
@@ -53,6 +58,10 @@ std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& i
                                       const CameraModel& camera, int n, double search_m,
                                       double sigma_m, double min_sigma_px, double max_search_px,
                                       double min_cos);
+
+// Angle of the chord of `spline` (image) from the road's direction on the
+// ground, degrees; 90 when its ends do not map to the ground ahead.
+double GroundAngleFromRoadDeg(const Bezier& spline, const CameraModel& camera);
 
 // The image rows the extension stays within: extend_min_row and
 // extend_max_row of `pp`, or when negative derived from the camera's horizon

@@ -95,6 +95,10 @@ struct PostprocessOptions {
   // spans the whole top view, which extends beyond the image's sides where
   // the ground rectangle does; a lane stops where the image does.
   bool clip_to_image = true;
+  // The final image spline, mapped to the ground, must run within
+  // ipm_max_angle_from_vertical_deg of the road's direction, as the top-view
+  // spline had to (paper II-E.3: geometric checks after each step).
+  bool check_ground_angle = true;
   // A final image spline shorter than this (pixels at 640 width) is replaced
   // by the line.
   double min_image_length_px = 40.0;
