@@ -116,6 +116,9 @@ LANE_FIELDS(PostprocessOptions) {
   v.Field("min_length_fraction", s.min_length_fraction);
   v.Field("side_offset_m", s.side_offset_m);
   v.Field("min_side_contrast", s.min_side_contrast);
+  v.Field("min_ray_angle_deg", s.min_ray_angle_deg);
+  v.Field("max_ray_bend_m", s.max_ray_bend_m);
+  v.Field("max_bright_side_fraction", s.max_bright_side_fraction);
   v.Field("ipm_extend_step_px", s.ipm_extend_step_px);
   v.Field("ipm_normal_search_px", s.ipm_normal_search_px);
   v.Field("backproject_samples", s.backproject_samples);
@@ -139,6 +142,7 @@ LANE_FIELDS(PostprocessOptions) {
   v.Field("extend_to_max_row", s.extend_to_max_row);
   v.Field("clip_to_image", s.clip_to_image);
   v.Field("check_ground_angle", s.check_ground_angle);
+  v.Field("max_redness", s.max_redness);
   v.Field("min_image_length_px", s.min_image_length_px);
   v.Field("localize_in_image", s.localize_in_image);
   v.Field("extend_in_image", s.extend_in_image);

@@ -3,13 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
 #include "lane/image_extension.h"
 #include "lane/marking_check.h"
+#include "lane/vehicle_check.h"
 
 namespace lane {
 namespace {
@@ -356,6 +355,13 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
   const double min_row = rows.min_row;
   const double max_row = rows.max_row;
   std::vector<Candidate> done;
+  double road_deg = 0;
+  const float road_level = pp.max_bright_side_fraction < 1 ? RoadLevel(ipm, ipm_.valid_mask()) : 0;
+  if (pp.min_ray_angle_deg > 0) {
+    std::vector<Bezier> splines;
+    for (const Candidate& c : cands) splines.push_back(c.ipm);
+    road_deg = RoadDirectionDeg(splines, ipm_);
+  }
   for (Candidate c : cands) {
     if (AngleFromVerticalDeg(c.ipm) > pp.ipm_max_angle_from_vertical_deg) continue;
     const Bezier ipm_line = Bezier::Line(c.line.top, c.line.bottom);
@@ -381,6 +387,15 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
     if (pp.min_side_contrast > 0 &&
         BarContrast(c.ipm, ipm, pp.side_offset_m / mpp_x) < pp.min_side_contrast) {
       continue;  // a step (curb, road edge), not a bright marking
+    }
+    if (pp.max_bright_side_fraction < 1 &&
+        BrightSideFraction(c.ipm, ipm, road_level, pp.side_offset_m / mpp_x) >
+            pp.max_bright_side_fraction) {
+      continue;  // beside a bright object (vehicle_check.h)
+    }
+    if (pp.min_ray_angle_deg > 0 &&
+        TestRay(c.ipm, ipm_).RayLike(pp.min_ray_angle_deg, road_deg, pp.max_ray_bend_m)) {
+      continue;  // a vertical object's streak (vehicle_check.h)
     }
 
     // Image: back-project, localise, check, extend, check.
@@ -437,17 +452,9 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
         GroundAngleFromRoadDeg(c.image, cam) > pp.ipm_max_angle_from_vertical_deg) {
       continue;
     }
-    if (const char* env = std::getenv("LANE_WIDTH_CHECK")) {
-      double max_w = 0.3, min_frac = 0.5;
-      std::sscanf(env, "%lf,%lf", &max_w, &min_frac);
-      BarWidthOptions bo;
-      bo.max_width_m = max_w;
-      const BarWidthReport w = MeasureBarWidths(c.image, channel, cam, bo);
-      if (std::getenv("LANE_WIDTH_PRINT")) {
-        c.score = w.structured * 100 + w.narrow_bars + std::min(0.99, w.median_width_m);
-      } else if (w.structured >= 4 && w.NarrowFraction() < min_frac) {
-        continue;
-      }
+    if (pp.max_redness < 1 && frame.channels() == 3) {
+      const double r = MedianRedness(c.image, frame, channel, 2 * scale);
+      if (std::isfinite(r) && r > pp.max_redness) continue;  // red: a curb or a vehicle
     }
     bool dup = false;
     for (const auto& d : done) {

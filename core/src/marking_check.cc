@@ -69,4 +69,27 @@ BarWidthReport MeasureBarWidths(const Bezier& spline, const ChannelView& image,
   return report;
 }
 
+double MedianRedness(const Bezier& spline, const cv::Mat& bgr, const ChannelView& view,
+                     double search_px, int samples) {
+  if (bgr.channels() != 3 || bgr.depth() != CV_8U) return std::nan("");
+  std::vector<double> redness;
+  const int s = std::max(1, static_cast<int>(std::lround(search_px)));
+  for (int i = 0; i < samples; ++i) {
+    const Eigen::Vector2d p = spline.Eval((i + 0.5) / samples);
+    const int y = static_cast<int>(std::lround(p.y()));
+    const int cx = static_cast<int>(std::lround(p.x()));
+    if (y < 0 || y >= bgr.rows || cx < 0 || cx >= bgr.cols) continue;
+    int best = -1;
+    for (int x = std::max(0, cx - s); x <= std::min(bgr.cols - 1, cx + s); ++x) {
+      if (best < 0 || view.At(x, y) > view.At(best, y)) best = x;
+    }
+    const cv::Vec3b c = bgr.at<cv::Vec3b>(y, best);
+    if (c[2] < 40) continue;
+    redness.push_back((static_cast<double>(c[2]) - c[1]) / c[2]);
+  }
+  if (redness.empty()) return std::nan("");
+  std::nth_element(redness.begin(), redness.begin() + redness.size() / 2, redness.end());
+  return redness[redness.size() / 2];
+}
+
 }  // namespace lane

@@ -39,6 +39,17 @@ struct BarWidthReport {
 BarWidthReport MeasureBarWidths(const Bezier& spline, const ChannelView& image,
                                 const CameraModel& camera, const BarWidthOptions& options);
 
+// Colour (the paper's section IV: colour "will allow us to remove the false
+// positives due to curbs"): lane paint is white or yellow, so red and green
+// are about equally bright in it (yellow: green ~0.85 of red; faded orange
+// ~0.7), while red-painted curbs, red vehicles and tail lights have green
+// well below red. The median over `samples` points of the image spline of
+// (R - G) / R at the brightest pixel (in `view`) within `search_px` of the
+// spline along its row. NaN for a grey frame or when no sample is bright
+// enough (R < 40) to have a colour.
+double MedianRedness(const Bezier& spline, const cv::Mat& bgr, const ChannelView& view,
+                     double search_px, int samples = 24);
+
 }  // namespace lane
 
 #endif  // LANE_MARKING_CHECK_H_

@@ -35,6 +35,23 @@ struct PostprocessOptions {
   // positives (section IV).
   double side_offset_m = 0.3;
   double min_side_contrast = 0.015;
+  // Vertical objects (lane/vehicle_check.h): a top-view spline closer in
+  // direction to the ray from the camera's foot point through it than to the
+  // road's direction is dropped, where the two directions differ by at
+  // least this many degrees (twice the ~3 deg by which yaw and curvature
+  // tilt markings from the road's axis). 0 disables the test.
+  // The road's direction is the frame's median candidate direction; a
+  // candidate that bends by more than max_ray_bend_m from its straight line
+  // is a marking on a curve, not a (straight) ray.
+  double min_ray_angle_deg = 6.0;
+  // Bright neighbours (lane/vehicle_check.h): a top-view spline with a side,
+  // side_offset_m across, brighter than the road by more than half its own
+  // contrast along more than this fraction of its length is dropped: a
+  // marking has road on both sides. >= 1 disables it (the default: on the
+  // dev clips it cost more markings, beside double lines and bright curbs,
+  // than it removed false positives; docs/accuracy-log.md).
+  double max_bright_side_fraction = 1.0;
+  double max_ray_bend_m = 0.15;
   // Extension in the top view: tangent step and normal half-search, IPM px.
   double ipm_extend_step_px = 5.0;
   double ipm_normal_search_px = 10.0;
@@ -99,6 +116,11 @@ struct PostprocessOptions {
   // ipm_max_angle_from_vertical_deg of the road's direction, as the top-view
   // spline had to (paper II-E.3: geometric checks after each step).
   bool check_ground_angle = true;
+  // Colour (lane/marking_check.h): an image spline whose median redness
+  // (R - G) / R exceeds this is dropped. Yellow paint reads ~0.15, faded
+  // orange ~0.3, red curbs, red cars and tail lights 0.5-0.7; 0.4 lies
+  // between. >= 1 disables it. Grey frames are not checked.
+  double max_redness = 0.4;
   // A final image spline shorter than this (pixels at 640 width) is replaced
   // by the line.
   double min_image_length_px = 40.0;
