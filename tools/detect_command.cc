@@ -59,11 +59,11 @@ std::string UniqueStem(const std::string& stem, std::set<std::string>& used) {
 // Writes both overlay pictures; an error message or "".
 std::string WriteOverlays(const std::filesystem::path& dir, const std::string& stem,
                           const cv::Mat& frame, const lane::Detection& detection,
-                          const lane::Detector& detector) {
+                          const lane::Detector& detector, const std::string& frame_name) {
   const std::string image_path = (dir / (stem + ".png")).string();
   const std::string ipm_path = (dir / (stem + "_ipm.png")).string();
   try {
-    if (!cv::imwrite(image_path, DrawLanesOnImage(frame, detection, detector))) {
+    if (!cv::imwrite(image_path, DrawLanesOnImage(frame, detection, detector, frame_name))) {
       return absl::StrCat("cannot write ", image_path);
     }
     if (!cv::imwrite(ipm_path, DrawIpmView(frame, detection, detector))) {
@@ -185,7 +185,7 @@ int RunDetect(const std::vector<std::string>& argv) {
 
     if (!overlay_dir.empty()) {
       const std::string message = WriteOverlays(overlay_dir, UniqueStem(frame.stem, used_stems),
-                                                frame.bgr, *detection, *detector);
+                                                frame.bgr, *detection, *detector, frame.name);
       if (!message.empty()) {
         overlay_failed = true;
         std::fprintf(stderr, "lane detect: %s: %s\n", frame.name.c_str(), message.c_str());

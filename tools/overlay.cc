@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "lane/bezier.h"
 
 namespace lane_tools {
@@ -75,8 +77,23 @@ cv::Scalar LaneColour(int i) {
   return kPalette[((i % n) + n) % n];
 }
 
+cv::Point DrawCaption(cv::Mat& canvas, const std::string& text, int x, int y,
+                      const cv::Scalar& colour) {
+  const double scale = std::max(0.4, 0.5 * canvas.cols / 640.0);
+  const int thickness = std::max(1, static_cast<int>(std::lround(scale * 1.5)));
+  int baseline = 0;
+  const cv::Size size =
+      cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, thickness, &baseline);
+  const int pad = std::max(2, static_cast<int>(std::lround(4 * scale)));
+  const cv::Point corner(x + size.width + 2 * pad, y + size.height + baseline + 2 * pad);
+  cv::rectangle(canvas, {x, y}, corner, cv::Scalar(0, 0, 0), cv::FILLED);
+  cv::putText(canvas, text, {x + pad, y + pad + size.height}, cv::FONT_HERSHEY_SIMPLEX, scale,
+              colour, thickness, cv::LINE_AA);
+  return corner;
+}
+
 cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
-                         const lane::Detector& detector) {
+                         const lane::Detector& detector, const std::string& frame_name) {
   cv::Mat canvas = ToBgr(frame);
   if (canvas.empty()) return canvas;
 
@@ -96,6 +113,17 @@ cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
   for (size_t i = 0; i < detection.lanes.size(); ++i) {
     DrawBezier(canvas, detection.lanes[i].image, LaneColour(static_cast<int>(i)),
                [](const Eigen::Vector2d& p) { return p; });
+  }
+  // Caption: the frame's name, then the lanes' scores in their colours.
+  const int margin = std::max(2, canvas.cols / 160);
+  int y = margin;
+  if (!frame_name.empty()) y = DrawCaption(canvas, frame_name, margin, y).y;
+  cv::Point at =
+      DrawCaption(canvas, absl::StrCat(detection.lanes.size(), " lanes, scores:"), margin, y);
+  for (size_t i = 0; i < detection.lanes.size(); ++i) {
+    char score[32];
+    std::snprintf(score, sizeof(score), "%.1f", detection.lanes[i].score);
+    at = DrawCaption(canvas, score, at.x, y, LaneColour(static_cast<int>(i)));
   }
   return canvas;
 }

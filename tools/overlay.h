@@ -4,6 +4,7 @@
 #define LANE_TOOLS_OVERLAY_H_
 
 #include <opencv2/core.hpp>
+#include <string>
 
 #include "lane/detector.h"
 
@@ -13,11 +14,18 @@ namespace lane_tools {
 cv::Scalar LaneColour(int i);
 
 // A BGR copy of `frame` (CV_8UC3 or CV_8UC1) with: the mapped ROI as a thin
-// red rectangle, the horizon row as a thin grey dashed line, and each lane as
-// a 2 px polyline through 50 samples of its image Bezier with its control
-// points as small circles.
+// red rectangle, the horizon row as a thin grey dashed line, each lane as a
+// 2 px polyline through 50 samples of its image Bezier with its control
+// points as small circles, and a caption in the top-left corner: the frame's
+// name (when given) and each lane's score, left to right, in the lane's
+// colour.
 cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
-                         const lane::Detector& detector);
+                         const lane::Detector& detector, const std::string& frame_name = "");
+
+// White (or `colour`) text on a black box with its top-left corner at (x, y),
+// scaled to the frame; returns the box's right edge and bottom.
+cv::Point DrawCaption(cv::Mat& canvas, const std::string& text, int x, int y,
+                      const cv::Scalar& colour = cv::Scalar(255, 255, 255));
 
 // The detector's top view of `frame` (its channel through the IPM),
 // stretched to 0..255, enlarged `scale` times (nearest neighbour), in BGR,
