@@ -313,6 +313,11 @@ absl::StatusOr<Baseline> ReadBaseline(const std::string& path) {
     return absl::InvalidArgumentError(absl::StrCat(path, ": \"culane_f1\" must be a number"));
   }
   b.culane_f1 = j["culane_f1"].get<double>();
+  const auto number_or_nan = [&j](const char* key) {
+    return j.contains(key) && j[key].is_number() ? j[key].get<double>() : std::nan("");
+  };
+  b.paper_correct_rate = number_or_nan("paper_correct_rate");
+  b.paper_false_positive_rate = number_or_nan("paper_false_positive_rate");
   if (j.contains("dataset") && j["dataset"].is_string())
     b.dataset = j["dataset"].get<std::string>();
   if (j.contains("mode") && j["mode"].is_string()) b.mode = j["mode"].get<std::string>();

@@ -46,6 +46,10 @@ struct Baseline {
   std::string mode;
   int frames = 0;
   double culane_f1 = 0;
+  // The paper rule's total correct and false-positive rates (fractions);
+  // NaN when the file does not record them.
+  double paper_correct_rate = 0;
+  double paper_false_positive_rate = 0;
   std::vector<uint64_t> seeds;  // empty: the config's seed
 };
 // Reads what BaselineJson wrote. INVALID_ARGUMENT naming the file when a
