@@ -41,6 +41,8 @@ absl::StatusOr<lane::Channel> ChannelFromProto(v1::Channel channel) {
       return lane::Channel::kBlue;
     case v1::CHANNEL_GRAY:
       return lane::Channel::kGray;
+    case v1::CHANNEL_MIN_RED_GREEN:
+      return lane::Channel::kMinRedGreen;
     default:
       return InvalidRequest(absl::StrCat("detector.channel: unknown value ", channel));
   }
@@ -56,6 +58,8 @@ v1::Channel ChannelToProto(lane::Channel channel) {
       return v1::CHANNEL_BLUE;
     case lane::Channel::kGray:
       return v1::CHANNEL_GRAY;
+    case lane::Channel::kMinRedGreen:
+      return v1::CHANNEL_MIN_RED_GREEN;
   }
   return v1::CHANNEL_RED;
 }
@@ -89,8 +93,31 @@ absl::Status IpmFromProto(const v1::IpmOptions& p, lane::IpmOptions& o) {
     case v1::INTERPOLATION_BILINEAR:
       o.interpolation = lane::Interpolation::kBilinear;
       break;
+    case v1::INTERPOLATION_AREA:
+      o.interpolation = lane::Interpolation::kArea;
+      break;
     default:
       return InvalidRequest(absl::StrCat("ipm.interpolation: unknown value ", p.interpolation()));
+  }
+  const v1::GroundView& g = p.ground();
+  LANE_COPY_IF_SET(g, o.ground, x_min_m);
+  LANE_COPY_IF_SET(g, o.ground, x_max_m);
+  LANE_COPY_IF_SET(g, o.ground, y_min_m);
+  LANE_COPY_IF_SET(g, o.ground, y_max_m);
+  LANE_COPY_IF_SET(g, o.ground, metres_per_px_x);
+  LANE_COPY_IF_SET(g, o.ground, metres_per_px_y);
+  switch (p.view()) {
+    case v1::IPM_VIEW_UNSPECIFIED:
+      if (p.has_ground()) o.view = lane::IpmView::kGround;
+      break;
+    case v1::IPM_VIEW_ROI:
+      o.view = lane::IpmView::kRoi;
+      break;
+    case v1::IPM_VIEW_GROUND:
+      o.view = lane::IpmView::kGround;
+      break;
+    default:
+      return InvalidRequest(absl::StrCat("ipm.view: unknown value ", p.view()));
   }
   return absl::OkStatus();
 }
@@ -112,6 +139,9 @@ absl::Status DetectorFromProto(const v1::DetectorOptions& p, lane::DetectorOptio
   LANE_COPY_IF_SET(f, o.filter, kernel_extent_sigmas);
   LANE_COPY_IF_SET(f, o.filter, zero_border_x_px);
   LANE_COPY_IF_SET(f, o.filter, zero_border_bottom_px);
+  LANE_COPY_IF_SET(f, o.filter, bar_side_m);
+  LANE_COPY_IF_SET(f, o.filter, void_level);
+  LANE_COPY_IF_SET(f, o.filter, void_margin_y_px);
 
   LANE_COPY_IF_SET(p.threshold(), o.threshold, quantile);
 
@@ -160,6 +190,19 @@ absl::Status DetectorFromProto(const v1::DetectorOptions& p, lane::DetectorOptio
   LANE_COPY_IF_SET(pp, po, localize_in_image);
   LANE_COPY_IF_SET(pp, po, extend_in_image);
   LANE_COPY_IF_SET(pp, po, extend_in_ipm);
+  LANE_COPY_IF_SET(pp, po, extend_geometric);
+  LANE_COPY_IF_SET(pp, po, extend_search_m);
+  LANE_COPY_IF_SET(pp, po, extend_gap_m);
+  LANE_COPY_IF_SET(pp, po, extend_to_max_row);
+  LANE_COPY_IF_SET(pp, po, localize_geometric);
+  LANE_COPY_IF_SET(pp, po, localize_search_m);
+  LANE_COPY_IF_SET(pp, po, localize_sigma_m);
+  LANE_COPY_IF_SET(pp, po, clip_to_image);
+  LANE_COPY_IF_SET(pp, po, check_ground_angle);
+  LANE_COPY_IF_SET(pp, po, min_ray_angle_deg);
+  LANE_COPY_IF_SET(pp, po, max_ray_bend_m);
+  LANE_COPY_IF_SET(pp, po, max_bright_side_fraction);
+  LANE_COPY_IF_SET(pp, po, max_redness);
 
   const v1::TwoLaneOptions& t = p.two_lanes();
   LANE_COPY_IF_SET(t, o.two_lanes, search_half_width_m);
@@ -231,9 +274,25 @@ void ConfigToProto(const lane::Config& config, v1::SessionConfig* out) {
   LANE_SET(roi, i.roi, top);
   LANE_SET(roi, i.roi, bottom);
   LANE_SET(ipm, i, horizon_margin_px);
-  ipm->set_interpolation(i.interpolation == lane::Interpolation::kNearest
-                             ? v1::INTERPOLATION_NEAREST
-                             : v1::INTERPOLATION_BILINEAR);
+  switch (i.interpolation) {
+    case lane::Interpolation::kNearest:
+      ipm->set_interpolation(v1::INTERPOLATION_NEAREST);
+      break;
+    case lane::Interpolation::kBilinear:
+      ipm->set_interpolation(v1::INTERPOLATION_BILINEAR);
+      break;
+    case lane::Interpolation::kArea:
+      ipm->set_interpolation(v1::INTERPOLATION_AREA);
+      break;
+  }
+  ipm->set_view(i.view == lane::IpmView::kGround ? v1::IPM_VIEW_GROUND : v1::IPM_VIEW_ROI);
+  v1::GroundView* g = ipm->mutable_ground();
+  LANE_SET(g, i.ground, x_min_m);
+  LANE_SET(g, i.ground, x_max_m);
+  LANE_SET(g, i.ground, y_min_m);
+  LANE_SET(g, i.ground, y_max_m);
+  LANE_SET(g, i.ground, metres_per_px_x);
+  LANE_SET(g, i.ground, metres_per_px_y);
 
   v1::DetectorOptions* det = out->mutable_detector();
   const lane::DetectorOptions& d = config.detector;
@@ -248,6 +307,9 @@ void ConfigToProto(const lane::Config& config, v1::SessionConfig* out) {
   LANE_SET(f, d.filter, kernel_extent_sigmas);
   LANE_SET(f, d.filter, zero_border_x_px);
   LANE_SET(f, d.filter, zero_border_bottom_px);
+  LANE_SET(f, d.filter, bar_side_m);
+  LANE_SET(f, d.filter, void_level);
+  LANE_SET(f, d.filter, void_margin_y_px);
 
   det->mutable_threshold()->set_quantile(d.threshold.quantile);
 
@@ -296,6 +358,19 @@ void ConfigToProto(const lane::Config& config, v1::SessionConfig* out) {
   LANE_SET(pp, po, localize_in_image);
   LANE_SET(pp, po, extend_in_image);
   LANE_SET(pp, po, extend_in_ipm);
+  LANE_SET(pp, po, extend_geometric);
+  LANE_SET(pp, po, extend_search_m);
+  LANE_SET(pp, po, extend_gap_m);
+  LANE_SET(pp, po, extend_to_max_row);
+  LANE_SET(pp, po, localize_geometric);
+  LANE_SET(pp, po, localize_search_m);
+  LANE_SET(pp, po, localize_sigma_m);
+  LANE_SET(pp, po, clip_to_image);
+  LANE_SET(pp, po, check_ground_angle);
+  LANE_SET(pp, po, min_ray_angle_deg);
+  LANE_SET(pp, po, max_ray_bend_m);
+  LANE_SET(pp, po, max_bright_side_fraction);
+  LANE_SET(pp, po, max_redness);
 
   v1::TwoLaneOptions* t = det->mutable_two_lanes();
   LANE_SET(t, d.two_lanes, search_half_width_m);
