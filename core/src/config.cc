@@ -85,7 +85,11 @@ LANE_FIELDS(FilterOptions) {
   v.Field("void_margin_y_px", s.void_margin_y_px);
 }
 
-LANE_FIELDS(ThresholdOptions) { v.Field("quantile", s.quantile); }
+LANE_FIELDS(ThresholdOptions) {
+  v.Field("quantile", s.quantile);
+  v.Field("transverse_max_fraction", s.transverse_max_fraction);
+  v.Field("transverse_margin_m", s.transverse_margin_m);
+}
 
 LANE_FIELDS(HoughOptions) {
   v.Field("smooth_sigma_px", s.smooth_sigma_px);

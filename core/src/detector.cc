@@ -137,6 +137,9 @@ DetectorOptions DetectorOptions::ForMode(Mode mode) {
     o.spline_ransac.window_half_width_m = 0.67;
     o.spline_ransac.iterations = 75;
     o.spline_ransac.k2 = 1.0;
+    // The ego lane's band (+-2.9 m) holds its two boundaries: 2 x 0.25 m of
+    // kept pixels in 5.8 m is 8.6 % of a row (threshold.h).
+    o.threshold.transverse_max_fraction = 0.15;
   }
   return o;
 }
@@ -272,6 +275,7 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
   cv::Mat thresholded = filtered.clone();
   const float threshold = ApplyQuantileThreshold(thresholded, opt.threshold.quantile);
   const double cam_col = ipm_.GroundToIpm(Eigen::Vector2d(0, ipm_.y_min())).x();
+  cv::Mat searched = ipm_.valid_mask();  // the columns searched for lanes
   if (opt.mode == Mode::kTwo) {
     // Only the band around the camera can hold the ego lane's boundaries.
     const double half = opt.two_lanes.search_half_width_m / ipm_.metres_per_px_x();
@@ -280,6 +284,14 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
         std::clamp(static_cast<int>(std::floor(cam_col + half)) + 1, 0, thresholded.cols);
     if (c0 > 0) thresholded.colRange(0, c0).setTo(0);
     if (c1 < thresholded.cols) thresholded.colRange(c1, thresholded.cols).setTo(0);
+    searched = ipm_.valid_mask().clone();
+    if (c0 > 0) searched.colRange(0, c0).setTo(0);
+    if (c1 < searched.cols) searched.colRange(c1, searched.cols).setTo(0);
+  }
+  if (opt.threshold.transverse_max_fraction < 1) {
+    SuppressTransverseRows(
+        thresholded, searched, opt.threshold.transverse_max_fraction,
+        static_cast<int>(std::lround(opt.threshold.transverse_margin_m / ipm_.metres_per_px_y())));
   }
   det.timings.threshold_ms = MsSince(t);
 
