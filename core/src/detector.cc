@@ -160,14 +160,7 @@ absl::StatusOr<Detector> Detector::Create(const CameraModel& camera, const IpmOp
   if (!mapping.ok()) return mapping.status();
   FilterKernels kernels =
       MakeFilterKernels(options.filter, mapping->metres_per_px_x(), mapping->metres_per_px_y());
-  const ExtensionRows rows = ImageExtensionRows(camera, mapping->roi(), options.postprocess);
-  const double search =
-      2 * std::max(options.postprocess.localize_search_px, options.postprocess.extend_search_px) *
-      camera.image_width / 640.0;
-  const int first_row =
-      std::clamp(static_cast<int>(std::floor(std::min(mapping->roi().top, rows.min_row) - search)),
-                 0, camera.image_height - 1);
-  return Detector(*std::move(mapping), options, std::move(kernels), first_row);
+  return Detector(*std::move(mapping), options, std::move(kernels));
 }
 
 cv::Mat Detector::ExtractChannel(const cv::Mat& frame) const {
@@ -199,14 +192,6 @@ cv::Mat Detector::ExtractChannel(const cv::Mat& frame) const {
 
 ChannelView Detector::ViewChannel(const cv::Mat& frame) const {
   if (frame.channels() == 1) return ChannelView(frame);
-  if (options_.channel == Channel::kGray && first_row_ > 0) {
-    // Only the rows the detector reads; those above read as black.
-    cv::Mat gray(frame.rows, frame.cols, CV_8U);
-    gray.rowRange(0, first_row_).setTo(0);
-    cv::Mat below = gray.rowRange(first_row_, frame.rows);
-    cv::cvtColor(frame.rowRange(first_row_, frame.rows), below, cv::COLOR_BGR2GRAY);
-    return ChannelView(gray);
-  }
   switch (options_.channel) {
     case Channel::kRed:
       return ChannelView(frame, 2);
@@ -217,7 +202,7 @@ ChannelView Detector::ViewChannel(const cv::Mat& frame) const {
     case Channel::kMinRedGreen:
       return ChannelView(frame, 2, 1);
     case Channel::kGray:
-      break;
+      return ChannelView(frame, 0, kGrayOfBgr);  // computed where read
   }
   return ChannelView(ExtractChannel(frame));
 }

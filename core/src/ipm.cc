@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
+#include "lane/postprocess.h"
 
 namespace lane {
 
@@ -308,7 +309,10 @@ cv::Mat IpmMapping::ApplySegments(const cv::Mat& image, int channel, int channel
     int32_t* p = prefix.data() + static_cast<size_t>(v) * cols;
     int32_t acc = 0;
     p[0] = 0;
-    if (channel2 >= 0) {
+    if (channel2 == kGrayOfBgr) {
+      const uint8_t* px = image.ptr<uint8_t>(seg_row0_ + v);
+      for (int k = 0; k + 1 < cols; ++k) p[k + 1] = acc += GrayOfBgr(px + 3 * k);
+    } else if (channel2 >= 0) {
       const int d = channel2 - channel;
       for (int k = 0; k + 1 < cols; ++k) p[k + 1] = acc += std::min(src[k * cn], src[k * cn + d]);
     } else if (cn == 1) {
@@ -357,7 +361,7 @@ double IpmMapping::mean_taps() const {
 cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel, int channel2) const {
   CV_Assert(image.depth() == CV_8U && image.cols == camera_.image_width &&
             image.rows == camera_.image_height && channel >= 0 && channel < image.channels() &&
-            channel2 < image.channels());
+            channel2 < image.channels() && (channel2 != kGrayOfBgr || image.channels() == 3));
   if (options_.interpolation == Interpolation::kArea)
     return ApplySegments(image, channel, channel2);
   cv::Mat out(height_, width_, CV_32F);
@@ -375,7 +379,11 @@ cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel, int channel2) const
       continue;
     }
     float v = 0.f;
-    if (channel2 >= 0) {
+    if (channel2 == kGrayOfBgr) {
+      for (int k = a; k < b; ++k) {
+        v += taps[k].w * GrayOfBgr(image.data + taps[k].y * step + taps[k].x * cn);
+      }
+    } else if (channel2 >= 0) {
       const int d = channel2 - channel;
       for (int k = a; k < b; ++k) {
         const uint8_t* p = base + taps[k].y * step + taps[k].x * cn;

@@ -37,7 +37,7 @@ bool InBounds(const Eigen::Vector2d& p, const ChannelView& image) {
 
 float ChannelView::Bilinear(double x, double y) const {
   if (!(x >= 0 && y >= 0 && x <= image.cols - 1 && y <= image.rows - 1)) return 0.f;
-  if (channel2 >= 0) {
+  if (channel2 != -1) {
     const int x0 = std::min(static_cast<int>(x), std::max(0, image.cols - 2));
     const int y0 = std::min(static_cast<int>(y), std::max(0, image.rows - 2));
     const int x1 = std::min(x0 + 1, image.cols - 1), y1 = std::min(y0 + 1, image.rows - 1);

@@ -137,23 +137,17 @@ class Detector {
 
   // The single channel the detector reads from a frame, as a copy.
   cv::Mat ExtractChannel(const cv::Mat& frame) const;
-  // The same channel as a view: no copy except for kGray on a colour frame
-  // (kMinRedGreen is a view of two channels).
+  // The same channel as a view, without a copy (kMinRedGreen and kGray are
+  // computed from the BGR pixels where they are read).
   ChannelView ViewChannel(const cv::Mat& frame) const;
 
  private:
-  Detector(IpmMapping ipm, DetectorOptions options, FilterKernels kernels, int first_row)
-      : ipm_(std::move(ipm)),
-        options_(std::move(options)),
-        kernels_(std::move(kernels)),
-        first_row_(first_row) {}
+  Detector(IpmMapping ipm, DetectorOptions options, FilterKernels kernels)
+      : ipm_(std::move(ipm)), options_(std::move(options)), kernels_(std::move(kernels)) {}
 
   IpmMapping ipm_;
   DetectorOptions options_;
   FilterKernels kernels_;
-  // The first image row any stage reads (the ROI's or the extension's top,
-  // less the localisation search): kGray is converted from there down only.
-  int first_row_ = 0;
 };
 
 }  // namespace lane

@@ -96,7 +96,8 @@ class IpmMapping {
   // pixels are read, so no full-frame channel copy is made. Pixels whose
   // source falls outside the ROI are set to the mean of the others (as in the
   // reference implementation).
-  // With `channel2` >= 0 the top view is of min(channel, channel2) per pixel.
+  // With `channel2` >= 0 the top view is of min(channel, channel2) per pixel;
+  // with kGrayOfBgr (lane/postprocess.h) of the grey of a BGR image.
   cv::Mat Apply(const cv::Mat& image, int channel = 0, int channel2 = -1) const;
 
   // Conversions between IPM pixels, image pixels and ground metres.

@@ -134,7 +134,13 @@ struct PostprocessOptions {
 
 // One channel of an image without copying it out: a CV_8UC1 or CV_32FC1
 // image (channel 0), or channel `channel` of a CV_8UC3 image, or with
-// `channel2` >= 0 the per-pixel minimum of two channels of a CV_8UC3 image.
+// `channel2` >= 0 the per-pixel minimum of two channels of a CV_8UC3 image,
+// or with `channel2` == kGrayOfBgr the grey (BT.601, as cv::COLOR_BGR2GRAY)
+// of a CV_8UC3 BGR image.
+inline constexpr int kGrayOfBgr = -2;
+inline int GrayOfBgr(const uint8_t* p) {
+  return (p[0] * 1868 + p[1] * 9617 + p[2] * 4899 + 8192) >> 14;
+}
 struct ChannelView {
   ChannelView(const cv::Mat& m, int c = 0, int c2 = -1)  // NOLINT: implicit
       : image(m), channel(c), channel2(c2) {}
@@ -146,6 +152,7 @@ struct ChannelView {
   float At(int x, int y) const {
     if (image.depth() == CV_32F) return image.ptr<float>(y)[x];
     const uint8_t* p = image.ptr<uint8_t>(y) + x * image.channels();
+    if (channel2 == kGrayOfBgr) return static_cast<float>(GrayOfBgr(p));
     return channel2 >= 0 ? std::min(p[channel], p[channel2]) : p[channel];
   }
   // Bilinear sample; 0 outside the image.
