@@ -47,13 +47,13 @@ struct GroundView {
   // for lanes up to 3.75 m wide with the car up to 1.9 m off the centre.
   double x_min_m = -7.5;
   double x_max_m = 7.5;
-  // Distance range. Near limit: where the car's own hood or the image bottom
-  // ends the road; far limit: where the ground resolution of the image
-  // becomes too coarse across the road (below ~2 image px per 15 cm
-  // marking) and vehicles ahead fill the view. Both depend on the camera:
-  // see docs/config.md for how the shipped configs were chosen.
+  // Distance range ahead. Near limit: where the car's own hood or the image
+  // bottom ends the road (8 m for the CULane camera); far limit: short of
+  // the vehicles ahead in dense traffic, whose edges and shadows otherwise
+  // dominate the threshold (a 1-1.5 s gap at 30-50 km/h is 8-20 m), and deep
+  // enough for a dash and a gap. docs/config.md, "Choosing a ground view".
   double y_min_m = 8.0;
-  double y_max_m = 22.0;
+  double y_max_m = 18.0;
   // Ground size of one top-view pixel across and along the road, metres.
   // Across: a 15 cm marking should span >= 2 px (<= 0.075 m). Along: the
   // filter smooths over 1 m along the road, so 0.125 m (8 px per sigma)

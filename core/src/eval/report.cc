@@ -270,8 +270,9 @@ std::string BaselineJson(const EvalReport& report, const std::string& command,
   Json out = Json::object();
   out["about"] =
       "Regression baseline of lane eval (tests/core/eval_regression_test.cc fails when the "
-      "CULane F1 drops more than 0.02 below culane_f1). Regenerate with `command`; see "
-      "docs/evaluation.md.";
+      "CULane F1, the mean over `seeds`, drops more than 0.02 below culane_f1, or the paper "
+      "rule's correct rate drops / false-positive rate rises by more than one point). "
+      "Regenerate with `command`; see docs/evaluation.md.";
   out["dataset"] = DatasetName(report.dataset);
   out["mode"] = ModeName(report.options.mode);
   out["frames"] = t.frames;
