@@ -6,9 +6,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
+#include "lane/candidate_checks.h"
 #include "lane/image_extension.h"
-#include "lane/marking_check.h"
-#include "lane/vehicle_check.h"
 
 namespace lane {
 namespace {
@@ -352,13 +351,9 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
   const double min_row = rows.min_row;
   const double max_row = rows.max_row;
   std::vector<Candidate> done;
-  double road_deg = 0;
-  const float road_level = pp.max_bright_side_fraction < 1 ? RoadLevel(ipm, ipm_.valid_mask()) : 0;
-  if (pp.min_ray_angle_deg > 0) {
-    std::vector<Bezier> splines;
-    for (const Candidate& c : cands) splines.push_back(c.ipm);
-    road_deg = RoadDirectionDeg(splines, ipm_);
-  }
+  std::vector<Bezier> cand_splines;
+  for (const Candidate& c : cands) cand_splines.push_back(c.ipm);
+  const TopViewCheckContext check_context = MakeTopViewCheckContext(cand_splines, ipm, ipm_, pp);
   for (Candidate c : cands) {
     if (AngleFromVerticalDeg(c.ipm) > pp.ipm_max_angle_from_vertical_deg) continue;
     const Bezier ipm_line = Bezier::Line(c.line.top, c.line.bottom);
@@ -385,15 +380,7 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
         BarContrast(c.ipm, ipm, pp.side_offset_m / mpp_x) < pp.min_side_contrast) {
       continue;  // a step (curb, road edge), not a bright marking
     }
-    if (pp.max_bright_side_fraction < 1 &&
-        BrightSideFraction(c.ipm, ipm, road_level, pp.side_offset_m / mpp_x) >
-            pp.max_bright_side_fraction) {
-      continue;  // beside a bright object (vehicle_check.h)
-    }
-    if (pp.min_ray_angle_deg > 0 &&
-        TestRay(c.ipm, ipm_).RayLike(pp.min_ray_angle_deg, road_deg, pp.max_ray_bend_m)) {
-      continue;  // a vertical object's streak (vehicle_check.h)
-    }
+    if (!PassesTopViewChecks(c.ipm, ipm, ipm_, pp, check_context)) continue;
 
     // Image: back-project, localise, check, extend, check.
     auto to_image = [this](const Eigen::Vector2d& p) { return ipm_.IpmToImage(p); };
@@ -438,21 +425,10 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
       c.image = TopDown(ExtendSpline(c.image, channel, eo));
       if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
     }
-    if (pp.clip_to_image) {
-      const std::optional<Bezier> clipped = ClipToImageContent(c.image, channel);
-      if (!clipped) continue;
-      c.image = TopDown(*clipped);
-    }
-    // The top view's direction check on the final spline: image localisation
-    // and extension must not have turned it away from the road.
-    if (pp.check_ground_angle &&
-        GroundAngleFromRoadDeg(c.image, cam) > pp.ipm_max_angle_from_vertical_deg) {
-      continue;
-    }
-    if (pp.max_redness < 1 && frame.channels() == 3) {
-      const double r = MedianRedness(c.image, frame, channel, 2 * scale);
-      if (std::isfinite(r) && r > pp.max_redness) continue;  // red: a curb or a vehicle
-    }
+    const std::optional<Bezier> finished =
+        FinishImageSpline(c.image, channel, frame, cam, pp, scale);
+    if (!finished) continue;
+    c.image = *finished;
     bool dup = false;
     for (const auto& d : done) {
       dup = dup || MeanNearestDistance(c.image, d.image) <
