@@ -144,6 +144,8 @@ absl::Status DetectorFromProto(const v1::DetectorOptions& p, lane::DetectorOptio
   LANE_COPY_IF_SET(f, o.filter, void_margin_y_px);
 
   LANE_COPY_IF_SET(p.threshold(), o.threshold, quantile);
+  LANE_COPY_IF_SET(p.threshold(), o.threshold, transverse_max_fraction);
+  LANE_COPY_IF_SET(p.threshold(), o.threshold, transverse_margin_m);
 
   const v1::HoughOptions& h = p.hough();
   LANE_COPY_IF_SET(h, o.hough, smooth_sigma_px);
@@ -311,7 +313,10 @@ void ConfigToProto(const lane::Config& config, v1::SessionConfig* out) {
   LANE_SET(f, d.filter, void_level);
   LANE_SET(f, d.filter, void_margin_y_px);
 
-  det->mutable_threshold()->set_quantile(d.threshold.quantile);
+  v1::ThresholdOptions* th = det->mutable_threshold();
+  LANE_SET(th, d.threshold, quantile);
+  LANE_SET(th, d.threshold, transverse_max_fraction);
+  LANE_SET(th, d.threshold, transverse_margin_m);
 
   v1::HoughOptions* h = det->mutable_hough();
   LANE_SET(h, d.hough, smooth_sigma_px);
