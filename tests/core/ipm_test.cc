@@ -123,8 +123,7 @@ TEST(IpmTest, GroundViewHasTheRequestedExtentAndResolution) {
   // (at 8 m, +-7.5 m lies outside a 1640 px wide frame).
   const CameraModel cam = CulaneCamera();
   EXPECT_NEAR(m->roi().top,
-              std::min(cam.GroundToImage({-7.5, 18}).y(), cam.GroundToImage({7.5, 18}).y()),
-              1e-9);
+              std::min(cam.GroundToImage({-7.5, 18}).y(), cam.GroundToImage({7.5, 18}).y()), 1e-9);
   EXPECT_NEAR(m->roi().bottom,
               std::max(cam.GroundToImage({-7.5, 8}).y(), cam.GroundToImage({7.5, 8}).y()), 1e-9);
   EXPECT_EQ(m->roi().left, 0);
