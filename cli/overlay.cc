@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
@@ -77,8 +78,23 @@ cv::Scalar LaneColour(int i) {
   return kPalette[((i % n) + n) % n];
 }
 
+cv::Point DrawCaption(cv::Mat& canvas, const std::string& text, int x, int y,
+                      const cv::Scalar& colour) {
+  const double scale = std::max(0.4, 0.5 * canvas.cols / 640.0);
+  const int thickness = std::max(1, static_cast<int>(std::lround(scale * 1.5)));
+  int baseline = 0;
+  const cv::Size size =
+      cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, thickness, &baseline);
+  const int pad = std::max(2, static_cast<int>(std::lround(4 * scale)));
+  const cv::Point corner(x + size.width + 2 * pad, y + size.height + baseline + 2 * pad);
+  cv::rectangle(canvas, {x, y}, corner, cv::Scalar(0, 0, 0), cv::FILLED);
+  cv::putText(canvas, text, {x + pad, y + pad + size.height}, cv::FONT_HERSHEY_SIMPLEX, scale,
+              colour, thickness, cv::LINE_AA);
+  return corner;
+}
+
 cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
-                         const lane::Detector& detector) {
+                         const lane::Detector& detector, const std::string& frame_name) {
   cv::Mat canvas = ToBgr(frame);
   if (canvas.empty()) return canvas;
 
@@ -98,6 +114,17 @@ cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
   for (size_t i = 0; i < detection.lanes.size(); ++i) {
     DrawBezier(canvas, detection.lanes[i].image, LaneColour(static_cast<int>(i)),
                [](const Eigen::Vector2d& p) { return p; });
+  }
+  // Caption: the frame's name, then the lanes' scores in their colours.
+  const int margin = std::max(2, canvas.cols / 160);
+  int y = margin;
+  if (!frame_name.empty()) y = DrawCaption(canvas, frame_name, margin, y).y;
+  cv::Point at =
+      DrawCaption(canvas, absl::StrCat(detection.lanes.size(), " lanes, scores:"), margin, y);
+  for (size_t i = 0; i < detection.lanes.size(); ++i) {
+    char score[32];
+    std::snprintf(score, sizeof(score), "%.1f", detection.lanes[i].score);
+    at = DrawCaption(canvas, score, at.x, y, LaneColour(static_cast<int>(i)));
   }
   return canvas;
 }
@@ -127,11 +154,11 @@ cv::Mat DrawIpmView(const cv::Mat& frame, const lane::Detection& detection,
 
 std::string WriteOverlays(const std::filesystem::path& dir, const std::string& stem,
                           const cv::Mat& frame, const lane::Detection& detection,
-                          const lane::Detector& detector) {
+                          const lane::Detector& detector, const std::string& frame_name) {
   const std::string image_path = (dir / (stem + ".png")).string();
   const std::string ipm_path = (dir / (stem + "_ipm.png")).string();
   try {
-    if (!cv::imwrite(image_path, DrawLanesOnImage(frame, detection, detector))) {
+    if (!cv::imwrite(image_path, DrawLanesOnImage(frame, detection, detector, frame_name))) {
       return absl::StrCat("cannot write ", image_path);
     }
     if (!cv::imwrite(ipm_path, DrawIpmView(frame, detection, detector))) {

@@ -15,11 +15,18 @@ namespace lane_tools {
 cv::Scalar LaneColour(int i);
 
 // A BGR copy of `frame` (CV_8UC3 or CV_8UC1) with: the mapped ROI as a thin
-// red rectangle, the horizon row as a thin grey dashed line, and each lane as
-// a 2 px polyline through 50 samples of its image Bezier with its control
-// points as small circles.
+// red rectangle, the horizon row as a thin grey dashed line, each lane as a
+// 2 px polyline through 50 samples of its image Bezier with its control
+// points as small circles, and a caption in the top-left corner: the frame's
+// name (when given) and each lane's score, left to right, in the lane's
+// colour.
 cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
-                         const lane::Detector& detector);
+                         const lane::Detector& detector, const std::string& frame_name = "");
+
+// White (or `colour`) text on a black box with its top-left corner at (x, y),
+// scaled to the frame; returns the box's right edge and bottom.
+cv::Point DrawCaption(cv::Mat& canvas, const std::string& text, int x, int y,
+                      const cv::Scalar& colour = cv::Scalar(255, 255, 255));
 
 // The detector's top view of `frame` (its channel through the IPM),
 // stretched to 0..255, enlarged `scale` times (nearest neighbour), in BGR,
@@ -28,10 +35,10 @@ cv::Mat DrawIpmView(const cv::Mat& frame, const lane::Detection& detection,
                     const lane::Detector& detector, int scale = 4);
 
 // Writes DIR/STEM.png (DrawLanesOnImage) and DIR/STEM_ipm.png
-// (DrawIpmView); an error message or "".
+// (DrawIpmView), captioned with `frame_name`; an error message or "".
 std::string WriteOverlays(const std::filesystem::path& dir, const std::string& stem,
                           const cv::Mat& frame, const lane::Detection& detection,
-                          const lane::Detector& detector);
+                          const lane::Detector& detector, const std::string& frame_name = "");
 
 }  // namespace lane_tools
 

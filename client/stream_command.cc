@@ -83,7 +83,7 @@ class OverlayWriter {
     if (frame.empty()) return "cannot decode the frame for the overlay";
     const lane::Detection detection = DetectionFromResponse(response);
     return lane_tools::WriteOverlays(dir_, lane_tools::UniqueStem(item.stem, used_), frame,
-                                     detection, *detector_);
+                                     detection, *detector_, item.name);
   }
 
  private:

@@ -136,7 +136,7 @@ class DetectRun {
     total_ms_.push_back(detection->timings.total_ms);
     if (!overlay_dir_.empty()) {
       const std::string message = WriteOverlays(overlay_dir_, UniqueStem(frame.stem, used_stems_),
-                                                frame.bgr, *detection, detector_);
+                                                frame.bgr, *detection, detector_, frame.name);
       if (!message.empty()) {
         overlay_failed_ = true;
         std::fprintf(stderr, "lane detect: %s: %s\n", frame.name.c_str(), message.c_str());

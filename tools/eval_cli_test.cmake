@@ -71,6 +71,41 @@ foreach(f table.md results.txt overlays/000000.png)
     message(FATAL_ERROR "lane eval --out/--overlays did not write ${f}")
   endif()
 endforeach()
+run(2 seeds_with_results eval --results "${OUT}/eval/results.txt" --seeds 3 "${OUT}/frames")
+
+# --- --results with --out writes the tables (it used to fail with "error
+# writing to DIR": closing the never-opened results.jsonl set its failbit) ---
+file(REMOVE_RECURSE "${OUT}/rescored")
+run(0 rescored eval --results "${OUT}/eval/results.jsonl" --out "${OUT}/rescored" "${OUT}/frames")
+foreach(f table.md table.json results.txt)
+  if(NOT EXISTS "${OUT}/rescored/${f}")
+    message(FATAL_ERROR "lane eval --results --out did not write ${f}:\n${rescored_err}")
+  endif()
+endforeach()
+string(FIND "${rescored_err}" "error writing" _pos)
+if(NOT _pos EQUAL -1)
+  message(FATAL_ERROR "lane eval --results --out reported:\n${rescored_err}")
+endif()
+
+# --- several seeds: mean and spread, the first seed's tables unchanged -------
+run(0 seeds eval --config "${CONFIG}" --seeds 3 --out "${OUT}/seeds"
+    --write-baseline "${OUT}/seeds-baseline.json" "${OUT}/frames")
+expect_contains("${seeds_out}" "## Over 3 RANSAC seeds (1, 2, 3)" "lane eval --seeds")
+expect_contains("${seeds_err}" "over 3 seeds" "lane eval --seeds summary")
+total_rows("${seeds_out}" seeds_rows)
+list(LENGTH seeds_rows n_rows)
+if(NOT n_rows EQUAL 3)
+  message(FATAL_ERROR "lane eval --seeds: expected 3 Total rows (spread, paper, CULane), got:\n${seeds_rows}")
+endif()
+list(SUBLIST seeds_rows 1 2 seeds_first)
+if(NOT "${seeds_first}" STREQUAL "${detector_rows}")
+  message(FATAL_ERROR "lane eval --seeds: the first seed's tables\n${seeds_first}\ndiffer from a single run's\n${detector_rows}")
+endif()
+file(READ "${OUT}/seeds/table.json" seeds_json)
+expect_contains("${seeds_json}" "\"seeds\"" "table.json with --seeds")
+file(READ "${OUT}/seeds-baseline.json" seeds_baseline)
+expect_contains("${seeds_baseline}" "\"seeds\"" "baseline with --seeds")
+run(2 zero_seeds eval --config "${CONFIG}" --seeds 0 "${OUT}/frames")
 
 # --- 2-lanes mode and the original counting ----------------------------------
 run(0 two eval --config "${CONFIG}" --mode two --count many-to-one --rule or "${OUT}/frames")

@@ -27,6 +27,7 @@
 #include "lane/eval/report.h"
 #include "lane/eval/results_jsonl.h"
 #include "lane/eval/results_txt.h"
+#include "lane/eval/seeds.h"
 #include "lane/ipm.h"
 
 namespace lane_tools {
@@ -53,6 +54,7 @@ struct EvalFlags {
   std::optional<std::string> config;
   std::optional<std::string> mode;
   std::optional<uint64_t> seed;
+  std::optional<uint64_t> seeds;
   std::optional<std::string> results;
   std::optional<std::string> out;
   std::optional<std::string> overlays;
@@ -115,6 +117,9 @@ std::string FlagsError(const EvalFlags& flags) {
     return "give --config (run the detector) or --results (score a file)";
   }
   if (flags.results && flags.seed) return "--seed has no effect with --results";
+  if (flags.seeds && (*flags.seeds < 1 || *flags.seeds > 1000))
+    return "--seeds must lie in 1..1000";
+  if (flags.results && flags.seeds) return "--seeds has no effect with --results";
   return "";
 }
 
@@ -164,6 +169,9 @@ struct EvalSource {
   std::optional<lane::Config> config;
   std::optional<lane::Roi> roi;
   std::optional<lane::Detector> detector;
+  // --seeds: the detectors of the second seed onwards, and every seed.
+  std::vector<lane::Detector> more_seeds;
+  std::vector<uint64_t> seeds;
   std::vector<lane::eval::FrameResult> records;
 };
 
@@ -215,16 +223,28 @@ absl::Status ReadResults(const EvalFlags& flags, lane::eval::EvalOptions* option
   return absl::OkStatus();
 }
 
-// Without --results: the detector of the config.
-absl::Status MakeDetector(lane::eval::EvalOptions* options, EvalSource* source) {
+// Without --results: the detector of the config, and with --seeds K one per
+// seed (N, N+1, ..., N+K-1; N the config's or --seed's).
+absl::Status MakeDetectors(const EvalFlags& flags, lane::eval::EvalOptions* options,
+                           EvalSource* source) {
   const lane::Config& config = *source->config;
-  absl::StatusOr<lane::Detector> created =
-      lane::Detector::Create(config.camera, config.ipm, config.detector);
-  if (!created.ok()) {
-    return absl::Status(created.status().code(),
-                        absl::StrCat("cannot build the detector: ", created.status().message()));
+  const uint64_t count = flags.seeds ? *flags.seeds : 0;
+  for (uint64_t k = 0; k < std::max<uint64_t>(count, 1); ++k) {
+    lane::DetectorOptions detector_options = config.detector;
+    detector_options.seed = config.detector.seed + k;
+    absl::StatusOr<lane::Detector> created =
+        lane::Detector::Create(config.camera, config.ipm, detector_options);
+    if (!created.ok()) {
+      return absl::Status(created.status().code(),
+                          absl::StrCat("cannot build the detector: ", created.status().message()));
+    }
+    if (count > 0) source->seeds.push_back(detector_options.seed);
+    if (k == 0) {
+      source->detector = std::move(*created);
+    } else {
+      source->more_seeds.push_back(std::move(*created));
+    }
   }
-  source->detector = std::move(*created);
   options->mode = source->detector->options().mode;
   return absl::OkStatus();
 }
@@ -275,12 +295,20 @@ class EvalOutputs {
   void ClearProgress() { progress_.Clear(); }
 
   // Closes the results files and writes the tables to --output.
-  void Finish(const lane::eval::EvalReport& report, const std::string& markdown) {
+  void Finish(const lane::eval::EvalReport& report, const std::string& markdown,
+              const lane::eval::SeedSummary* seeds) {
     if (out_dir_.empty()) return;
-    jsonl_.close();
-    txt_.close();
-    if (jsonl_.fail() || txt_.fail() || !WriteFile(out_dir_ / "table.md", markdown) ||
-        !WriteFile(out_dir_ / "table.json", lane::eval::ReportJson(report))) {
+    // Only streams that were opened are closed and checked: close() on a
+    // stream that never opened (results.jsonl when scoring --results) sets
+    // its failbit, which used to fail every --results --output run.
+    bool streams_ok = true;
+    for (std::ofstream* stream : {&jsonl_, &txt_}) {
+      if (!stream->is_open()) continue;
+      stream->close();
+      streams_ok = streams_ok && !stream->fail();
+    }
+    if (!streams_ok || !WriteFile(out_dir_ / "table.md", markdown) ||
+        !WriteFile(out_dir_ / "table.json", lane::eval::ReportJson(report, seeds))) {
       output_failed_ = true;
       std::fprintf(stderr, "lane eval: error writing to %s\n", out_dir_.string().c_str());
     }
@@ -333,12 +361,12 @@ class EvalOutputs {
 // --write-baseline: the regression baseline with the command that made it;
 // false when it cannot be written.
 bool WriteBaseline(const std::string& baseline, const lane::eval::EvalReport& report,
-                   const std::vector<std::string>& argv) {
+                   const lane::eval::SeedSummary* seeds, const std::vector<std::string>& argv) {
   std::vector<std::string> words = {"lane", "eval"};
   for (const std::string& a : argv) words.push_back(ShellWord(a));
   const fs::path parent = fs::path(baseline).parent_path();
   if (!parent.empty()) MakeDir(parent);
-  if (!WriteFile(baseline, lane::eval::BaselineJson(report, absl::StrJoin(words, " ")))) {
+  if (!WriteFile(baseline, lane::eval::BaselineJson(report, absl::StrJoin(words, " "), seeds))) {
     std::fprintf(stderr, "lane eval: cannot write %s\n", baseline.c_str());
     return false;
   }
@@ -356,8 +384,8 @@ int RunEval(const CLI::App& app, const EvalFlags& flags, const std::vector<std::
   EvalSource source;
   absl::Status status = LoadConfig(flags, &options, &source);
   if (status.ok()) {
-    status =
-        flags.results ? ReadResults(flags, &options, &source) : MakeDetector(&options, &source);
+    status = flags.results ? ReadResults(flags, &options, &source)
+                           : MakeDetectors(flags, &options, &source);
   }
   if (!status.ok()) return Failure("eval", std::string(status.message()));
   const bool detector = source.detector.has_value();
@@ -367,23 +395,37 @@ int RunEval(const CLI::App& app, const EvalFlags& flags, const std::vector<std::
   const lane::eval::FrameCallback on_frame = [&](const lane::eval::FrameOutcome& o) {
     outputs.OnFrame(o, options, source.roi, detector);
   };
-  absl::StatusOr<lane::eval::EvalReport> report =
-      detector ? lane::eval::EvaluateDetector(dataset, *source.detector, options, on_frame)
-               : lane::eval::EvaluateResults(dataset, source.records, options, on_frame);
+  absl::StatusOr<lane::eval::EvalReport> report;
+  std::optional<lane::eval::SeedSummary> summary;
+  if (detector) {
+    std::vector<const lane::Detector*> all = {&*source.detector};
+    for (const lane::Detector& d : source.more_seeds) all.push_back(&d);
+    absl::StatusOr<std::vector<lane::eval::EvalReport>> reports =
+        lane::eval::EvaluateDetectors(dataset, all, options, on_frame);
+    if (reports.ok()) {
+      if (!source.seeds.empty()) summary = lane::eval::SummariseSeeds(*reports, source.seeds);
+      report = std::move(reports->front());
+    } else {
+      report = reports.status();
+    }
+  } else {
+    report = lane::eval::EvaluateResults(dataset, source.records, options, on_frame);
+  }
   outputs.ClearProgress();
+  const lane::eval::SeedSummary* seeds_summary = summary ? &*summary : nullptr;
   if (!report.ok()) return Failure("eval", std::string(report.status().message()));
   report->source = detector ? absl::StrCat("detector, config ", *flags.config, ", seed ",
                                            source.config->detector.seed)
                             : absl::StrCat("results ", *flags.results);
 
-  const std::string markdown = lane::eval::ReportMarkdown(*report);
+  const std::string markdown = lane::eval::ReportMarkdown(*report, seeds_summary);
   std::fputs(markdown.c_str(), stdout);
   std::fflush(stdout);
   for (const std::string& w : report->warnings) {
     std::fprintf(stderr, "lane eval: warning: %s\n", w.c_str());
   }
-  outputs.Finish(*report, markdown);
-  if (flags.write_baseline && !WriteBaseline(*flags.write_baseline, *report, argv)) {
+  outputs.Finish(*report, markdown, seeds_summary);
+  if (flags.write_baseline && !WriteBaseline(*flags.write_baseline, *report, seeds_summary, argv)) {
     outputs.set_output_failed();
   }
   const lane::eval::ClipCounts& t = report->total;
@@ -392,6 +434,16 @@ int RunEval(const CLI::App& app, const EvalFlags& flags, const std::vector<std::
                "CULane F1 %.3f\n",
                t.frames, t.paper.F1(), 100 * t.paper.CorrectRate(),
                t.paper.FalsePositivesPerFrame(t.frames), t.culane.F1());
+  if (summary) {
+    const lane::eval::ClipSpread& m = summary->total;
+    std::fprintf(stderr,
+                 "lane eval: over %zu seeds: correct %.2f%% [%.2f, %.2f], FP rate %.2f%% [%.2f, "
+                 "%.2f], CULane F1 %.3f ± %.3f [%.3f, %.3f]\n",
+                 summary->seeds.size(), 100 * m.correct_rate.mean, 100 * m.correct_rate.min,
+                 100 * m.correct_rate.max, 100 * m.false_positive_rate.mean,
+                 100 * m.false_positive_rate.min, 100 * m.false_positive_rate.max, m.culane_f1.mean,
+                 m.culane_f1.std, m.culane_f1.min, m.culane_f1.max);
+  }
   return outputs.run_failures() > 0 || outputs.output_failed() ? kExitFailure : kExitOk;
 }
 
@@ -412,6 +464,12 @@ Command AddEvalCommand(CLI::App& lane, const std::vector<std::string>& args) {
         {"all", "two"});
   AddOptional(app, "--seed", &flags->seed, "RANSAC seed instead of the config's detector.seed")
       ->type_name("N");
+  AddOptional(app, "--seeds", &flags->seeds,
+              "run the detector with K seeds (N, N+1, ..., N+K-1, N the --seed or the config's) "
+              "and report the mean, standard deviation and range of every figure; results, "
+              "overlays and the full tables are those of the first seed, the baseline "
+              "(--write-baseline) holds the means")
+      ->type_name("K");
   AddOptional(app, "--results", &flags->results,
               "score FILE instead of running the detector: lane detect JSON Lines, or the "
               "original tool's results (.txt)")

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <opencv2/imgproc.hpp>
 #include <string>
 
@@ -130,6 +131,29 @@ cv::Mat DrawEvaluation(const cv::Mat& frame, const lane::eval::FrameOutcome& out
   if (outcome.missing_result) absl::StrAppend(&title, "  (no results record)");
   int y = Caption(canvas, title, margin, margin, text_scale, kWhite);
   y = Caption(canvas, counts, margin, y, text_scale, kWhite);
+  // The detections' scores, left to right as drawn, in their colours.
+  if (!outcome.lanes.empty()) {
+    std::string text = "scores:";
+    int x = margin;
+    int baseline = 0;
+    const int text_thickness = std::max(1, static_cast<int>(std::lround(text_scale * 1.5)));
+    const auto width = [&](const std::string& t) {
+      return cv::getTextSize(t, cv::FONT_HERSHEY_SIMPLEX, text_scale, text_thickness, &baseline)
+                 .width +
+             2 * std::max(2, static_cast<int>(std::lround(4 * text_scale)));
+    };
+    int bottom = Caption(canvas, text, x, y, text_scale, kWhite);
+    x += width(text);
+    for (size_t d = 0; d < outcome.lanes.size(); ++d) {
+      cv::Scalar colour = kOrange;
+      if (outcome.score) colour = outcome.score->paper.detection_label[d] >= 0 ? kGreen : kRed;
+      char score[32];
+      std::snprintf(score, sizeof(score), "%.1f", outcome.lanes[d].score);
+      Caption(canvas, score, x, y, text_scale, colour);
+      x += width(score);
+    }
+    y = bottom;
+  }
   // Legend in the colours it explains.
   int x = margin;
   for (const auto& [text, colour] : {std::pair<const char*, cv::Scalar>{"label / correct", kGreen},

@@ -142,6 +142,11 @@ absl::StatusOr<lane::Config> ConfigFromProto(const v1::SessionConfig& proto) {
     mode_reader.Field("mode", config->detector.mode);
     if (!mode_reader.status().ok()) return mode_reader.status();
     config->detector = lane::DetectorOptions::ForMode(config->detector.mode);
+    // As in the config file: a ground section without a view selects the
+    // ground view (a view that is set is read below and wins).
+    if (proto.ipm().has_ground() && proto.ipm().view() == v1::IPM_VIEW_UNSPECIFIED) {
+      config->ipm.view = lane::IpmView::kGround;
+    }
     ProtoReader reader(proto, "");
     VisitFields(*config, reader);
     if (!reader.status().ok()) return reader.status();

@@ -24,12 +24,18 @@ constexpr google::protobuf::FieldDescriptor::CppType CppTypeOf() {
   return google::protobuf::FieldDescriptor::CPPTYPE_MESSAGE;
 }
 
-// MODE_TWO <-> "two": proto enum values are the config's names in upper case
-// behind the enum's prefix; value 0 (..._UNSPECIFIED) means "keep the default".
+// MODE_TWO <-> "two", IPM_VIEW_GROUND <-> "ground": proto enum values are the
+// config's names in upper case behind the enum type's name in upper snake
+// case; value 0 (..._UNSPECIFIED) means "keep the default".
 inline std::string EnumValueName(const google::protobuf::EnumValueDescriptor& value) {
+  std::string prefix;  // IpmView -> IPM_VIEW_
+  for (const char c : value.type()->name()) {
+    if (std::isupper(static_cast<unsigned char>(c)) && !prefix.empty()) prefix += '_';
+    prefix += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  }
+  prefix += '_';
   std::string name = value.name();
-  const size_t prefix = name.find('_');
-  name = prefix == std::string::npos ? name : name.substr(prefix + 1);
+  if (name.compare(0, prefix.size(), prefix) == 0) name = name.substr(prefix.size());
   for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return name;
 }

@@ -152,6 +152,12 @@ absl::StatusOr<Config> ConfigFromJson(const Json& doc) {
       config.detector = DetectorOptions::ForMode(m);
     }
   }
+  // A "ground" section without "view" means the ground view ("view" itself,
+  // when present, is read below and wins).
+  const auto ipm = doc.is_object() ? doc.find("ipm") : doc.end();
+  if (ipm != doc.end() && ipm->is_object() && ipm->contains("ground") && !ipm->contains("view")) {
+    config.ipm.view = IpmView::kGround;
+  }
   if (absl::Status s = ReadObject(doc, "", config); !s.ok()) return s;
   if (absl::Status s = config.Validate(); !s.ok()) return s;
   return config;

@@ -6,6 +6,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
+#include "lane/candidate_checks.h"
+#include "lane/image_extension.h"
 
 namespace lane {
 namespace {
@@ -91,6 +93,8 @@ const char* ChannelName(Channel channel) {
       return "blue";
     case Channel::kGray:
       return "gray";
+    case Channel::kMinRedGreen:
+      return "min_rg";
   }
   return "red";
 }
@@ -100,6 +104,7 @@ std::optional<Channel> ParseChannel(const std::string& name) {
   if (name == "green") return Channel::kGreen;
   if (name == "blue") return Channel::kBlue;
   if (name == "gray" || name == "grey") return Channel::kGray;
+  if (name == "min_rg") return Channel::kMinRedGreen;
   return std::nullopt;
 }
 
@@ -131,6 +136,9 @@ DetectorOptions DetectorOptions::ForMode(Mode mode) {
     o.spline_ransac.window_half_width_m = 0.67;
     o.spline_ransac.iterations = 75;
     o.spline_ransac.k2 = 1.0;
+    // The ego lane's band (+-2.9 m) holds its two boundaries: 2 x 0.25 m of
+    // kept pixels in 5.8 m is 8.6 % of a row (threshold.h).
+    o.threshold.transverse_max_fraction = 0.15;
   }
   return o;
 }
@@ -175,6 +183,13 @@ cv::Mat Detector::ExtractChannel(const cv::Mat& frame) const {
     case Channel::kGray:
       cv::cvtColor(frame, out, cv::COLOR_BGR2GRAY);
       break;
+    case Channel::kMinRedGreen: {
+      cv::Mat red, green;
+      cv::extractChannel(frame, red, 2);
+      cv::extractChannel(frame, green, 1);
+      cv::min(red, green, out);
+      break;
+    }
   }
   return out;
 }
@@ -188,8 +203,10 @@ ChannelView Detector::ViewChannel(const cv::Mat& frame) const {
       return ChannelView(frame, 1);
     case Channel::kBlue:
       return ChannelView(frame, 0);
+    case Channel::kMinRedGreen:
+      return ChannelView(frame, 2, 1);
     case Channel::kGray:
-      break;
+      return ChannelView(frame, 0, kGrayOfBgr);  // computed where read
   }
   return ChannelView(ExtractChannel(frame));
 }
@@ -216,14 +233,30 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
   // 1. Channel and top view, mean removed.
   auto t = Clock::now();
   const ChannelView channel = ViewChannel(frame);
-  cv::Mat ipm = ipm_.Apply(channel.image, channel.channel);
-  ipm -= cv::mean(ipm)[0];
+  cv::Mat ipm = ipm_.Apply(channel.image, channel.channel, channel.channel2);
+  cv::Mat void_mask;  // empty: no void handling beyond the ROI's
+  if (opt.filter.void_level >= 0) {
+    void_mask = VoidMask(ipm, ipm_.invalid_mask(), opt.filter.void_level);
+    const double content_mean = cv::mean(ipm, ~void_mask)[0];
+    ipm.setTo(content_mean, void_mask);
+    ipm -= content_mean;
+  } else {
+    ipm -= cv::mean(ipm)[0];
+  }
   det.timings.ipm_ms = MsSince(t);
 
   // 2. Filter.
   t = Clock::now();
   cv::Mat filtered = FilterTopView(ipm, kernels_, opt.filter);
-  filtered.setTo(0, ipm_.invalid_mask());
+  if (void_mask.empty()) {
+    filtered.setTo(0, ipm_.invalid_mask());
+  } else {
+    filtered.setTo(0, GrowMask(void_mask, kernels_.kx.rows / 2, opt.filter.void_margin_y_px));
+  }
+  if (opt.filter.bar_side_m > 0) {
+    SuppressSteps(ipm, filtered, opt.filter.bar_side_m / ipm_.metres_per_px_x(),
+                  static_cast<int>(std::lround(kernels_.sigma_y_px)));
+  }
   det.timings.filter_ms = MsSince(t);
 
   // 3. Threshold.
@@ -231,6 +264,7 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
   cv::Mat thresholded = filtered.clone();
   const float threshold = ApplyQuantileThreshold(thresholded, opt.threshold.quantile);
   const double cam_col = ipm_.GroundToIpm(Eigen::Vector2d(0, ipm_.y_min())).x();
+  cv::Mat searched = ipm_.valid_mask();  // the columns searched for lanes
   if (opt.mode == Mode::kTwo) {
     // Only the band around the camera can hold the ego lane's boundaries.
     const double half = opt.two_lanes.search_half_width_m / ipm_.metres_per_px_x();
@@ -239,6 +273,14 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
         std::clamp(static_cast<int>(std::floor(cam_col + half)) + 1, 0, thresholded.cols);
     if (c0 > 0) thresholded.colRange(0, c0).setTo(0);
     if (c1 < thresholded.cols) thresholded.colRange(c1, thresholded.cols).setTo(0);
+    searched = ipm_.valid_mask().clone();
+    if (c0 > 0) searched.colRange(0, c0).setTo(0);
+    if (c1 < searched.cols) searched.colRange(c1, searched.cols).setTo(0);
+  }
+  if (opt.threshold.transverse_max_fraction < 1) {
+    SuppressTransverseRows(
+        thresholded, searched, opt.threshold.transverse_max_fraction,
+        static_cast<int>(std::lround(opt.threshold.transverse_margin_m / ipm_.metres_per_px_y())));
   }
   det.timings.threshold_ms = MsSince(t);
 
@@ -310,13 +352,13 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
   t = Clock::now();
   const double ipm_min_len = pp.min_length_fraction * ipm_.height();
   const double scale = cam.image_width / 640.0;
-  const double horizon = cam.HorizonRow();
-  const double roi_bottom = ipm_.roi().bottom;
-  const double min_row =
-      pp.extend_min_row >= 0 ? pp.extend_min_row : horizon + 0.15 * (roi_bottom - horizon);
-  const double max_row =
-      pp.extend_max_row >= 0 ? pp.extend_max_row : roi_bottom + 0.2 * (roi_bottom - horizon);
+  const ExtensionRows rows = ImageExtensionRows(cam, ipm_.roi(), pp);
+  const double min_row = rows.min_row;
+  const double max_row = rows.max_row;
   std::vector<Candidate> done;
+  std::vector<Bezier> cand_splines;
+  for (const Candidate& c : cands) cand_splines.push_back(c.ipm);
+  const TopViewCheckContext check_context = MakeTopViewCheckContext(cand_splines, ipm, ipm_, pp);
   for (Candidate c : cands) {
     if (AngleFromVerticalDeg(c.ipm) > pp.ipm_max_angle_from_vertical_deg) continue;
     const Bezier ipm_line = Bezier::Line(c.line.top, c.line.bottom);
@@ -343,6 +385,7 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
         BarContrast(c.ipm, ipm, pp.side_offset_m / mpp_x) < pp.min_side_contrast) {
       continue;  // a step (curb, road edge), not a bright marking
     }
+    if (!PassesTopViewChecks(c.ipm, ipm, ipm_, pp, check_context)) continue;
 
     // Image: back-project, localise, check, extend, check.
     auto to_image = [this](const Eigen::Vector2d& p) { return ipm_.IpmToImage(p); };
@@ -353,7 +396,15 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
     const Bezier fallback = TopDown(*image_line);
     const double min_len = pp.min_image_length_px * scale;
     contrast = 0;
-    if (pp.localize_in_image) {
+    if (pp.localize_in_image && pp.localize_geometric) {
+      if (auto loc =
+              LocalizeInImage(c.image, channel, cam, pp.localize_points, pp.localize_search_m,
+                              pp.localize_sigma_m, pp.profile_sigma_px * scale,
+                              2 * pp.localize_search_px * scale, pp.localize_min_cos)) {
+        c.image = TopDown(*loc);
+      }
+      if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
+    } else if (pp.localize_in_image) {
       if (auto loc =
               LocalizeSpline(c.image, channel, pp.localize_points, pp.localize_search_px * scale,
                              pp.profile_sigma_px * scale, pp.localize_min_cos, &contrast)) {
@@ -361,7 +412,12 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
       }
       if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
     }
-    if (pp.extend_in_image && contrast > 0) {
+    if (pp.extend_in_image && pp.extend_geometric) {
+      c.image = TopDown(ExtendInImage(
+          c.image, channel, cam,
+          ImageExtendOptionsFrom(pp, scale, min_row, max_row, opt.filter.marking_width_m)));
+      if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
+    } else if (pp.extend_in_image && contrast > 0) {
       ExtendOptions eo;
       eo.step_px = pp.extend_step_px * scale;
       eo.search_px = pp.extend_search_px * scale;
@@ -374,6 +430,10 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
       c.image = TopDown(ExtendSpline(c.image, channel, eo));
       if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
     }
+    const std::optional<Bezier> finished =
+        FinishImageSpline(c.image, channel, frame, cam, pp, scale);
+    if (!finished) continue;
+    c.image = *finished;
     bool dup = false;
     for (const auto& d : done) {
       dup = dup || MeanNearestDistance(c.image, d.image) <

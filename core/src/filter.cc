@@ -23,6 +23,13 @@ absl::Status FilterOptions::Validate() const {
   if (!(kernel_extent_sigmas >= 1 && kernel_extent_sigmas <= 6)) {
     return absl::InvalidArgumentError("filter.kernel_extent_sigmas must lie in [1, 6]");
   }
+  if (!std::isfinite(void_level) || void_level > 255 || void_margin_y_px < 0) {
+    return absl::InvalidArgumentError(
+        "filter.void_level must be a finite number <= 255 and void_margin_y_px >= 0");
+  }
+  if (!(bar_side_m >= 0 && bar_side_m < 2)) {
+    return absl::InvalidArgumentError("filter.bar_side_m must lie in [0, 2) metres");
+  }
   if (zero_border_x_px < 0 || zero_border_bottom_px < 0) {
     return absl::InvalidArgumentError("filter.zero_border_*_px must be >= 0");
   }
@@ -89,6 +96,50 @@ cv::Mat FilterTopView(const cv::Mat& ipm, const FilterKernels& kernels,
   }
   if (by > 0) out.rowRange(out.rows - by, out.rows).setTo(0);
   return out;
+}
+
+cv::Mat VoidMask(const cv::Mat& ipm, const cv::Mat& invalid, double void_level) {
+  CV_Assert(ipm.type() == CV_32FC1 && invalid.type() == CV_8UC1 && ipm.size() == invalid.size());
+  if (void_level < 0) return invalid.clone();
+  cv::Mat black = ipm <= static_cast<float>(void_level / 255.0);
+  cv::bitwise_or(black, invalid, black);
+  return black;
+}
+
+cv::Mat GrowMask(const cv::Mat& void_mask, int half_x, int half_y) {
+  cv::Mat grown;
+  const cv::Mat kernel =
+      cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * half_x + 1, 2 * half_y + 1));
+  cv::dilate(void_mask, grown, kernel, cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
+  return grown;
+}
+
+void SuppressSteps(const cv::Mat& ipm, cv::Mat& response, double side_px, int along_px) {
+  CV_Assert(ipm.type() == CV_32FC1 && response.type() == CV_32FC1 && ipm.size() == response.size());
+  cv::Mat mean;
+  cv::boxFilter(ipm, mean, CV_32F, cv::Size(1, 2 * std::max(0, along_px) + 1), cv::Point(-1, -1),
+                true, cv::BORDER_REPLICATE);
+  const double side = std::max(1.0, side_px);
+  const int s0 = static_cast<int>(std::floor(side));
+  const float f = static_cast<float>(side - s0);
+  const int w = ipm.cols;
+  for (int r = 0; r < response.rows; ++r) {
+    const float* m = mean.ptr<float>(r);
+    float* out = response.ptr<float>(r);
+    // The mean at x +- side, linearly interpolated, clamped to the row.
+    const auto at = [&](double x) {
+      const int x0 = std::clamp(static_cast<int>(std::floor(x)), 0, w - 1);
+      const int x1 = std::min(x0 + 1, w - 1);
+      const float fx = static_cast<float>(std::clamp(x - std::floor(x), 0.0, 1.0));
+      return (1 - fx) * m[x0] + fx * m[x1];
+    };
+    for (int c = 0; c < w; ++c) {
+      if (out[c] <= 0) continue;
+      const float left = (1 - f) * m[std::max(0, c - s0)] + f * at(c - s0 - 1);
+      const float right = (1 - f) * m[std::min(w - 1, c + s0)] + f * at(c + s0 + 1);
+      if (!(m[c] > left && m[c] > right)) out[c] = 0;
+    }
+  }
 }
 
 }  // namespace lane

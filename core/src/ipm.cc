@@ -6,15 +6,74 @@
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
+#include "lane/postprocess.h"
 
 namespace lane {
 
+namespace {
+
+// Top-view size along one axis for a ground range and resolution.
+int GroundPixels(double range_m, double metres_per_px) {
+  const double n = range_m / metres_per_px;
+  return n < 1e6 ? static_cast<int>(std::lround(n)) : 1000000;
+}
+
+// The bilinear taps of image point `p` (inside the image), scaled by `w`.
+template <class Add>
+void BilinearTaps(const Eigen::Vector2d& p, int image_width, int image_height, float w, Add add) {
+  const int x0 = std::clamp(static_cast<int>(p.x()), 0, std::max(0, image_width - 2));
+  const int y0 = std::clamp(static_cast<int>(p.y()), 0, std::max(0, image_height - 2));
+  const float fx = static_cast<float>(std::clamp(p.x() - x0, 0.0, 1.0));
+  const float fy = static_cast<float>(std::clamp(p.y() - y0, 0.0, 1.0));
+  add(x0, y0, w * (1 - fx) * (1 - fy));
+  add(x0 + 1, y0, w * fx * (1 - fy));
+  add(x0, y0 + 1, w * (1 - fx) * fy);
+  add(x0 + 1, y0 + 1, w * fx * fy);
+}
+
+// At most this many sub-samples per axis of one top-view pixel in area
+// sampling: beyond, the average is good enough and the taps only cost time.
+constexpr int kMaxSubsamples = 12;
+
+}  // namespace
+
 absl::Status IpmOptions::Validate() const {
+  if (!std::isfinite(horizon_margin_px) || horizon_margin_px < 0) {
+    return absl::InvalidArgumentError("ipm.horizon_margin_px must be a finite number >= 0");
+  }
+  if (view == IpmView::kGround) {
+    const GroundView& g = ground;
+    const double v[] = {g.x_min_m, g.x_max_m,         g.y_min_m,
+                        g.y_max_m, g.metres_per_px_x, g.metres_per_px_y};
+    for (double x : v) {
+      if (!std::isfinite(x)) return absl::InvalidArgumentError("ipm.ground values must be finite");
+    }
+    if (!(g.x_max_m > g.x_min_m) || !(g.y_min_m > 0) || !(g.y_max_m > g.y_min_m)) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "ipm.ground must have x_max_m > x_min_m and y_max_m > y_min_m > 0 (metres ahead of "
+          "the camera), got x ",
+          g.x_min_m, "..", g.x_max_m, ", y ", g.y_min_m, "..", g.y_max_m));
+    }
+    if (!(g.metres_per_px_x >= 0.001 && g.metres_per_px_x <= 10 && g.metres_per_px_y >= 0.001 &&
+          g.metres_per_px_y <= 10)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("ipm.ground.metres_per_px_x and _y must lie in [0.001, 10] metres, got ",
+                       g.metres_per_px_x, " and ", g.metres_per_px_y));
+    }
+    const int w = GroundPixels(g.x_max_m - g.x_min_m, g.metres_per_px_x);
+    const int h = GroundPixels(g.y_max_m - g.y_min_m, g.metres_per_px_y);
+    if (w < 8 || h < 8 || w > 2048 || h > 2048) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "ipm.ground gives a ", w, "x", h,
+          " pixel top view; ranges / metres_per_px must give 8..2048 pixels each way"));
+    }
+    return absl::OkStatus();
+  }
   if (width < 8 || height < 8 || width > 2048 || height > 2048) {
     return absl::InvalidArgumentError(
         absl::StrCat("ipm size must be within 8..2048 pixels, got ", width, "x", height));
   }
-  const double v[] = {roi.left, roi.right, roi.top, roi.bottom, horizon_margin_px};
+  const double v[] = {roi.left, roi.right, roi.top, roi.bottom};
   for (double x : v) {
     if (!std::isfinite(x)) return absl::InvalidArgumentError("ipm.roi values must be finite");
   }
@@ -22,9 +81,6 @@ absl::Status IpmOptions::Validate() const {
     return absl::InvalidArgumentError(
         absl::StrCat("ipm.roi must have right > left and bottom > top, got left=", roi.left,
                      " right=", roi.right, " top=", roi.top, " bottom=", roi.bottom));
-  }
-  if (horizon_margin_px < 0) {
-    return absl::InvalidArgumentError("ipm.horizon_margin_px must be >= 0");
   }
   return absl::OkStatus();
 }
@@ -37,109 +93,312 @@ absl::StatusOr<IpmMapping> IpmMapping::Create(const CameraModel& camera,
   IpmMapping m;
   m.camera_ = camera;
   m.options_ = options;
-
-  // Clip the ROI to the image and to below the horizon.
   const double horizon = camera.HorizonRow();
-  Roi roi = options.roi;
-  roi.left = std::max(roi.left, 0.0);
-  roi.right = std::min(roi.right, camera.image_width - 1.0);
-  roi.bottom = std::min(roi.bottom, camera.image_height - 1.0);
-  roi.top = std::max(roi.top, horizon + options.horizon_margin_px);
-  if (roi.right - roi.left < 2 || roi.bottom - roi.top < 2) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "ipm.roi (left=", options.roi.left, " right=", options.roi.right, " top=", options.roi.top,
-        " bottom=", options.roi.bottom, ") has no usable part inside the ", camera.image_width, "x",
-        camera.image_height, " image below the horizon (row ", horizon, " + margin ",
-        options.horizon_margin_px, ")"));
-  }
-  m.roi_ = roi;
+  const double top_limit = horizon + options.horizon_margin_px;
 
-  // Ground footprint of the ROI: its corners and the vanishing point's column
-  // on its top and bottom rows.
-  const double vp_u = std::clamp(camera.VanishingPoint().x(), roi.left, roi.right);
-  const Eigen::Vector2d corners[] = {{roi.left, roi.top},     {roi.right, roi.top},
-                                     {vp_u, roi.top},         {roi.left, roi.bottom},
-                                     {roi.right, roi.bottom}, {vp_u, roi.bottom}};
-  m.x_min_ = m.y_min_ = std::numeric_limits<double>::infinity();
-  m.x_max_ = m.y_max_ = -std::numeric_limits<double>::infinity();
-  for (const auto& c : corners) {
-    const Eigen::Vector2d g = camera.ImageToGround(c);
-    if (!g.allFinite() || g.y() <= 0) {
-      return absl::InvalidArgumentError("ipm.roi maps to points behind the camera");
-    }
-    m.x_min_ = std::min(m.x_min_, g.x());
-    m.x_max_ = std::max(m.x_max_, g.x());
-    m.y_min_ = std::min(m.y_min_, g.y());
-    m.y_max_ = std::max(m.y_max_, g.y());
-  }
-  m.mpp_x_ = (m.x_max_ - m.x_min_) / options.width;
-  m.mpp_y_ = (m.y_max_ - m.y_min_) / options.height;
-  if (!(m.mpp_x_ > 0) || !(m.mpp_y_ > 0)) {
-    return absl::InvalidArgumentError("ipm.roi has an empty ground footprint");
-  }
-
-  // The per-pixel source coordinates and weights, computed once per
-  // calibration.
-  const int n = options.width * options.height;
-  m.src_x_.assign(n, -1);
-  m.src_y_.assign(n, -1);
-  m.weights_.assign(n, {0.f, 0.f, 0.f, 0.f});
-  m.valid_ = cv::Mat::zeros(options.height, options.width, CV_8U);
-  m.valid_count_ = 0;
-  const bool bilinear = options.interpolation == Interpolation::kBilinear;
-  for (int r = 0; r < options.height; ++r) {
-    for (int c = 0; c < options.width; ++c) {
-      const Eigen::Vector2d img = m.IpmToImage(Eigen::Vector2d(c, r));
-      const bool inside = img.allFinite() && img.x() >= roi.left && img.x() <= roi.right &&
-                          img.y() >= roi.top && img.y() <= roi.bottom;
-      if (!inside) continue;
-      const int i = r * options.width + c;
-      if (bilinear) {
-        // The ROI lies inside the image, so x0 + 1 and y0 + 1 do too except
-        // on the last column/row, where the weight of the outer pixel is 0.
-        const int x0 = std::min(static_cast<int>(img.x()), camera.image_width - 2);
-        const int y0 = std::min(static_cast<int>(img.y()), camera.image_height - 2);
-        const float fx = static_cast<float>(img.x() - x0);
-        const float fy = static_cast<float>(img.y() - y0);
-        m.src_x_[i] = x0;
-        m.src_y_[i] = y0;
-        m.weights_[i] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
-      } else {
-        m.src_x_[i] = static_cast<int>(std::lround(img.x()));
-        m.src_y_[i] = static_cast<int>(std::lround(img.y()));
-        m.weights_[i] = {1.f, 0.f, 0.f, 0.f};
+  if (options.view == IpmView::kGround) {
+    // The ground rectangle as given; the ROI is the bounding box of its
+    // projection, clipped to the image and to below the horizon.
+    const GroundView& g = options.ground;
+    m.width_ = GroundPixels(g.x_max_m - g.x_min_m, g.metres_per_px_x);
+    m.height_ = GroundPixels(g.y_max_m - g.y_min_m, g.metres_per_px_y);
+    m.x_min_ = g.x_min_m;
+    m.x_max_ = g.x_max_m;
+    m.y_min_ = g.y_min_m;
+    m.y_max_ = g.y_max_m;
+    m.mpp_x_ = (m.x_max_ - m.x_min_) / m.width_;
+    m.mpp_y_ = (m.y_max_ - m.y_min_) / m.height_;
+    Roi box{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+            std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+    for (const double x : {g.x_min_m, g.x_max_m}) {
+      for (const double y : {g.y_min_m, g.y_max_m}) {
+        const Eigen::Vector2d p = camera.GroundToImage({x, y});
+        if (!p.allFinite() || !(p.y() > horizon)) {
+          return absl::InvalidArgumentError(
+              absl::StrCat("ipm.ground corner (", x, ", ", y,
+                           ") m does not project below the horizon: is the camera's pitch right?"));
+        }
+        box.left = std::min(box.left, p.x());
+        box.right = std::max(box.right, p.x());
+        box.top = std::min(box.top, p.y());
+        box.bottom = std::max(box.bottom, p.y());
       }
-      m.valid_.at<uint8_t>(r, c) = 255;
-      ++m.valid_count_;
+    }
+    Roi roi;
+    roi.left = std::max(box.left, 0.0);
+    roi.right = std::min(box.right, camera.image_width - 1.0);
+    roi.top = std::max(box.top, std::max(0.0, top_limit));
+    roi.bottom = std::min(box.bottom, camera.image_height - 1.0);
+    if (roi.right - roi.left < 2 || roi.bottom - roi.top < 2) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "ipm.ground (x ", g.x_min_m, "..", g.x_max_m, " m, y ", g.y_min_m, "..", g.y_max_m,
+          " m) projects to image rows ", box.top, "..", box.bottom, ", columns ", box.left, "..",
+          box.right, ": no usable part inside the ", camera.image_width, "x", camera.image_height,
+          " image below the horizon (row ", horizon, " + margin ", options.horizon_margin_px, ")"));
+    }
+    m.roi_ = roi;
+  } else {
+    // Clip the ROI to the image and to below the horizon.
+    Roi roi = options.roi;
+    roi.left = std::max(roi.left, 0.0);
+    roi.right = std::min(roi.right, camera.image_width - 1.0);
+    roi.bottom = std::min(roi.bottom, camera.image_height - 1.0);
+    roi.top = std::max(roi.top, top_limit);
+    if (roi.right - roi.left < 2 || roi.bottom - roi.top < 2) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "ipm.roi (left=", options.roi.left, " right=", options.roi.right,
+          " top=", options.roi.top, " bottom=", options.roi.bottom,
+          ") has no usable part inside the ", camera.image_width, "x", camera.image_height,
+          " image below the horizon (row ", horizon, " + margin ", options.horizon_margin_px, ")"));
+    }
+    m.roi_ = roi;
+    m.width_ = options.width;
+    m.height_ = options.height;
+
+    // Ground footprint of the ROI: its corners and the vanishing point's column
+    // on its top and bottom rows.
+    const double vp_u = std::clamp(camera.VanishingPoint().x(), roi.left, roi.right);
+    const Eigen::Vector2d corners[] = {{roi.left, roi.top},     {roi.right, roi.top},
+                                       {vp_u, roi.top},         {roi.left, roi.bottom},
+                                       {roi.right, roi.bottom}, {vp_u, roi.bottom}};
+    m.x_min_ = m.y_min_ = std::numeric_limits<double>::infinity();
+    m.x_max_ = m.y_max_ = -std::numeric_limits<double>::infinity();
+    for (const auto& c : corners) {
+      const Eigen::Vector2d g = camera.ImageToGround(c);
+      if (!g.allFinite() || g.y() <= 0) {
+        return absl::InvalidArgumentError("ipm.roi maps to points behind the camera");
+      }
+      m.x_min_ = std::min(m.x_min_, g.x());
+      m.x_max_ = std::max(m.x_max_, g.x());
+      m.y_min_ = std::min(m.y_min_, g.y());
+      m.y_max_ = std::max(m.y_max_, g.y());
+    }
+    m.mpp_x_ = (m.x_max_ - m.x_min_) / m.width_;
+    m.mpp_y_ = (m.y_max_ - m.y_min_) / m.height_;
+    if (!(m.mpp_x_ > 0) || !(m.mpp_y_ > 0)) {
+      return absl::InvalidArgumentError("ipm.roi has an empty ground footprint");
     }
   }
-  if (m.valid_count_ == 0) return absl::InvalidArgumentError("ipm.roi maps to no IPM pixel");
-  cv::bitwise_not(m.valid_, m.invalid_);
+  m.BuildTaps();
+  if (m.valid_count_ == 0) return absl::InvalidArgumentError("ipm maps to no image pixel");
   return m;
 }
 
-cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel) const {
+void IpmMapping::BuildTaps() {
+  // The per-pixel taps, computed once per calibration.
+  const int n = width_ * height_;
+  const Roi& roi = roi_;
+  const int iw = camera_.image_width;
+  const int ih = camera_.image_height;
+  const auto inside = [&roi](const Eigen::Vector2d& img) {
+    return img.allFinite() && img.x() >= roi.left && img.x() <= roi.right && img.y() >= roi.top &&
+           img.y() <= roi.bottom;
+  };
+  tap_start_.assign(n + 1, 0);
+  taps_.clear();
+  taps_.reserve(4 * n);
+  valid_ = cv::Mat::zeros(height_, width_, CV_8U);
+  valid_count_ = 0;
+  for (int r = 0; r < height_; ++r) {
+    for (int c = 0; c < width_; ++c) {
+      const int i = r * width_ + c;
+      tap_start_[i] = static_cast<int32_t>(taps_.size());
+      const Eigen::Vector2d img = IpmToImage(Eigen::Vector2d(c, r));
+      if (!inside(img)) continue;
+      const auto add = [this](int x, int y, float w) {
+        if (w > 0) taps_.push_back({x, y, w});
+      };
+      switch (options_.interpolation) {
+        case Interpolation::kNearest:
+          add(static_cast<int>(std::lround(img.x())), static_cast<int>(std::lround(img.y())), 1.f);
+          break;
+        case Interpolation::kBilinear:
+          BilinearTaps(img, iw, ih, 1.f, add);
+          break;
+        case Interpolation::kArea:  // the taps mark validity; BuildSegments samples
+          BilinearTaps(img, iw, ih, 1.f, add);
+          break;
+      }
+      if (static_cast<int32_t>(taps_.size()) == tap_start_[i]) continue;
+      valid_.at<uint8_t>(r, c) = 255;
+      ++valid_count_;
+    }
+  }
+  tap_start_[n] = static_cast<int32_t>(taps_.size());
+  cv::bitwise_not(valid_, invalid_);
+  if (options_.interpolation == Interpolation::kArea) BuildSegments();
+}
+
+void IpmMapping::BuildSegments() {
+  // The footprint of IPM pixel (c, r) is the image of the ground cell
+  // [c - 0.5, c + 0.5] x [r - 0.5, r + 0.5]. Lines of constant ground y are
+  // (nearly) horizontal in the image (the camera does not roll), so the
+  // footprint is cut into `nv` sub-rows of constant y, each a horizontal
+  // segment of the image between the images of its left and right corners:
+  // a box along the image row, and linear interpolation between the two
+  // image rows around it. nv follows the footprint's height in image rows,
+  // so every image row of the footprint is read.
+  const int n = width_ * height_;
+  const int iw = camera_.image_width;
+  const int ih = camera_.image_height;
+  seg_start_.assign(n + 1, 0);
+  segments_.clear();
+  segments_.reserve(4 * n);
+  seg_row0_ = ih;
+  seg_row1_ = -1;
+  seg_col1_ = 0;
+  for (int r = 0; r < height_; ++r) {
+    for (int c = 0; c < width_; ++c) {
+      const int i = r * width_ + c;
+      seg_start_[i] = static_cast<int32_t>(segments_.size());
+      if (tap_start_[i] == tap_start_[i + 1]) continue;  // invalid
+      const double v_top = IpmToImage({c, r - 0.5}).y(), v_bot = IpmToImage({c, r + 0.5}).y();
+      const int nv =
+          std::clamp(static_cast<int>(std::ceil(std::abs(v_bot - v_top))), 1, kMaxSubsamples);
+      const size_t first = segments_.size();
+      double total = 0;
+      for (int b = 0; b < nv; ++b) {
+        const double t = r - 0.5 + (b + 0.5) / nv;
+        Eigen::Vector2d a = IpmToImage({c - 0.5, t}), z = IpmToImage({c + 0.5, t});
+        if (!a.allFinite() || !z.allFinite()) continue;
+        if (a.x() > z.x()) std::swap(a, z);
+        const double v = 0.5 * (a.y() + z.y());
+        // Clipped to the image; a segment narrower than a pixel is widened
+        // around its centre to one pixel (then it reads like bilinear).
+        double u0 = std::max(0.0, a.x()), u1 = std::min(iw - 1.0, z.x());
+        if (u1 - u0 < 1.0) {
+          const double m = std::clamp(0.5 * (u0 + u1), 0.5, iw - 1.5);
+          u0 = m - 0.5;
+          u1 = m + 0.5;
+        }
+        if (!(v >= 0 && v <= ih - 1)) continue;
+        const int v0 = std::min(static_cast<int>(v), ih - 2);
+        const double fv = v - v0;
+        for (const auto& [row, w] : {std::pair<int, double>{v0, 1 - fv}, {v0 + 1, fv}}) {
+          if (w <= 0) continue;
+          // Pixel k covers [k - 0.5, k + 0.5]: the box [u0, u1] in prefix
+          // coordinates is [u0 + 0.5, u1 + 0.5].
+          segments_.push_back({row, static_cast<float>(u0 + 0.5), static_cast<float>(u1 + 0.5),
+                               static_cast<float>(w)});
+          total += w;
+          seg_row0_ = std::min(seg_row0_, row);
+          seg_row1_ = std::max(seg_row1_, row);
+          seg_col1_ = std::max(seg_col1_, static_cast<int>(std::ceil(u1 + 0.5)) + 1);
+        }
+      }
+      for (size_t k = first; k < segments_.size(); ++k) {
+        Segment& sg = segments_[k];
+        sg.w = static_cast<float>(sg.w / total / (sg.u1 - sg.u0));
+      }
+    }
+  }
+  seg_start_[n] = static_cast<int32_t>(segments_.size());
+  seg_col1_ = std::min(seg_col1_, iw);
+}
+
+cv::Mat IpmMapping::ApplySegments(const cv::Mat& image, int channel, int channel2) const {
+  // Prefix sums of the rows read: P[k] = sum of pixels 0 .. k - 1 of a row
+  // (exact in int32: at most 16384 * 255).
+  const int cols = seg_col1_ + 1;
+  const int rows = seg_row1_ - seg_row0_ + 1;
+  thread_local std::vector<int32_t> prefix;
+  prefix.resize(static_cast<size_t>(std::max(0, rows)) * cols);
+  const int cn = image.channels();
+  for (int v = 0; v < rows; ++v) {
+    const uint8_t* src = image.ptr<uint8_t>(seg_row0_ + v) + channel;
+    int32_t* p = prefix.data() + static_cast<size_t>(v) * cols;
+    int32_t acc = 0;
+    p[0] = 0;
+    if (channel2 == kGrayOfBgr) {
+      const uint8_t* px = image.ptr<uint8_t>(seg_row0_ + v);
+      for (int k = 0; k + 1 < cols; ++k) p[k + 1] = acc += GrayOfBgr(px + 3 * k);
+    } else if (channel2 >= 0) {
+      const int d = channel2 - channel;
+      for (int k = 0; k + 1 < cols; ++k) p[k + 1] = acc += std::min(src[k * cn], src[k * cn + d]);
+    } else if (cn == 1) {
+      for (int k = 0; k + 1 < cols; ++k) p[k + 1] = acc += src[k];
+    } else {
+      for (int k = 0; k + 1 < cols; ++k) p[k + 1] = acc += src[k * cn];
+    }
+  }
+  const auto at = [&](const int32_t* p, float u) {
+    const int k = std::min(static_cast<int>(u), cols - 2);
+    const float f = u - k;
+    return p[k] + f * static_cast<float>(p[k + 1] - p[k]);
+  };
+  cv::Mat out(height_, width_, CV_32F);
+  float* dst = out.ptr<float>(0);
+  const int n = width_ * height_;
+  double sum = 0;
+  for (int i = 0; i < n; ++i) {
+    const int a = seg_start_[i], b = seg_start_[i + 1];
+    if (a == b) continue;
+    float value = 0;
+    for (int k = a; k < b; ++k) {
+      const Segment& sg = segments_[k];
+      const int32_t* p = prefix.data() + static_cast<size_t>(sg.row - seg_row0_) * cols;
+      value += sg.w * (at(p, sg.u1) - at(p, sg.u0));
+    }
+    value *= 1.f / 255.f;
+    dst[i] = value;
+    sum += value;
+  }
+  const float mean = static_cast<float>(sum / valid_count_);
+  for (int i = 0; i < n; ++i) {
+    if (seg_start_[i] == seg_start_[i + 1]) dst[i] = mean;
+  }
+  return out;
+}
+
+double IpmMapping::mean_taps() const {
+  if (valid_count_ == 0) return 0.0;
+  if (options_.interpolation == Interpolation::kArea) {
+    return static_cast<double>(segments_.size()) / valid_count_;
+  }
+  return static_cast<double>(taps_.size()) / valid_count_;
+}
+
+cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel, int channel2) const {
   CV_Assert(image.depth() == CV_8U && image.cols == camera_.image_width &&
-            image.rows == camera_.image_height && channel >= 0 && channel < image.channels());
-  cv::Mat out(options_.height, options_.width, CV_32F);
+            image.rows == camera_.image_height && channel >= 0 && channel < image.channels() &&
+            channel2 < image.channels() && (channel2 != kGrayOfBgr || image.channels() == 3));
+  if (options_.interpolation == Interpolation::kArea)
+    return ApplySegments(image, channel, channel2);
+  cv::Mat out(height_, width_, CV_32F);
   const int cn = image.channels();
   const size_t step = image.step[0];
   const uint8_t* base = image.data + channel;
   float* dst = out.ptr<float>(0);  // continuous: freshly allocated
-  const int n = options_.width * options_.height;
+  const int n = width_ * height_;
   double sum = 0;
+  const Tap* taps = taps_.data();
   for (int i = 0; i < n; ++i) {
-    if (src_x_[i] < 0) continue;
-    const uint8_t* p = base + src_y_[i] * step + src_x_[i] * cn;
-    const auto& w = weights_[i];
-    const float v =
-        (w[0] * p[0] + w[1] * p[cn] + w[2] * p[step] + w[3] * p[step + cn]) * (1.f / 255.f);
+    const int a = tap_start_[i], b = tap_start_[i + 1];
+    if (a == b) {
+      dst[i] = -1.f;  // invalid, filled below
+      continue;
+    }
+    float v = 0.f;
+    if (channel2 == kGrayOfBgr) {
+      for (int k = a; k < b; ++k) {
+        v += taps[k].w * GrayOfBgr(image.data + taps[k].y * step + taps[k].x * cn);
+      }
+    } else if (channel2 >= 0) {
+      const int d = channel2 - channel;
+      for (int k = a; k < b; ++k) {
+        const uint8_t* p = base + taps[k].y * step + taps[k].x * cn;
+        v += taps[k].w * std::min(p[0], p[d]);
+      }
+    } else {
+      for (int k = a; k < b; ++k) v += taps[k].w * base[taps[k].y * step + taps[k].x * cn];
+    }
+    v *= 1.f / 255.f;
     dst[i] = v;
     sum += v;
   }
   const float mean = static_cast<float>(sum / valid_count_);
   for (int i = 0; i < n; ++i) {
-    if (src_x_[i] < 0) dst[i] = mean;
+    if (tap_start_[i] == tap_start_[i + 1]) dst[i] = mean;
   }
   return out;
 }
@@ -161,9 +420,9 @@ Eigen::Vector2d IpmMapping::ImageToIpm(const Eigen::Vector2d& image) const {
 }
 
 size_t IpmMapping::MemoryBytes() const {
-  return src_x_.capacity() * sizeof(int) + src_y_.capacity() * sizeof(int) +
-         weights_.capacity() * sizeof(weights_[0]) + valid_.total() * valid_.elemSize() +
-         invalid_.total() * invalid_.elemSize();
+  return tap_start_.capacity() * sizeof(tap_start_[0]) + taps_.capacity() * sizeof(Tap) +
+         seg_start_.capacity() * sizeof(seg_start_[0]) + segments_.capacity() * sizeof(Segment) +
+         valid_.total() * valid_.elemSize() + invalid_.total() * invalid_.elemSize();
 }
 
 }  // namespace lane

@@ -37,6 +37,14 @@ bool InBounds(const Eigen::Vector2d& p, const ChannelView& image) {
 
 float ChannelView::Bilinear(double x, double y) const {
   if (!(x >= 0 && y >= 0 && x <= image.cols - 1 && y <= image.rows - 1)) return 0.f;
+  if (channel2 != -1) {
+    const int x0 = std::min(static_cast<int>(x), std::max(0, image.cols - 2));
+    const int y0 = std::min(static_cast<int>(y), std::max(0, image.rows - 2));
+    const int x1 = std::min(x0 + 1, image.cols - 1), y1 = std::min(y0 + 1, image.rows - 1);
+    const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
+    return (1 - fy) * ((1 - fx) * At(x0, y0) + fx * At(x1, y0)) +
+           fy * ((1 - fx) * At(x0, y1) + fx * At(x1, y1));
+  }
   if (image.depth() == CV_32F) return BilinearT<float>(image, image.channels(), channel, x, y);
   return BilinearT<uint8_t>(image, image.channels(), channel, x, y);
 }
@@ -71,6 +79,14 @@ absl::Status PostprocessOptions::Validate() const {
       {"min_image_length_px", min_image_length_px, 0, 1e5},
       {"side_offset_m", side_offset_m, 0, 10},
       {"min_side_contrast", min_side_contrast, 0, 1},
+      {"extend_search_m", extend_search_m, 0.01, 10},
+      {"min_ray_angle_deg", min_ray_angle_deg, 0, 90},
+      {"max_ray_bend_m", max_ray_bend_m, 0, 10},
+      {"max_bright_side_fraction", max_bright_side_fraction, 0, 1},
+      {"max_redness", max_redness, -1, 1},
+      {"localize_search_m", localize_search_m, 0.01, 10},
+      {"localize_sigma_m", localize_sigma_m, 0, 2},
+      {"extend_gap_m", extend_gap_m, 0, 100},
   };
   for (const auto& c : checks) {
     if (auto s = bad(c.name, c.v, c.lo, c.hi); !s.ok()) return s;

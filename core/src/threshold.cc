@@ -8,6 +8,12 @@
 namespace lane {
 
 absl::Status ThresholdOptions::Validate() const {
+  if (!(transverse_max_fraction > 0 && transverse_max_fraction <= 10) ||
+      !(transverse_margin_m >= 0 && transverse_margin_m < 20)) {
+    return absl::InvalidArgumentError(
+        "threshold.transverse_max_fraction must lie in (0, 10] and transverse_margin_m in "
+        "[0, 20) m");
+  }
   if (!(quantile >= 0.0 && quantile < 1.0)) {
     return absl::InvalidArgumentError(
         absl::StrCat("threshold.quantile must lie in [0, 1), got ", quantile));
@@ -100,6 +106,33 @@ float ApplyQuantileThreshold(cv::Mat& image, double q) {
     }
   }
   return threshold;
+}
+
+int SuppressTransverseRows(cv::Mat& image, const cv::Mat& valid, double max_fraction,
+                           int margin_rows) {
+  CV_Assert(image.type() == CV_32FC1 && valid.type() == CV_8UC1 && image.size() == valid.size());
+  std::vector<bool> transverse(image.rows, false);
+  int found = 0;
+  for (int r = 0; r < image.rows; ++r) {
+    const float* v = image.ptr<float>(r);
+    const uint8_t* m = valid.ptr<uint8_t>(r);
+    int kept = 0, width = 0;
+    for (int c = 0; c < image.cols; ++c) {
+      width += m[c] ? 1 : 0;
+      kept += v[c] > 0 ? 1 : 0;
+    }
+    if (width > 0 && kept > max_fraction * width) {
+      transverse[r] = true;
+      ++found;
+    }
+  }
+  if (found == 0) return 0;
+  for (int r = 0; r < image.rows; ++r) {
+    if (!transverse[r]) continue;
+    const int a = std::max(0, r - margin_rows), b = std::min(image.rows - 1, r + margin_rows);
+    image.rowRange(a, b + 1).setTo(0);
+  }
+  return found;
 }
 
 }  // namespace lane

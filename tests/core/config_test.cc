@@ -326,7 +326,9 @@ TEST(ConfigTest, ShippedConfigsParse) {
   EXPECT_EQ(culane->camera.image_width, 1640);
   EXPECT_EQ(culane->camera.image_height, 590);
   EXPECT_EQ(culane->camera.pitch_deg, -4.858);
-  EXPECT_EQ(culane->ipm.roi.right, 1250);
+  EXPECT_EQ(culane->ipm.view, IpmView::kGround);
+  EXPECT_EQ(culane->ipm.ground.y_min_m, 8.0);
+  EXPECT_EQ(culane->ipm.interpolation, Interpolation::kArea);
 
   const absl::StatusOr<Config> synthetic = LoadConfigFile(ConfigPath("synthetic.json"));
   ASSERT_TRUE(synthetic.ok()) << synthetic.status();
@@ -374,6 +376,75 @@ TEST(ConfigTest, LoadConfigFileErrors) {
   EXPECT_TRUE(Contains(unknown.status().message(), "\"ipm.widht\""));
   std::filesystem::remove(bad);
   std::filesystem::remove(typo);
+}
+
+TEST(ConfigTest, GroundViewSectionSelectsTheGroundView) {
+  const absl::StatusOr<Config> c = ParseConfig(R"({"ipm": {"ground": {"x_min_m": -5,
+      "x_max_m": 5, "y_min_m": 6, "y_max_m": 16, "metres_per_px_x": 0.05}}})");
+  ASSERT_TRUE(c.ok()) << c.status();
+  EXPECT_EQ(c->ipm.view, IpmView::kGround);
+  EXPECT_EQ(c->ipm.ground.x_min_m, -5);
+  EXPECT_EQ(c->ipm.ground.metres_per_px_x, 0.05);
+  EXPECT_EQ(c->ipm.ground.metres_per_px_y, GroundView{}.metres_per_px_y);
+  // An explicit view wins over the section's presence.
+  const absl::StatusOr<Config> roi =
+      ParseConfig(R"({"ipm": {"view": "roi", "ground": {"y_min_m": 6}}})");
+  ASSERT_TRUE(roi.ok()) << roi.status();
+  EXPECT_EQ(roi->ipm.view, IpmView::kRoi);
+  // The old form keeps loading as the ROI view.
+  const absl::StatusOr<Config> old = ParseConfig(
+      R"({"ipm": {"width": 160, "height": 120, "roi": {"left": 1, "right": 600, "top": 230,
+          "bottom": 400}}})");
+  ASSERT_TRUE(old.ok()) << old.status();
+  EXPECT_EQ(old->ipm.view, IpmView::kRoi);
+  EXPECT_EQ(old->ipm.roi.right, 600);
+  // The written document reads back to the same view.
+  const absl::StatusOr<Config> again = ParseConfig(ConfigToJson(*c));
+  ASSERT_TRUE(again.ok()) << again.status();
+  EXPECT_EQ(ConfigToJson(*again), ConfigToJson(*c));
+}
+
+TEST(ConfigTest, GroundViewIsValidated) {
+  for (const char* bad : {
+           R"({"ipm": {"ground": {"x_min_m": 3, "x_max_m": -3}}})",
+           R"({"ipm": {"ground": {"y_min_m": -1}}})",
+           R"({"ipm": {"ground": {"y_min_m": 20, "y_max_m": 10}}})",
+           R"({"ipm": {"ground": {"metres_per_px_x": 0}}})",
+           R"({"ipm": {"ground": {"metres_per_px_y": 0.00001}}})",
+           R"({"ipm": {"view": "sideways"}})",
+       }) {
+    const absl::StatusOr<Config> c = ParseConfig(bad);
+    EXPECT_EQ(c.status().code(), absl::StatusCode::kInvalidArgument) << bad;
+    EXPECT_NE(c.status().message().find("ipm"), std::string::npos) << c.status();
+  }
+  // Too many pixels: 100 m at 1 cm.
+  const absl::StatusOr<Config> huge = ParseConfig(
+      R"({"ipm": {"ground": {"x_min_m": -50, "x_max_m": 50, "metres_per_px_x": 0.01}}})");
+  EXPECT_EQ(huge.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(huge.status().message().find("10000x"), std::string::npos) << huge.status();
+}
+
+TEST(ConfigTest, NewDetectorOptionsRoundTripAndAreValidated) {
+  const absl::StatusOr<Config> c = ParseConfig(R"({"detector": {"channel": "min_rg",
+      "filter": {"bar_side_m": 0.2, "void_level": 5},
+      "postprocess": {"extend_geometric": false, "extend_search_m": 0.6, "extend_gap_m": 3,
+                      "extend_to_max_row": true, "clip_to_image": false}},
+      "ipm": {"interpolation": "area"}})");
+  ASSERT_TRUE(c.ok()) << c.status();
+  EXPECT_EQ(c->detector.channel, Channel::kMinRedGreen);
+  EXPECT_EQ(c->detector.filter.bar_side_m, 0.2);
+  EXPECT_FALSE(c->detector.postprocess.extend_geometric);
+  EXPECT_TRUE(c->detector.postprocess.extend_to_max_row);
+  EXPECT_FALSE(c->detector.postprocess.clip_to_image);
+  EXPECT_EQ(c->ipm.interpolation, Interpolation::kArea);
+  const absl::StatusOr<Config> again = ParseConfig(ConfigToJson(*c));
+  ASSERT_TRUE(again.ok()) << again.status();
+  EXPECT_EQ(ConfigToJson(*again), ConfigToJson(*c));
+  for (const char* bad : {R"({"detector": {"postprocess": {"extend_search_m": 0}}})",
+                          R"({"detector": {"postprocess": {"extend_gap_m": -1}}})",
+                          R"({"detector": {"filter": {"bar_side_m": -0.1}}})"}) {
+    EXPECT_EQ(ParseConfig(bad).status().code(), absl::StatusCode::kInvalidArgument) << bad;
+  }
 }
 
 }  // namespace

@@ -89,5 +89,123 @@ TEST(IpmTest, RejectsRoisWithNothingToMap) {
             absl::StatusCode::kInvalidArgument);
 }
 
+// The CULane camera of configs/culane-driver161.json.
+CameraModel CulaneCamera() {
+  CameraModel cam;
+  cam.fu = cam.fv = 1000;
+  cam.cu = 820;
+  cam.cv = 295;
+  cam.pitch_deg = -4.858;
+  cam.yaw_deg = 3.706;
+  cam.height_m = 1.3;
+  cam.image_width = 1640;
+  cam.image_height = 590;
+  return cam;
+}
+
+TEST(IpmTest, GroundViewHasTheRequestedExtentAndResolution) {
+  IpmOptions o;
+  o.view = IpmView::kGround;
+  o.ground = {-7.5, 7.5, 8.0, 18.0, 0.0625, 0.125};
+  const auto m = IpmMapping::Create(CulaneCamera(), o);
+  ASSERT_TRUE(m.ok()) << m.status();
+  EXPECT_EQ(m->width(), 240);
+  EXPECT_EQ(m->height(), 80);
+  EXPECT_NEAR(m->metres_per_px_x(), 0.0625, 1e-12);
+  EXPECT_NEAR(m->metres_per_px_y(), 0.125, 1e-12);
+  EXPECT_NEAR(m->x_min(), -7.5, 1e-12);
+  EXPECT_NEAR(m->y_max(), 18.0, 1e-12);
+  // The outer edges of the corner pixels are the rectangle's corners.
+  EXPECT_NEAR((m->IpmToGround({-0.5, -0.5}) - Eigen::Vector2d(-7.5, 18)).norm(), 0, 1e-9);
+  EXPECT_NEAR((m->IpmToGround({239.5, 79.5}) - Eigen::Vector2d(7.5, 8)).norm(), 0, 1e-9);
+  // The derived ROI: the bounding box of the corners' images (the yaw tilts
+  // the rows of constant distance a little), clipped to the image's columns
+  // (at 8 m, +-7.5 m lies outside a 1640 px wide frame).
+  const CameraModel cam = CulaneCamera();
+  EXPECT_NEAR(m->roi().top,
+              std::min(cam.GroundToImage({-7.5, 18}).y(), cam.GroundToImage({7.5, 18}).y()), 1e-9);
+  EXPECT_NEAR(m->roi().bottom,
+              std::max(cam.GroundToImage({-7.5, 8}).y(), cam.GroundToImage({7.5, 8}).y()), 1e-9);
+  EXPECT_EQ(m->roi().left, 0);
+  EXPECT_EQ(m->roi().right, 1639);
+  // Pixels whose ground point lies outside the image are invalid.
+  EXPECT_EQ(m->valid_mask().at<uint8_t>(79, 0), 0);
+  EXPECT_EQ(m->valid_mask().at<uint8_t>(79, 120), 255);
+}
+
+TEST(IpmTest, GroundViewBeyondTheHorizonIsAnError) {
+  IpmOptions o;
+  o.view = IpmView::kGround;
+  o.ground.y_max_m = 1e4;  // projects onto the horizon
+  const auto m = IpmMapping::Create(CulaneCamera(), o);
+  ASSERT_FALSE(m.ok());
+  EXPECT_EQ(m.status().code(), absl::StatusCode::kInvalidArgument);
+  IpmOptions behind;
+  behind.view = IpmView::kGround;
+  behind.ground.y_min_m = 0.5;  // below the image
+  behind.ground.y_max_m = 1.0;
+  EXPECT_FALSE(IpmMapping::Create(CulaneCamera(), behind).ok());
+}
+
+// Fine vertical stripes, 1 px white / 1 px black: far finer than a top-view
+// pixel near the camera (8 image columns), so a point sample reads either
+// 0 or 1 while the true average is 0.5.
+TEST(IpmTest, AreaSamplingAveragesTheFootprint) {
+  const CameraModel cam = CulaneCamera();
+  cv::Mat stripes(cam.image_height, cam.image_width, CV_8UC1);
+  for (int x = 0; x < stripes.cols; ++x) stripes.col(x).setTo(x % 2 ? 255 : 0);
+  IpmOptions o;
+  o.view = IpmView::kGround;
+  o.ground = {-5, 5, 8, 18, 0.0625, 0.125};
+  o.interpolation = Interpolation::kArea;
+  const auto area = IpmMapping::Create(cam, o);
+  o.interpolation = Interpolation::kNearest;
+  const auto nearest = IpmMapping::Create(cam, o);
+  ASSERT_TRUE(area.ok() && nearest.ok());
+  const cv::Mat a = area->Apply(stripes);
+  const cv::Mat n = nearest->Apply(stripes);
+  // Near rows (footprints several columns wide): the area average is close
+  // to 0.5 everywhere; nearest reads 0 or 1.
+  double worst_area = 0, worst_nearest = 0;
+  for (int c = 10; c < a.cols - 10; ++c) {
+    worst_area = std::max(worst_area, std::abs(a.at<float>(a.rows - 2, c) - 0.5));
+    worst_nearest = std::max(worst_nearest, std::abs(n.at<float>(n.rows - 2, c) - 0.5));
+  }
+  EXPECT_LT(worst_area, 0.1);
+  EXPECT_GT(worst_nearest, 0.45);
+  EXPECT_GT(area->mean_taps(), 1.0);
+
+  // A uniform image reads the same everywhere, whatever the footprint.
+  const cv::Mat grey(cam.image_height, cam.image_width, CV_8UC1, cv::Scalar(100));
+  const cv::Mat g = area->Apply(grey);
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(g, &lo, &hi, nullptr, nullptr, area->valid_mask());
+  EXPECT_NEAR(lo, 100 / 255.0, 1e-4);
+  EXPECT_NEAR(hi, 100 / 255.0, 1e-4);
+}
+
+// Where a top-view pixel is smaller than an image pixel (far rows), area
+// sampling is bilinear interpolation.
+TEST(IpmTest, AreaSamplingIsBilinearWhereTheViewIsFinerThanTheImage) {
+  CameraModel cam;  // Caltech, 640x480
+  cv::Mat ramp(cam.image_height, cam.image_width, CV_8UC1);
+  for (int x = 0; x < ramp.cols; ++x) ramp.col(x).setTo(x * 255 / (ramp.cols - 1));
+  IpmOptions o;
+  o.view = IpmView::kGround;
+  o.ground = {-3, 3, 20, 30, 0.2, 0.5};  // far: ~3 image px per top-view px across
+  o.interpolation = Interpolation::kArea;
+  const auto area = IpmMapping::Create(cam, o);
+  o.interpolation = Interpolation::kBilinear;
+  const auto bilinear = IpmMapping::Create(cam, o);
+  ASSERT_TRUE(area.ok() && bilinear.ok());
+  // On a linear ramp every symmetric average equals the centre value.
+  const cv::Mat a = area->Apply(ramp), b = bilinear->Apply(ramp);
+  for (int r = 0; r < a.rows; r += 5) {
+    for (int c = 0; c < a.cols; c += 3) {
+      ASSERT_NEAR(a.at<float>(r, c), b.at<float>(r, c), 2e-3) << r << "," << c;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace lane

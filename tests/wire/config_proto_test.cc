@@ -57,6 +57,30 @@ TEST(ConvertTest, RoundTrip) {
   EXPECT_EQ(lane::ConfigToJson(*back), lane::ConfigToJson(config));
 }
 
+// The enums the perturbation below cannot reach: the ground view, area
+// sampling and the min(red, green) channel.
+TEST(ConvertTest, GroundViewAreaSamplingAndMinRedGreenRoundTrip) {
+  lane::Config config;
+  config.ipm.view = lane::IpmView::kGround;
+  config.ipm.ground = {-6, 6, 7, 19, 0.05, 0.1};
+  config.ipm.interpolation = lane::Interpolation::kArea;
+  config.detector.channel = lane::Channel::kMinRedGreen;
+  v1::SessionConfig proto;
+  ConfigToProto(config, &proto);
+  EXPECT_EQ(proto.ipm().view(), v1::IPM_VIEW_GROUND);
+  EXPECT_EQ(proto.ipm().interpolation(), v1::INTERPOLATION_AREA);
+  absl::StatusOr<lane::Config> back = ConfigFromProto(proto);
+  ASSERT_TRUE(back.ok()) << back.status();
+  EXPECT_EQ(lane::ConfigToJson(*back), lane::ConfigToJson(config));
+  // A ground section without a view selects the ground view.
+  v1::SessionConfig implicit;
+  implicit.mutable_ipm()->mutable_ground()->set_y_max_m(20);
+  absl::StatusOr<lane::Config> ground = ConfigFromProto(implicit);
+  ASSERT_TRUE(ground.ok()) << ground.status();
+  EXPECT_EQ(ground->ipm.view, lane::IpmView::kGround);
+  EXPECT_DOUBLE_EQ(ground->ipm.ground.y_max_m, 20);
+}
+
 // Every key of the config file must survive the proto: perturb every number
 // and switch of a full config, then compare config -> proto -> config.
 TEST(ConvertTest, EveryConfigFieldSurvivesTheProto) {

@@ -49,7 +49,20 @@ LANE_FIELDS(Roi) {
   v.Field("bottom", s.bottom);
 }
 
+LANE_FIELDS(GroundView) {
+  v.Field("x_min_m", s.x_min_m);
+  v.Field("x_max_m", s.x_max_m);
+  v.Field("y_min_m", s.y_min_m);
+  v.Field("y_max_m", s.y_max_m);
+  v.Field("metres_per_px_x", s.metres_per_px_x);
+  v.Field("metres_per_px_y", s.metres_per_px_y);
+}
+
+// `view` is also set before everything else by ConfigFromJson: a "ground"
+// section without "view" selects the ground view.
 LANE_FIELDS(IpmOptions) {
+  v.Field("view", s.view);
+  v.Section("ground", s.ground);
   v.Field("width", s.width);
   v.Field("height", s.height);
   v.Section("roi", s.roi);
@@ -65,9 +78,16 @@ LANE_FIELDS(FilterOptions) {
   v.Field("kernel_extent_sigmas", s.kernel_extent_sigmas);
   v.Field("zero_border_x_px", s.zero_border_x_px);
   v.Field("zero_border_bottom_px", s.zero_border_bottom_px);
+  v.Field("bar_side_m", s.bar_side_m);
+  v.Field("void_level", s.void_level);
+  v.Field("void_margin_y_px", s.void_margin_y_px);
 }
 
-LANE_FIELDS(ThresholdOptions) { v.Field("quantile", s.quantile); }
+LANE_FIELDS(ThresholdOptions) {
+  v.Field("quantile", s.quantile);
+  v.Field("transverse_max_fraction", s.transverse_max_fraction);
+  v.Field("transverse_margin_m", s.transverse_margin_m);
+}
 
 LANE_FIELDS(HoughOptions) {
   v.Field("smooth_sigma_px", s.smooth_sigma_px);
@@ -98,6 +118,9 @@ LANE_FIELDS(PostprocessOptions) {
   v.Field("min_length_fraction", s.min_length_fraction);
   v.Field("side_offset_m", s.side_offset_m);
   v.Field("min_side_contrast", s.min_side_contrast);
+  v.Field("min_ray_angle_deg", s.min_ray_angle_deg);
+  v.Field("max_ray_bend_m", s.max_ray_bend_m);
+  v.Field("max_bright_side_fraction", s.max_bright_side_fraction);
   v.Field("ipm_extend_step_px", s.ipm_extend_step_px);
   v.Field("ipm_normal_search_px", s.ipm_normal_search_px);
   v.Field("backproject_samples", s.backproject_samples);
@@ -112,6 +135,16 @@ LANE_FIELDS(PostprocessOptions) {
   v.Field("extend_min_cos_down", s.extend_min_cos_down);
   v.Field("extend_min_row", s.extend_min_row);
   v.Field("extend_max_row", s.extend_max_row);
+  v.Field("extend_geometric", s.extend_geometric);
+  v.Field("localize_geometric", s.localize_geometric);
+  v.Field("localize_search_m", s.localize_search_m);
+  v.Field("localize_sigma_m", s.localize_sigma_m);
+  v.Field("extend_search_m", s.extend_search_m);
+  v.Field("extend_gap_m", s.extend_gap_m);
+  v.Field("extend_to_max_row", s.extend_to_max_row);
+  v.Field("clip_to_image", s.clip_to_image);
+  v.Field("check_ground_angle", s.check_ground_angle);
+  v.Field("max_redness", s.max_redness);
   v.Field("min_image_length_px", s.min_image_length_px);
   v.Field("localize_in_image", s.localize_in_image);
   v.Field("extend_in_image", s.extend_in_image);
@@ -152,12 +185,29 @@ LANE_FIELDS(Config) {
 // Enums <-> names.
 
 inline const char* InterpolationName(Interpolation interpolation) {
-  return interpolation == Interpolation::kNearest ? "nearest" : "bilinear";
+  switch (interpolation) {
+    case Interpolation::kNearest:
+      return "nearest";
+    case Interpolation::kBilinear:
+      return "bilinear";
+    case Interpolation::kArea:
+      return "area";
+  }
+  return "bilinear";
 }
 
 inline std::optional<Interpolation> ParseInterpolation(const std::string& name) {
   if (name == "nearest") return Interpolation::kNearest;
   if (name == "bilinear") return Interpolation::kBilinear;
+  if (name == "area") return Interpolation::kArea;
+  return std::nullopt;
+}
+
+inline const char* IpmViewName(IpmView view) { return view == IpmView::kGround ? "ground" : "roi"; }
+
+inline std::optional<IpmView> ParseIpmView(const std::string& name) {
+  if (name == "roi") return IpmView::kRoi;
+  if (name == "ground") return IpmView::kGround;
   return std::nullopt;
 }
 
@@ -174,13 +224,19 @@ template <>
 struct EnumTraits<Channel> {
   static const char* Name(Channel c) { return ChannelName(c); }
   static std::optional<Channel> Parse(const std::string& s) { return ParseChannel(s); }
-  static constexpr const char* kAllowed = "\"red\", \"green\", \"blue\" or \"gray\"";
+  static constexpr const char* kAllowed = "\"red\", \"green\", \"blue\", \"gray\" or \"min_rg\"";
 };
 template <>
 struct EnumTraits<Interpolation> {
   static const char* Name(Interpolation i) { return InterpolationName(i); }
   static std::optional<Interpolation> Parse(const std::string& s) { return ParseInterpolation(s); }
-  static constexpr const char* kAllowed = "\"bilinear\" or \"nearest\"";
+  static constexpr const char* kAllowed = "\"bilinear\", \"nearest\" or \"area\"";
+};
+template <>
+struct EnumTraits<IpmView> {
+  static const char* Name(IpmView v) { return IpmViewName(v); }
+  static std::optional<IpmView> Parse(const std::string& s) { return ParseIpmView(s); }
+  static constexpr const char* kAllowed = "\"roi\" or \"ground\"";
 };
 
 }  // namespace lane

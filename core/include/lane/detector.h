@@ -33,7 +33,11 @@ std::optional<Mode> ParseMode(const std::string& name);
 
 // Which channel of a BGR frame feeds the detector. The paper uses red: it
 // shows white and yellow paint brighter against asphalt than grey does.
-enum class Channel { kRed, kGreen, kBlue, kGray };
+// kMinRedGreen is min(red, green) per pixel, the paper's "use the colour"
+// (section IV): white and yellow paint are bright in both red and green,
+// whereas red vehicles, tail lights and brake lights (bright in red only),
+// vegetation (green only) and sky or blue signs are not.
+enum class Channel { kRed, kGreen, kBlue, kGray, kMinRedGreen };
 const char* ChannelName(Channel channel);
 std::optional<Channel> ParseChannel(const std::string& name);
 
@@ -136,7 +140,8 @@ class Detector {
 
   // The single channel the detector reads from a frame, as a copy.
   cv::Mat ExtractChannel(const cv::Mat& frame) const;
-  // The same channel as a view: no copy except for kGray on a colour frame.
+  // The same channel as a view, without a copy (kMinRedGreen and kGray are
+  // computed from the BGR pixels where they are read).
   ChannelView ViewChannel(const cv::Mat& frame) const;
 
  private:

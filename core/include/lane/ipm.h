@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -24,9 +25,49 @@ struct Roi {
   double bottom = 350;
 };
 
-enum class Interpolation { kNearest, kBilinear };
+// kNearest and kBilinear read one point per top-view pixel. kArea averages
+// the image over the pixel's footprint wherever that footprint spans more
+// than one image pixel (anti-aliasing: otherwise a top view coarser than the
+// image picks single pixels, and thin markings and asphalt texture alias),
+// and is bilinear elsewhere.
+enum class Interpolation { kNearest, kBilinear, kArea };
+
+// How the top view is defined: by a rectangle of the image (the paper's and
+// the reference code's form; the ground extent is the ROI's footprint and
+// the resolution follows from width x height), or by a rectangle of the road
+// in metres and a resolution in metres per pixel (the image ROI is then
+// derived: the bounding box of the rectangle's projection).
+enum class IpmView { kRoi, kGround };
+
+// A rectangle of the road plane and the top view's resolution. Ground frame:
+// x lateral (metres, positive to the right), y ahead of the camera's foot
+// point (metres).
+struct GroundView {
+  // Lateral range. The default, +-7.5 m, holds the ego lane's boundaries
+  // and the next boundary on each side (CULane labels at most these four)
+  // for lanes up to 3.75 m wide with the car up to 1.9 m off the centre.
+  double x_min_m = -7.5;
+  double x_max_m = 7.5;
+  // Distance range ahead. Near limit: where the car's own hood or the image
+  // bottom ends the road (8 m for the CULane camera); far limit: short of
+  // the vehicles ahead in dense traffic, whose edges and shadows otherwise
+  // dominate the threshold (a 1-1.5 s gap at 30-50 km/h is 8-20 m), and deep
+  // enough for a dash and a gap. docs/config.md, "Choosing a ground view".
+  double y_min_m = 8.0;
+  double y_max_m = 18.0;
+  // Ground size of one top-view pixel across and along the road, metres.
+  // Across: a 15 cm marking should span >= 2 px (<= 0.075 m). Along: the
+  // filter smooths over 1 m along the road, so 0.125 m (8 px per sigma)
+  // loses nothing.
+  double metres_per_px_x = 0.0625;
+  double metres_per_px_y = 0.125;
+};
 
 struct IpmOptions {
+  // kRoi: `roi`, `width` and `height` define the view. kGround: `ground`
+  // does, and `roi`, `width` and `height` are ignored (derived). A config
+  // file with a "ground" section and no "view" key selects kGround.
+  IpmView view = IpmView::kRoi;
   // Size of the top view in pixels. 160x120 as in the paper: small enough for
   // real time, large enough for a 10 cm marking to cover ~1 pixel.
   int width = 160;
@@ -34,6 +75,7 @@ struct IpmOptions {
   // Region of the image that is mapped. It is clipped to the image and to
   // `horizon_margin_px` below the horizon.
   Roi roi;
+  GroundView ground;
   // How far below the horizon the ROI must start, pixels. Rows nearer the
   // horizon map to ground points that are absurdly far away.
   double horizon_margin_px = 10.0;
@@ -55,7 +97,9 @@ class IpmMapping {
   // pixels are read, so no full-frame channel copy is made. Pixels whose
   // source falls outside the ROI are set to the mean of the others (as in the
   // reference implementation).
-  cv::Mat Apply(const cv::Mat& image, int channel = 0) const;
+  // With `channel2` >= 0 the top view is of min(channel, channel2) per pixel;
+  // with kGrayOfBgr (lane/postprocess.h) of the grey of a BGR image.
+  cv::Mat Apply(const cv::Mat& image, int channel = 0, int channel2 = -1) const;
 
   // Conversions between IPM pixels, image pixels and ground metres.
   Eigen::Vector2d IpmToGround(const Eigen::Vector2d& ipm) const;
@@ -63,6 +107,7 @@ class IpmMapping {
   Eigen::Vector2d IpmToImage(const Eigen::Vector2d& ipm) const;
   Eigen::Vector2d ImageToIpm(const Eigen::Vector2d& image) const;
 
+  // Size of the top view (for kGround, derived from the ground rectangle).
   // Ground size of one IPM pixel, metres: across the road (x) and along it (y).
   double metres_per_px_x() const { return mpp_x_; }
   double metres_per_px_y() const { return mpp_y_; }
@@ -75,8 +120,11 @@ class IpmMapping {
   const Roi& roi() const { return roi_; }
   const CameraModel& camera() const { return camera_; }
   const IpmOptions& options() const { return options_; }
-  int width() const { return options_.width; }
-  int height() const { return options_.height; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  // Image->top-view taps per top-view pixel, on average (4 for bilinear; more
+  // where kArea averages a footprint). For the benchmark and tests.
+  double mean_taps() const;
   // CV_8U, 255 where the IPM pixel's source lies inside the ROI.
   const cv::Mat& valid_mask() const { return valid_; }
   // Its complement.
@@ -87,17 +135,40 @@ class IpmMapping {
 
  private:
   IpmMapping() = default;
+  void BuildTaps();
+  void BuildSegments();
+  cv::Mat ApplySegments(const cv::Mat& image, int channel, int channel2) const;
 
   CameraModel camera_;
   IpmOptions options_;
   Roi roi_;
+  int width_ = 0, height_ = 0;
   double x_min_ = 0, x_max_ = 0, y_min_ = 0, y_max_ = 0;
   double mpp_x_ = 0, mpp_y_ = 0;
-  // Per IPM pixel (row-major): the source pixel's top-left neighbour and the
-  // four bilinear weights (nearest: one weight of 1). Invalid pixels have
-  // src_x_ = -1. Applied by a plain loop that reads one channel in place.
-  std::vector<int> src_x_, src_y_;
-  std::vector<std::array<float, 4>> weights_;
+  // Per IPM pixel (row-major): taps tap_start_[i] .. tap_start_[i + 1] - 1,
+  // each an image pixel and its weight (bilinear: the 4 neighbours; nearest:
+  // one; area: every pixel of the footprint). Invalid pixels have none.
+  // Applied by a plain loop that reads one channel in place.
+  struct Tap {
+    int32_t x, y;
+    float w;
+  };
+  std::vector<int32_t> tap_start_;
+  std::vector<Tap> taps_;
+  // kArea: per IPM pixel, segments seg_start_[i] .. seg_start_[i + 1] - 1,
+  // each the average of one image row between columns u0 and u1 (a box
+  // along the row, read from the row's prefix sums at Apply), weighted by
+  // w / (u1 - u0). Sub-rows of the footprint between two image rows give
+  // two segments. Rows seg_row0_ .. seg_row1_ and columns up to seg_col1_
+  // are read.
+  struct Segment {
+    int32_t row;
+    float u0, u1;
+    float w;
+  };
+  std::vector<int32_t> seg_start_;
+  std::vector<Segment> segments_;
+  int seg_row0_ = 0, seg_row1_ = -1, seg_col1_ = 0;
   cv::Mat valid_;
   cv::Mat invalid_;
   int valid_count_ = 0;

@@ -4,6 +4,7 @@
 #ifndef LANE_POSTPROCESS_H_
 #define LANE_POSTPROCESS_H_
 
+#include <algorithm>
 #include <opencv2/core.hpp>
 #include <optional>
 
@@ -34,6 +35,23 @@ struct PostprocessOptions {
   // positives (section IV).
   double side_offset_m = 0.3;
   double min_side_contrast = 0.015;
+  // Vertical objects (lane/vehicle_check.h): a top-view spline closer in
+  // direction to the ray from the camera's foot point through it than to the
+  // road's direction is dropped, where the two directions differ by at
+  // least this many degrees (twice the ~3 deg by which yaw and curvature
+  // tilt markings from the road's axis). 0 disables the test.
+  // The road's direction is the frame's median candidate direction; a
+  // candidate that bends by more than max_ray_bend_m from its straight line
+  // is a marking on a curve, not a (straight) ray.
+  double min_ray_angle_deg = 6.0;
+  // Bright neighbours (lane/vehicle_check.h): a top-view spline with a side,
+  // side_offset_m across, brighter than the road by more than half its own
+  // contrast along more than this fraction of its length is dropped: a
+  // marking has road on both sides. >= 1 disables it (the default: on the
+  // dev clips it cost more markings, beside double lines and bright curbs,
+  // than it removed false positives; docs/accuracy-log.md).
+  double max_bright_side_fraction = 1.0;
+  double max_ray_bend_m = 0.15;
   // Extension in the top view: tangent step and normal half-search, IPM px.
   double ipm_extend_step_px = 5.0;
   double ipm_normal_search_px = 10.0;
@@ -65,6 +83,44 @@ struct PostprocessOptions {
   // camera, whose horizon is at row 171 and ROI bottom at 350).
   double extend_min_row = -1;
   double extend_max_row = -1;
+  // Extension in the image along the road's geometry (lane/image_extension.h)
+  // instead of the reference's walk (stop at the first step without a
+  // profile peak): each step looks for a bright bar as wide as a marking
+  // across a normal `extend_search_m` metres long on the road (so the window
+  // follows the perspective: the reference's fixed 20 px are +-1.4 m at the
+  // Caltech camera's far rows and +-0.2 m at its near rows), walks through
+  // up to `extend_gap_m` metres without one (the gap between two dashes: 6
+  // to 9 m on US and Chinese roads; beyond that the lane is not followed),
+  // and, with `extend_to_max_row`, extrapolates the final straight segment
+  // down to `extend_max_row` (the road continues straight under the last
+  // evidence; lane labels such as CULane's run to the image bottom).
+  bool extend_geometric = true;
+  // Localisation in the image along the road's geometry (LocalizeInImage)
+  // instead of with the fixed pixel values above: the normal is searched
+  // +-localize_search_m on the road and the profile smoothed with
+  // localize_sigma_m on the road (at least profile_sigma_px), so the two
+  // lines of a double line merge into one peak at their centre (0.1 m: a
+  // marking's width; the lines of a double line are 10-15 cm apart).
+  bool localize_geometric = true;
+  double localize_search_m = 0.4;
+  double localize_sigma_m = 0.1;
+  double extend_search_m = 0.4;
+  double extend_gap_m = 6.0;
+  bool extend_to_max_row = false;
+  // The final image spline is cut to the part inside the image and on image
+  // content (not black: outside a lens's image circle). A top-view spline
+  // spans the whole top view, which extends beyond the image's sides where
+  // the ground rectangle does; a lane stops where the image does.
+  bool clip_to_image = true;
+  // The final image spline, mapped to the ground, must run within
+  // ipm_max_angle_from_vertical_deg of the road's direction, as the top-view
+  // spline had to (paper II-E.3: geometric checks after each step).
+  bool check_ground_angle = true;
+  // Colour (lane/marking_check.h): an image spline whose median redness
+  // (R - G) / R exceeds this is dropped. Yellow paint reads ~0.15, faded
+  // orange ~0.3, red curbs, red cars and tail lights 0.5-0.7; 0.4 lies
+  // between. >= 1 disables it. Grey frames are not checked.
+  double max_redness = 0.4;
   // A final image spline shorter than this (pixels at 640 width) is replaced
   // by the line.
   double min_image_length_px = 40.0;
@@ -77,16 +133,27 @@ struct PostprocessOptions {
 };
 
 // One channel of an image without copying it out: a CV_8UC1 or CV_32FC1
-// image (channel 0), or channel `channel` of a CV_8UC3 image.
+// image (channel 0), or channel `channel` of a CV_8UC3 image, or with
+// `channel2` >= 0 the per-pixel minimum of two channels of a CV_8UC3 image,
+// or with `channel2` == kGrayOfBgr the grey (BT.601, as cv::COLOR_BGR2GRAY)
+// of a CV_8UC3 BGR image.
+inline constexpr int kGrayOfBgr = -2;
+inline int GrayOfBgr(const uint8_t* p) {
+  return (p[0] * 1868 + p[1] * 9617 + p[2] * 4899 + 8192) >> 14;
+}
 struct ChannelView {
-  ChannelView(const cv::Mat& m, int c = 0) : image(m), channel(c) {}  // NOLINT: implicit
+  ChannelView(const cv::Mat& m, int c = 0, int c2 = -1)  // NOLINT: implicit
+      : image(m), channel(c), channel2(c2) {}
   cv::Mat image;
   int channel = 0;
+  int channel2 = -1;
   int cols() const { return image.cols; }
   int rows() const { return image.rows; }
   float At(int x, int y) const {
     if (image.depth() == CV_32F) return image.ptr<float>(y)[x];
-    return image.ptr<uint8_t>(y)[x * image.channels() + channel];
+    const uint8_t* p = image.ptr<uint8_t>(y) + x * image.channels();
+    if (channel2 == kGrayOfBgr) return static_cast<float>(GrayOfBgr(p));
+    return channel2 >= 0 ? std::min(p[channel], p[channel2]) : p[channel];
   }
   // Bilinear sample; 0 outside the image.
   float Bilinear(double x, double y) const;

@@ -14,6 +14,17 @@ struct ThresholdOptions {
   // Quantile of the (non-negative) filter response below which everything is
   // zeroed. Paper: 97.5 %. Reference 2-lanes mode: 98.5 %.
   double quantile = 0.975;
+  // Transverse structures (not in the paper): crosswalks, stop lines and the
+  // horizontal edges of vehicles (bumpers, rear windows, the shadow under a
+  // car) fill whole rows of the top view with kept pixels. Lane markings run
+  // along the road, at most one per lane width: a 15 cm marking keeps about
+  // 0.25 m of a row per 3.5 m lane, 7 %. Rows whose kept pixels exceed this
+  // fraction of the searched width (the valid top view; in 2-lanes mode the
+  // band searched) are zeroed, with `transverse_margin_m` of rows either
+  // side along the road (the filter smooths over +-1 m). 0.1: above the
+  // markings' 7 %, far below a crosswalk's 30-50 %. >= 1 disables it.
+  double transverse_max_fraction = 0.1;
+  double transverse_margin_m = 1.0;
 
   absl::Status Validate() const;
 };
@@ -24,6 +35,13 @@ float Quantile(std::vector<float>& values, double q);
 // In place on a CV_32F image: negatives -> 0, then everything below the
 // q-quantile of all pixels -> 0. Returns the threshold used.
 float ApplyQuantileThreshold(cv::Mat& image, double q);
+
+// The transverse rows of ThresholdOptions::transverse_max_fraction: zeroes
+// rows of the thresholded `image` (and `margin_rows` either side) where the
+// fraction of non-zero pixels over the row's valid pixels (`valid`, CV_8U)
+// exceeds `max_fraction`. Returns the number of rows found.
+int SuppressTransverseRows(cv::Mat& image, const cv::Mat& valid, double max_fraction,
+                           int margin_rows);
 
 }  // namespace lane
 

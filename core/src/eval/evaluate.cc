@@ -22,17 +22,42 @@ std::vector<Curve> Curves(const std::vector<DetectedLane>& lanes) {
   return out;
 }
 
+// Scores one filled-in outcome and adds it to `counts`.
+void Tally(const LabelledFrame& frame, const EvalOptions& options, FrameOutcome& outcome,
+           ClipCounts& counts) {
+  if (!outcome.error.empty()) {
+    ++counts.failed_frames;
+    outcome.lanes.clear();
+  }
+  if (frame.labelled) {
+    outcome.score =
+        ScoreFrame(Curves(outcome.lanes), frame, outcome.width, outcome.height, options);
+    ++counts.frames;
+    counts.missing_results += outcome.missing_result ? 1 : 0;
+    counts.paper.Add(outcome.score->paper);
+    counts.culane.Add(outcome.score->culane);
+  } else {
+    ++counts.unlabelled_frames;
+  }
+}
+
+EvalReport EmptyReport(const Dataset& dataset, const EvalOptions& options) {
+  EvalReport report;
+  report.dataset = dataset.root;
+  report.format = dataset.format;
+  report.options = options;
+  report.warnings = dataset.warnings;
+  report.total.clip = "Total";
+  return report;
+}
+
 // Runs `fill` on every frame, scores it, hands it to `on_frame` and counts
 // it. `fill(frame, outcome)` sets the outcome's size, lanes, error, image
 // and detection.
 template <class Fill>
 EvalReport Run(const Dataset& dataset, const EvalOptions& options, const FrameCallback& on_frame,
                Fill fill) {
-  EvalReport report;
-  report.dataset = dataset.root;
-  report.format = dataset.format;
-  report.options = options;
-  report.warnings = dataset.warnings;
+  EvalReport report = EmptyReport(dataset, options);
   const int total = dataset.FrameCount();
   int index = 0;
   for (const Clip& clip : dataset.clips) {
@@ -45,20 +70,7 @@ EvalReport Run(const Dataset& dataset, const EvalOptions& options, const FrameCa
       outcome.index = index++;
       outcome.total = total;
       fill(frame, outcome);
-      if (!outcome.error.empty()) {
-        ++counts.failed_frames;
-        outcome.lanes.clear();
-      }
-      if (frame.labelled) {
-        outcome.score =
-            ScoreFrame(Curves(outcome.lanes), frame, outcome.width, outcome.height, options);
-        ++counts.frames;
-        counts.missing_results += outcome.missing_result ? 1 : 0;
-        counts.paper.Add(outcome.score->paper);
-        counts.culane.Add(outcome.score->culane);
-      } else {
-        ++counts.unlabelled_frames;
-      }
+      Tally(frame, options, outcome, counts);
       if (on_frame) on_frame(outcome);
     }
     report.total += counts;
@@ -121,49 +133,94 @@ FrameScore ScoreFrame(const std::vector<Curve>& detections, const LabelledFrame&
   return score;
 }
 
+absl::StatusOr<std::vector<EvalReport>> EvaluateDetectors(
+    const Dataset& dataset, const std::vector<const Detector*>& detectors,
+    const EvalOptions& options, const FrameCallback& on_frame) {
+  if (absl::Status s = options.Validate(); !s.ok()) return s;
+  if (detectors.empty()) return absl::InvalidArgumentError("no detector to evaluate");
+  for (const Detector* d : detectors) {
+    const CameraModel& a = d->ipm().camera();
+    const CameraModel& b = detectors.front()->ipm().camera();
+    if (a.image_width != b.image_width || a.image_height != b.image_height) {
+      return absl::InvalidArgumentError("the detectors evaluated together must share a frame size");
+    }
+  }
+  const CameraModel& camera = detectors.front()->ipm().camera();
+  std::vector<EvalReport> reports(detectors.size(), EmptyReport(dataset, options));
+  const int total = dataset.FrameCount();
+  int index = 0;
+  for (const Clip& clip : dataset.clips) {
+    std::vector<ClipCounts> counts(detectors.size());
+    for (ClipCounts& c : counts) c.clip = clip.name;
+    for (const LabelledFrame& frame : clip.frames) {
+      // Decoded once, detected by each detector.
+      cv::Mat image;
+      std::string read_error;
+      const auto start = std::chrono::steady_clock::now();
+      try {
+        image = cv::imread(frame.image_path, cv::IMREAD_COLOR);
+      } catch (const cv::Exception&) {
+        image.release();
+      }
+      const double decode_ms = MillisecondsSince(start);
+      if (image.empty()) {
+        read_error = absl::StrCat("cannot read image ", frame.image_path);
+      } else if (image.cols != camera.image_width || image.rows != camera.image_height) {
+        read_error = absl::StrCat("frame is ", image.cols, "x", image.rows,
+                                  " but the camera expects ", camera.image_width, "x",
+                                  camera.image_height, " (camera.image_width/image_height)");
+      }
+      for (size_t d = 0; d < detectors.size(); ++d) {
+        FrameOutcome outcome;
+        outcome.clip = &clip;
+        outcome.frame = &frame;
+        outcome.index = index;
+        outcome.total = total;
+        outcome.width = camera.image_width;
+        outcome.height = camera.image_height;
+        outcome.image = image;
+        outcome.decode_ms = decode_ms;
+        outcome.error = read_error;
+        std::optional<Detection> detection;
+        if (read_error.empty()) {
+          try {
+            absl::StatusOr<Detection> result = detectors[d]->Detect(image);
+            if (result.ok()) {
+              detection = std::move(*result);
+            } else {
+              outcome.error = std::string(result.status().message());
+            }
+          } catch (const std::exception& e) {
+            outcome.error = absl::StrCat("detector error: ", e.what());
+          }
+        }
+        if (detection) {
+          outcome.detection = &*detection;
+          for (const Lane& lane : detection->lanes) {
+            outcome.lanes.push_back({Curve::FromBezier(lane.image), lane.score});
+          }
+        }
+        Tally(frame, options, outcome, counts[d]);
+        if (d == 0 && on_frame) on_frame(outcome);
+      }
+      ++index;
+    }
+    for (size_t d = 0; d < detectors.size(); ++d) {
+      reports[d].total += counts[d];
+      reports[d].clips.push_back(std::move(counts[d]));
+      reports[d].total.clip = "Total";
+    }
+  }
+  return reports;
+}
+
 absl::StatusOr<EvalReport> EvaluateDetector(const Dataset& dataset, const Detector& detector,
                                             const EvalOptions& options,
                                             const FrameCallback& on_frame) {
-  if (absl::Status s = options.Validate(); !s.ok()) return s;
-  const CameraModel& camera = detector.ipm().camera();
-  std::optional<Detection> detection;
-  return Run(dataset, options, on_frame, [&](const LabelledFrame& frame, FrameOutcome& outcome) {
-    outcome.width = camera.image_width;
-    outcome.height = camera.image_height;
-    detection.reset();
-    const auto start = std::chrono::steady_clock::now();
-    try {
-      outcome.image = cv::imread(frame.image_path, cv::IMREAD_COLOR);
-    } catch (const cv::Exception&) {
-      outcome.image.release();
-    }
-    outcome.decode_ms = MillisecondsSince(start);
-    if (outcome.image.empty()) {
-      outcome.error = absl::StrCat("cannot read image ", frame.image_path);
-      return;
-    }
-    if (outcome.image.cols != camera.image_width || outcome.image.rows != camera.image_height) {
-      outcome.error = absl::StrCat("frame is ", outcome.image.cols, "x", outcome.image.rows,
-                                   " but the camera expects ", camera.image_width, "x",
-                                   camera.image_height, " (camera.image_width/image_height)");
-      return;
-    }
-    try {
-      absl::StatusOr<Detection> result = detector.Detect(outcome.image);
-      if (!result.ok()) {
-        outcome.error = std::string(result.status().message());
-        return;
-      }
-      detection = std::move(*result);
-    } catch (const std::exception& e) {
-      outcome.error = absl::StrCat("detector error: ", e.what());
-      return;
-    }
-    outcome.detection = &*detection;
-    for (const Lane& lane : detection->lanes) {
-      outcome.lanes.push_back({Curve::FromBezier(lane.image), lane.score});
-    }
-  });
+  absl::StatusOr<std::vector<EvalReport>> reports =
+      EvaluateDetectors(dataset, {&detector}, options, on_frame);
+  if (!reports.ok()) return reports.status();
+  return std::move(reports->front());
 }
 
 absl::StatusOr<EvalReport> EvaluateResults(const Dataset& dataset,

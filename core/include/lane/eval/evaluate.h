@@ -90,6 +90,14 @@ absl::StatusOr<EvalReport> EvaluateDetector(const Dataset& dataset, const Detect
                                             const EvalOptions& options,
                                             const FrameCallback& on_frame = {});
 
+// The same for several detectors at once (e.g. one per RANSAC seed): each
+// frame is decoded once and detected by every detector, which must share the
+// camera's frame size. One report per detector, in order. `on_frame` sees
+// the first detector's outcomes only.
+absl::StatusOr<std::vector<EvalReport>> EvaluateDetectors(
+    const Dataset& dataset, const std::vector<const Detector*>& detectors,
+    const EvalOptions& options, const FrameCallback& on_frame = {});
+
 // Scores the records of a results file. Records with an index (original
 // .txt format) are the data set's frames in order; others are matched by
 // name: the frame's name, else a unique trailing part of it ("00090.jpg"
