@@ -26,7 +26,7 @@ run() {  # name dataset config mode
   fi
   mkdir -p "$OUT/$name"
   "$LANE" eval "$DATA/$dataset" --config "$config" --mode "$mode" --seeds "$SEEDS" \
-    --out "$OUT/$name" --no-progress >/dev/null 2>"$OUT/$name/stderr.txt"
+    --output "$OUT/$name" --no-progress >/dev/null 2>"$OUT/$name/stderr.txt"
   printf '%-16s %s\n' "$name" "$(grep 'over .* seeds' "$OUT/$name/stderr.txt" | sed 's/^lane eval: //')"
 }
 
