@@ -139,6 +139,28 @@ std::vector<double> NearestPointDistances(const std::vector<Eigen::Vector2d>& fr
   return out;
 }
 
+double MeanNearestDistance(const Bezier& a, const Bezier& b) {
+  const bool a_shorter = a.Length() < b.Length();
+  const std::vector<double> d =
+      NearestPointDistances((a_shorter ? a : b).Sample(21), (a_shorter ? b : a).Sample(101));
+  double sum = 0;
+  for (const double v : d) sum += v;
+  return sum / d.size();
+}
+
+double AngleFromVerticalDeg(const Eigen::Vector2d& d) {
+  constexpr double kRadToDeg = 180.0 / M_PI;
+  return std::atan2(std::abs(d.x()), std::abs(d.y())) * kRadToDeg;
+}
+
+Bezier TopDown(Bezier s) {
+  if (s.p[0].y() > s.p[3].y()) {
+    std::swap(s.p[0], s.p[3]);
+    std::swap(s.p[1], s.p[2]);
+  }
+  return s;
+}
+
 double CurveDistance(const Bezier& a, const Bezier& b, int n) {
   const auto pa = a.Sample(n);
   const auto pb = b.Sample(n);

@@ -18,61 +18,6 @@ double MsSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-constexpr double kRadToDeg = 180.0 / M_PI;
-
-// Angle of the chord P0->P3 from vertical, degrees.
-double AngleFromVerticalDeg(const Bezier& s) {
-  const Eigen::Vector2d d = s.p[3] - s.p[0];
-  return std::atan2(std::abs(d.x()), std::abs(d.y())) * kRadToDeg;
-}
-
-// Orders the control points so that P0 is the upper (farther) end.
-Bezier TopDown(Bezier s) {
-  if (s.p[0].y() > s.p[3].y()) {
-    std::swap(s.p[0], s.p[3]);
-    std::swap(s.p[1], s.p[2]);
-  }
-  return s;
-}
-
-// Least-squares Bezier through samples of `s` mapped by `f`.
-template <typename Fn>
-std::optional<Bezier> MapSpline(const Bezier& s, int n, Fn f) {
-  std::vector<Eigen::Vector2d> pts;
-  pts.reserve(n);
-  for (const auto& p : s.Sample(n)) {
-    const Eigen::Vector2d q = f(p);
-    if (q.allFinite()) pts.push_back(q);
-  }
-  return FitBezier(pts);
-}
-
-// Mean distance from samples of the shorter spline to the nearest samples of
-// the other: small when one lies along the other.
-double MeanNearestDistance(const Bezier& a, const Bezier& b) {
-  const bool a_shorter = a.Length() < b.Length();
-  const auto from = (a_shorter ? a : b).Sample(21);
-  const auto to = (a_shorter ? b : a).Sample(101);
-  double sum = 0;
-  for (const auto& p : from) {
-    double best = 1e300;
-    for (const auto& q : to) best = std::min(best, (p - q).squaredNorm());
-    sum += std::sqrt(best);
-  }
-  return sum / from.size();
-}
-
-bool PassesShapeChecks(const Bezier& s, double min_length, double min_straightness) {
-  return s.Length() >= min_length && s.Straightness() >= min_straightness;
-}
-
-struct Candidate {
-  IpmLine line;
-  Bezier ipm;    // spline in the top view
-  Bezier image;  // spline in the image
-  double score = 0;
-};
-
 }  // namespace
 
 const char* ModeName(Mode mode) { return mode == Mode::kTwo ? "two" : "all"; }
@@ -106,20 +51,6 @@ std::optional<Channel> ParseChannel(const std::string& name) {
   if (name == "gray" || name == "grey") return Channel::kGray;
   if (name == "min_rg") return Channel::kMinRedGreen;
   return std::nullopt;
-}
-
-absl::Status TwoLaneOptions::Validate() const {
-  if (!(search_half_width_m > 0 && search_half_width_m < 20)) {
-    return absl::InvalidArgumentError("two_lanes.search_half_width_m must lie in (0, 20) metres");
-  }
-  if (!(lane_width_m > 0 && lane_width_m < 20 && lane_width_sigma_m > 0)) {
-    return absl::InvalidArgumentError(
-        "two_lanes.lane_width_m must lie in (0, 20) metres and lane_width_sigma_m be > 0");
-  }
-  if (!(min_pair_score >= 0 && min_pair_score <= 1)) {
-    return absl::InvalidArgumentError("two_lanes.min_pair_score must lie in [0, 1]");
-  }
-  return absl::OkStatus();
 }
 
 DetectorOptions DetectorOptions::ForMode(Mode mode) {
@@ -211,7 +142,7 @@ ChannelView Detector::ViewChannel(const cv::Mat& frame) const {
   return ChannelView(ExtractChannel(frame));
 }
 
-absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
+absl::Status Detector::CheckFrame(const cv::Mat& frame) const {
   const CameraModel& cam = ipm_.camera();
   if (frame.empty()) return absl::InvalidArgumentError("empty frame");
   if (frame.depth() != CV_8U || (frame.channels() != 3 && frame.channels() != 1)) {
@@ -224,225 +155,112 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
                                                    " but the calibration is for ", cam.image_width,
                                                    "x", cam.image_height));
   }
-  const DetectorOptions& opt = options_;
-  const PostprocessOptions& pp = opt.postprocess;
-  Detection det;
-  const auto t_start = Clock::now();
-  std::mt19937_64 rng(opt.seed);
+  return absl::OkStatus();
+}
 
-  // 1. Channel and top view, mean removed.
-  auto t = Clock::now();
-  const ChannelView channel = ViewChannel(frame);
+cv::Mat Detector::TopView(const ChannelView& channel, cv::Mat* void_mask) const {
   cv::Mat ipm = ipm_.Apply(channel.image, channel.channel, channel.channel2);
-  cv::Mat void_mask;  // empty: no void handling beyond the ROI's
-  if (opt.filter.void_level >= 0) {
-    void_mask = VoidMask(ipm, ipm_.invalid_mask(), opt.filter.void_level);
-    const double content_mean = cv::mean(ipm, ~void_mask)[0];
-    ipm.setTo(content_mean, void_mask);
+  if (options_.filter.void_level >= 0) {
+    *void_mask = VoidMask(ipm, ipm_.invalid_mask(), options_.filter.void_level);
+    const double content_mean = cv::mean(ipm, ~*void_mask)[0];
+    ipm.setTo(content_mean, *void_mask);
     ipm -= content_mean;
   } else {
     ipm -= cv::mean(ipm)[0];
   }
-  det.timings.ipm_ms = MsSince(t);
+  return ipm;
+}
 
-  // 2. Filter.
-  t = Clock::now();
-  cv::Mat filtered = FilterTopView(ipm, kernels_, opt.filter);
+cv::Mat Detector::Filter(const cv::Mat& top_view, const cv::Mat& void_mask) const {
+  const FilterOptions& fo = options_.filter;
+  cv::Mat filtered = FilterTopView(top_view, kernels_, fo);
   if (void_mask.empty()) {
     filtered.setTo(0, ipm_.invalid_mask());
   } else {
-    filtered.setTo(0, GrowMask(void_mask, kernels_.kx.rows / 2, opt.filter.void_margin_y_px));
+    filtered.setTo(0, GrowMask(void_mask, kernels_.kx.rows / 2, fo.void_margin_y_px));
   }
-  if (opt.filter.bar_side_m > 0) {
-    SuppressSteps(ipm, filtered, opt.filter.bar_side_m / ipm_.metres_per_px_x(),
+  if (fo.bar_side_m > 0) {
+    SuppressSteps(top_view, filtered, fo.bar_side_m / ipm_.metres_per_px_x(),
                   static_cast<int>(std::lround(kernels_.sigma_y_px)));
   }
-  det.timings.filter_ms = MsSince(t);
+  return filtered;
+}
 
-  // 3. Threshold.
-  t = Clock::now();
+cv::Mat Detector::Threshold(const cv::Mat& filtered, float* threshold) const {
   cv::Mat thresholded = filtered.clone();
-  const float threshold = ApplyQuantileThreshold(thresholded, opt.threshold.quantile);
-  const double cam_col = ipm_.GroundToIpm(Eigen::Vector2d(0, ipm_.y_min())).x();
+  *threshold = ApplyQuantileThreshold(thresholded, options_.threshold.quantile);
   cv::Mat searched = ipm_.valid_mask();  // the columns searched for lanes
-  if (opt.mode == Mode::kTwo) {
+  if (options_.mode == Mode::kTwo) {
     // Only the band around the camera can hold the ego lane's boundaries.
-    const double half = opt.two_lanes.search_half_width_m / ipm_.metres_per_px_x();
-    const int c0 = std::clamp(static_cast<int>(std::ceil(cam_col - half)), 0, thresholded.cols);
-    const int c1 =
-        std::clamp(static_cast<int>(std::floor(cam_col + half)) + 1, 0, thresholded.cols);
-    if (c0 > 0) thresholded.colRange(0, c0).setTo(0);
-    if (c1 < thresholded.cols) thresholded.colRange(c1, thresholded.cols).setTo(0);
+    const ColumnBand band =
+        EgoBand(CameraColumn(), ipm_.metres_per_px_x(), thresholded.cols, options_.two_lanes);
+    KeepBand(band, thresholded);
     searched = ipm_.valid_mask().clone();
-    if (c0 > 0) searched.colRange(0, c0).setTo(0);
-    if (c1 < searched.cols) searched.colRange(c1, searched.cols).setTo(0);
+    KeepBand(band, searched);
   }
-  if (opt.threshold.transverse_max_fraction < 1) {
-    SuppressTransverseRows(
-        thresholded, searched, opt.threshold.transverse_max_fraction,
-        static_cast<int>(std::lround(opt.threshold.transverse_margin_m / ipm_.metres_per_px_y())));
+  if (options_.threshold.transverse_max_fraction < 1) {
+    SuppressTransverseRows(thresholded, searched, options_.threshold.transverse_max_fraction,
+                           static_cast<int>(std::lround(options_.threshold.transverse_margin_m /
+                                                        ipm_.metres_per_px_y())));
   }
-  det.timings.threshold_ms = MsSince(t);
+  return thresholded;
+}
 
-  // 4-5. Column-sum Hough, then RANSAC lines.
-  t = Clock::now();
+double Detector::CameraColumn() const {
+  return ipm_.GroundToIpm(Eigen::Vector2d(0, ipm_.y_min())).x();
+}
+
+std::vector<IpmLine> Detector::FindLines(const cv::Mat& thresholded, std::mt19937_64& rng,
+                                         std::vector<ColumnPeak>* peaks) const {
+  const DetectorOptions& opt = options_;
   const double mpp_x = ipm_.metres_per_px_x();
-  std::vector<ColumnPeak> peaks =
-      FindColumnPeaks(ColumnProfile(thresholded, opt.hough.smooth_sigma_px), opt.hough.min_peak,
-                      opt.hough.group_distance_m / mpp_x);
-  if (opt.mode == Mode::kTwo && peaks.size() > 1) {
-    // The best pair straddling the camera whose spacing looks like one lane.
-    double best = -1;
-    std::vector<ColumnPeak> chosen;
-    for (size_t i = 0; i < peaks.size(); ++i) {
-      for (size_t j = i + 1; j < peaks.size(); ++j) {
-        if (!(peaks[i].x < cam_col && peaks[j].x > cam_col)) continue;
-        const double d = (peaks[j].x - peaks[i].x) * mpp_x - opt.two_lanes.lane_width_m;
-        const double s = opt.two_lanes.lane_width_sigma_m;
-        const double width_score = std::exp(-d * d / (2 * s * s));
-        if (width_score < opt.two_lanes.min_pair_score) continue;
-        const double score = width_score * (peaks[i].value + peaks[j].value);
-        if (score > best) {
-          best = score;
-          chosen = {peaks[i], peaks[j]};
-        }
-      }
-    }
-    if (chosen.empty()) {
-      chosen = {*std::max_element(
-          peaks.begin(), peaks.end(),
-          [](const ColumnPeak& a, const ColumnPeak& b) { return a.value < b.value; })};
-    }
-    peaks = chosen;
-  }
+  *peaks = FindColumnPeaks(ColumnProfile(thresholded, opt.hough.smooth_sigma_px),
+                           opt.hough.min_peak, opt.hough.group_distance_m / mpp_x);
+  if (opt.mode == Mode::kTwo) *peaks = SelectEgoPair(*peaks, CameraColumn(), mpp_x, opt.two_lanes);
   std::vector<IpmLine> lines;
-  for (const auto& peak : peaks) {
+  for (const auto& peak : *peaks) {
     if (auto line =
             FitLineInWindow(thresholded, peak.x, opt.line_ransac.window_half_width_m / mpp_x,
                             opt.line_ransac, rng)) {
       lines.push_back(*line);
     }
   }
-  det.timings.lines_ms = MsSince(t);
+  return lines;
+}
 
-  // 6. RANSAC splines around each line; near-duplicates keep the straighter.
-  t = Clock::now();
-  std::vector<Candidate> cands;
+std::vector<SplineCandidate> Detector::FitSplines(const cv::Mat& thresholded,
+                                                  const std::vector<IpmLine>& lines,
+                                                  std::mt19937_64& rng) const {
+  const SplineRansacOptions& so = options_.spline_ransac;
+  std::vector<SplineCandidate> candidates;
   for (const auto& line : lines) {
-    auto fit = FitSplineAroundLine(thresholded, line, opt.spline_ransac.window_half_width_m / mpp_x,
-                                   opt.spline_ransac, rng);
+    auto fit = FitSplineAroundLine(thresholded, line,
+                                   so.window_half_width_m / ipm_.metres_per_px_x(), so, rng);
     if (!fit) continue;
-    cands.push_back({line, TopDown(fit->spline), Bezier{}, fit->score});
+    candidates.push_back({line, TopDown(fit->spline), Bezier{}, fit->score});
   }
-  std::vector<Candidate> unique;
-  std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) {
-    return a.ipm.Straightness() > b.ipm.Straightness();
-  });
-  for (const auto& c : cands) {
+  // Near-duplicates keep the straighter.
+  std::sort(candidates.begin(), candidates.end(),
+            [](const SplineCandidate& a, const SplineCandidate& b) {
+              return a.ipm.Straightness() > b.ipm.Straightness();
+            });
+  std::vector<SplineCandidate> unique;
+  for (const auto& c : candidates) {
     bool dup = false;
     for (const auto& u : unique) {
-      dup = dup || MeanNearestDistance(c.ipm, u.ipm) < opt.spline_ransac.merge_distance_px;
+      dup = dup || MeanNearestDistance(c.ipm, u.ipm) < so.merge_distance_px;
     }
     if (!dup) unique.push_back(c);
   }
-  cands = std::move(unique);
-  det.timings.splines_ms = MsSince(t);
+  return unique;
+}
 
-  // 7. Post-processing, first in the top view, then in the image.
-  t = Clock::now();
-  const double ipm_min_len = pp.min_length_fraction * ipm_.height();
-  const double scale = cam.image_width / 640.0;
-  const ExtensionRows rows = ImageExtensionRows(cam, ipm_.roi(), pp);
-  const double min_row = rows.min_row;
-  const double max_row = rows.max_row;
-  std::vector<Candidate> done;
-  std::vector<Bezier> cand_splines;
-  for (const Candidate& c : cands) cand_splines.push_back(c.ipm);
-  const TopViewCheckContext check_context = MakeTopViewCheckContext(cand_splines, ipm, ipm_, pp);
-  for (Candidate c : cands) {
-    if (AngleFromVerticalDeg(c.ipm) > pp.ipm_max_angle_from_vertical_deg) continue;
-    const Bezier ipm_line = Bezier::Line(c.line.top, c.line.bottom);
-    // Top view: localise, check, extend, check.
-    double contrast = 0;
-    if (auto loc = LocalizeSpline(c.ipm, filtered, pp.localize_points, pp.ipm_normal_search_px, 0.0,
-                                  pp.localize_min_cos, &contrast)) {
-      c.ipm = TopDown(*loc);
-    }
-    if (!PassesShapeChecks(c.ipm, ipm_min_len, pp.min_straightness)) c.ipm = ipm_line;
-    if (pp.extend_in_ipm && contrast > 0) {
-      ExtendOptions eo;
-      eo.step_px = pp.ipm_extend_step_px;
-      eo.search_px = pp.ipm_normal_search_px;
-      eo.sigma_px = 0;
-      eo.min_contrast = pp.continuation_threshold * contrast;
-      eo.min_cos_start = pp.extend_min_cos_up;
-      eo.min_cos_end = pp.extend_min_cos_down;
-      c.ipm = TopDown(ExtendSpline(c.ipm, filtered, eo));
-      if (!PassesShapeChecks(c.ipm, ipm_min_len, pp.min_straightness)) c.ipm = ipm_line;
-    }
-    if (AngleFromVerticalDeg(c.ipm) > pp.ipm_max_angle_from_vertical_deg) continue;
-    if (pp.min_side_contrast > 0 &&
-        BarContrast(c.ipm, ipm, pp.side_offset_m / mpp_x) < pp.min_side_contrast) {
-      continue;  // a step (curb, road edge), not a bright marking
-    }
-    if (!PassesTopViewChecks(c.ipm, ipm, ipm_, pp, check_context)) continue;
-
-    // Image: back-project, localise, check, extend, check.
-    auto to_image = [this](const Eigen::Vector2d& p) { return ipm_.IpmToImage(p); };
-    const auto image_line = MapSpline(ipm_line, 4, to_image);
-    auto image = MapSpline(c.ipm, pp.backproject_samples, to_image);
-    if (!image || !image_line) continue;
-    c.image = TopDown(*image);
-    const Bezier fallback = TopDown(*image_line);
-    const double min_len = pp.min_image_length_px * scale;
-    contrast = 0;
-    if (pp.localize_in_image && pp.localize_geometric) {
-      if (auto loc =
-              LocalizeInImage(c.image, channel, cam, pp.localize_points, pp.localize_search_m,
-                              pp.localize_sigma_m, pp.profile_sigma_px * scale,
-                              2 * pp.localize_search_px * scale, pp.localize_min_cos)) {
-        c.image = TopDown(*loc);
-      }
-      if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
-    } else if (pp.localize_in_image) {
-      if (auto loc =
-              LocalizeSpline(c.image, channel, pp.localize_points, pp.localize_search_px * scale,
-                             pp.profile_sigma_px * scale, pp.localize_min_cos, &contrast)) {
-        c.image = TopDown(*loc);
-      }
-      if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
-    }
-    if (pp.extend_in_image && pp.extend_geometric) {
-      c.image = TopDown(ExtendInImage(
-          c.image, channel, cam,
-          ImageExtendOptionsFrom(pp, scale, min_row, max_row, opt.filter.marking_width_m)));
-      if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
-    } else if (pp.extend_in_image && contrast > 0) {
-      ExtendOptions eo;
-      eo.step_px = pp.extend_step_px * scale;
-      eo.search_px = pp.extend_search_px * scale;
-      eo.sigma_px = pp.profile_sigma_px * scale;
-      eo.min_contrast = pp.continuation_threshold * contrast;
-      eo.min_cos_start = pp.extend_min_cos_up;
-      eo.min_cos_end = pp.extend_min_cos_down;
-      eo.min_row = min_row;
-      eo.max_row = max_row;
-      c.image = TopDown(ExtendSpline(c.image, channel, eo));
-      if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
-    }
-    const std::optional<Bezier> finished =
-        FinishImageSpline(c.image, channel, frame, cam, pp, scale);
-    if (!finished) continue;
-    c.image = *finished;
-    bool dup = false;
-    for (const auto& d : done) {
-      dup = dup || MeanNearestDistance(c.image, d.image) <
-                       opt.spline_ransac.merge_distance_px * scale * 2.5;
-    }
-    if (!dup) done.push_back(c);
-  }
-
-  // 8. Every spline in the three frames.
+std::vector<Lane> Detector::ToLanes(const std::vector<SplineCandidate>& done) const {
+  // Post-processing in the image changed the curve (localisation, extension),
+  // so the top-view and ground forms are refitted from the final image
+  // spline, which is the one that is reported and drawn.
+  const CameraModel& cam = ipm_.camera();
+  std::vector<Lane> lanes;
   for (const auto& c : done) {
     Lane lane;
     lane.image = c.image.p;
@@ -454,22 +272,63 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
     lane.ipm = ipm_fit->p;
     lane.ground = ground_fit->p;
     lane.score = c.score;
-    det.lanes.push_back(lane);
+    lanes.push_back(lane);
   }
-  std::sort(det.lanes.begin(), det.lanes.end(),
+  std::sort(lanes.begin(), lanes.end(),
             [](const Lane& a, const Lane& b) { return a.ground[3].x() < b.ground[3].x(); });
-  det.timings.postprocess_ms = MsSince(t);
-  det.timings.total_ms = MsSince(t_start);
+  return lanes;
+}
+
+absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
+  if (absl::Status s = CheckFrame(frame); !s.ok()) return s;
+  const DetectorOptions& opt = options_;
+  Detection det;
+  StageTimings& time = det.timings;
+  const auto t_start = Clock::now();
+  std::mt19937_64 rng(opt.seed);
+  auto t = Clock::now();
+  // Times the stage that just ended into `field`.
+  auto lap = [&t](double& field) {
+    field = MsSince(t);
+    t = Clock::now();
+  };
+
+  // 1. Channel and top view, mean removed.
+  const ChannelView channel = ViewChannel(frame);
+  cv::Mat void_mask;  // empty: no void handling beyond the ROI's
+  const cv::Mat top_view = TopView(channel, &void_mask);
+  lap(time.ipm_ms);
+  // 2. Filter.
+  const cv::Mat filtered = Filter(top_view, void_mask);
+  lap(time.filter_ms);
+  // 3. Threshold (2-lanes: the ego band only).
+  float threshold = 0;
+  const cv::Mat thresholded = Threshold(filtered, &threshold);
+  lap(time.threshold_ms);
+  // 4-5. Column-sum Hough (2-lanes: the ego pair), then RANSAC lines.
+  std::vector<ColumnPeak> peaks;
+  const std::vector<IpmLine> lines = FindLines(thresholded, rng, &peaks);
+  lap(time.lines_ms);
+  // 6. RANSAC splines around each line.
+  const std::vector<SplineCandidate> candidates = FitSplines(thresholded, lines, rng);
+  lap(time.splines_ms);
+  // 7. Post-processing in the top view and the image; 8. the three frames.
+  const PostprocessFrame images{ipm_, top_view, filtered, channel, frame};
+  det.lanes =
+      ToLanes(PostprocessCandidates(candidates, images, opt.postprocess, opt.filter.marking_width_m,
+                                    opt.spline_ransac.merge_distance_px));
+  lap(time.postprocess_ms);
+  time.total_ms = MsSince(t_start);
 
   if (opt.keep_intermediates) {
     Intermediates in;
-    in.ipm = ipm;
+    in.ipm = top_view;
     in.filtered = filtered;
     in.thresholded = thresholded;
     in.threshold = threshold;
     in.peaks = peaks;
     in.lines = lines;
-    for (const auto& c : cands) in.ipm_splines.push_back(c.ipm);
+    for (const auto& c : candidates) in.ipm_splines.push_back(c.ipm);
     det.debug = std::move(in);
   }
   return det;

@@ -114,8 +114,7 @@ bool AlongTheRoad(const CameraModel& camera, const Eigen::Vector2d& a, const Eig
   if (max_deg <= 0) return true;
   const Eigen::Vector2d ga = camera.ImageToGround(a), gb = camera.ImageToGround(b);
   if (!ga.allFinite() || !gb.allFinite() || ga.y() <= 0 || gb.y() <= 0) return false;
-  const Eigen::Vector2d d = gb - ga;
-  return std::atan2(std::abs(d.x()), std::abs(d.y())) * 180.0 / M_PI <= max_deg;
+  return AngleFromVerticalDeg(gb - ga) <= max_deg;
 }
 
 }  // namespace
@@ -124,8 +123,7 @@ double GroundAngleFromRoadDeg(const Bezier& spline, const CameraModel& camera) {
   const Eigen::Vector2d a = camera.ImageToGround(spline.p[0]);
   const Eigen::Vector2d b = camera.ImageToGround(spline.p[3]);
   if (!a.allFinite() || !b.allFinite() || a.y() <= 0 || b.y() <= 0) return 90.0;
-  const Eigen::Vector2d d = b - a;
-  return std::atan2(std::abs(d.x()), std::abs(d.y())) * 180.0 / M_PI;
+  return AngleFromVerticalDeg(b - a);
 }
 
 ExtensionRows ImageExtensionRows(const CameraModel& camera, const Roi& roi,

@@ -3,12 +3,11 @@
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
+#include "lane/bezier.h"
 #include "lane/ransac.h"
 
 namespace lane {
 namespace {
-
-constexpr double kRadToDeg = 180.0 / M_PI;
 
 // A line through `point` with unit `dir`, clipped to rows 0 and rows-1.
 std::optional<IpmLine> MakeIpmLine(const Eigen::Vector2d& point, const Eigen::Vector2d& dir,
@@ -22,8 +21,7 @@ std::optional<IpmLine> MakeIpmLine(const Eigen::Vector2d& point, const Eigen::Ve
 }
 
 double AngleFromVerticalDeg(const IpmLine& line) {
-  const Eigen::Vector2d d = line.bottom - line.top;
-  return std::atan2(std::abs(d.x()), std::abs(d.y())) * kRadToDeg;
+  return lane::AngleFromVerticalDeg(line.bottom - line.top);
 }
 
 // The line through `top` with unit normal n: distance |n . p - n . top|.

@@ -4,6 +4,8 @@
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
+#include "lane/candidate_checks.h"
+#include "lane/image_extension.h"
 
 namespace lane {
 namespace {
@@ -239,6 +241,125 @@ Bezier ExtendSpline(const Bezier& spline, const ChannelView& image, const Extend
   pts.insert(pts.end(), after.begin(), after.end());
   if (auto fit = FitBezier(pts)) return *fit;
   return spline;
+}
+
+namespace {
+
+bool PassesShapeChecks(const Bezier& s, double min_length, double min_straightness) {
+  return s.Length() >= min_length && s.Straightness() >= min_straightness;
+}
+
+// The top view part of one candidate: localise, check, extend, check. False
+// when the candidate is dropped.
+bool PostprocessInTopView(SplineCandidate& c, const PostprocessFrame& f,
+                          const PostprocessOptions& pp, const TopViewCheckContext& context) {
+  const double mpp_x = f.ipm.metres_per_px_x();
+  const double ipm_min_len = pp.min_length_fraction * f.ipm.height();
+  if (ChordAngleFromVerticalDeg(c.ipm) > pp.ipm_max_angle_from_vertical_deg) return false;
+  const Bezier ipm_line = Bezier::Line(c.line.top, c.line.bottom);
+  double contrast = 0;
+  if (auto loc = LocalizeSpline(c.ipm, f.filtered, pp.localize_points, pp.ipm_normal_search_px, 0.0,
+                                pp.localize_min_cos, &contrast)) {
+    c.ipm = TopDown(*loc);
+  }
+  if (!PassesShapeChecks(c.ipm, ipm_min_len, pp.min_straightness)) c.ipm = ipm_line;
+  if (pp.extend_in_ipm && contrast > 0) {
+    ExtendOptions eo;
+    eo.step_px = pp.ipm_extend_step_px;
+    eo.search_px = pp.ipm_normal_search_px;
+    eo.sigma_px = 0;
+    eo.min_contrast = pp.continuation_threshold * contrast;
+    eo.min_cos_start = pp.extend_min_cos_up;
+    eo.min_cos_end = pp.extend_min_cos_down;
+    c.ipm = TopDown(ExtendSpline(c.ipm, f.filtered, eo));
+    if (!PassesShapeChecks(c.ipm, ipm_min_len, pp.min_straightness)) c.ipm = ipm_line;
+  }
+  if (ChordAngleFromVerticalDeg(c.ipm) > pp.ipm_max_angle_from_vertical_deg) return false;
+  if (pp.min_side_contrast > 0 &&
+      BarContrast(c.ipm, f.top_view, pp.side_offset_m / mpp_x) < pp.min_side_contrast) {
+    return false;  // a step (curb, road edge), not a bright marking
+  }
+  return PassesTopViewChecks(c.ipm, f.top_view, f.ipm, pp, context);
+}
+
+// The image part: back-project, localise, check, extend, check, finish. False
+// when the candidate is dropped.
+bool PostprocessInImage(SplineCandidate& c, const PostprocessFrame& f, const PostprocessOptions& pp,
+                        double marking_width_m) {
+  const CameraModel& cam = f.ipm.camera();
+  const double scale = cam.image_width / 640.0;
+  const ExtensionRows rows = ImageExtensionRows(cam, f.ipm.roi(), pp);
+  auto to_image = [&f](const Eigen::Vector2d& p) { return f.ipm.IpmToImage(p); };
+  const auto image_line = MapSpline(Bezier::Line(c.line.top, c.line.bottom), 4, to_image);
+  auto image = MapSpline(c.ipm, pp.backproject_samples, to_image);
+  if (!image || !image_line) return false;
+  c.image = TopDown(*image);
+  const Bezier fallback = TopDown(*image_line);
+  const double min_len = pp.min_image_length_px * scale;
+  double contrast = 0;
+  if (pp.localize_in_image && pp.localize_geometric) {
+    if (auto loc = LocalizeInImage(
+            c.image, f.channel, cam, pp.localize_points, pp.localize_search_m, pp.localize_sigma_m,
+            pp.profile_sigma_px * scale, 2 * pp.localize_search_px * scale, pp.localize_min_cos)) {
+      c.image = TopDown(*loc);
+    }
+    if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
+  } else if (pp.localize_in_image) {
+    if (auto loc =
+            LocalizeSpline(c.image, f.channel, pp.localize_points, pp.localize_search_px * scale,
+                           pp.profile_sigma_px * scale, pp.localize_min_cos, &contrast)) {
+      c.image = TopDown(*loc);
+    }
+    if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
+  }
+  if (pp.extend_in_image && pp.extend_geometric) {
+    c.image = TopDown(ExtendInImage(
+        c.image, f.channel, cam,
+        ImageExtendOptionsFrom(pp, scale, rows.min_row, rows.max_row, marking_width_m)));
+    if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
+  } else if (pp.extend_in_image && contrast > 0) {
+    ExtendOptions eo;
+    eo.step_px = pp.extend_step_px * scale;
+    eo.search_px = pp.extend_search_px * scale;
+    eo.sigma_px = pp.profile_sigma_px * scale;
+    eo.min_contrast = pp.continuation_threshold * contrast;
+    eo.min_cos_start = pp.extend_min_cos_up;
+    eo.min_cos_end = pp.extend_min_cos_down;
+    eo.min_row = rows.min_row;
+    eo.max_row = rows.max_row;
+    c.image = TopDown(ExtendSpline(c.image, f.channel, eo));
+    if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
+  }
+  const std::optional<Bezier> finished =
+      FinishImageSpline(c.image, f.channel, f.frame, cam, pp, scale);
+  if (!finished) return false;
+  c.image = *finished;
+  return true;
+}
+
+}  // namespace
+
+std::vector<SplineCandidate> PostprocessCandidates(const std::vector<SplineCandidate>& candidates,
+                                                   const PostprocessFrame& frame,
+                                                   const PostprocessOptions& options,
+                                                   double marking_width_m,
+                                                   double merge_distance_px) {
+  std::vector<Bezier> ipm_splines;
+  for (const SplineCandidate& c : candidates) ipm_splines.push_back(c.ipm);
+  const TopViewCheckContext context =
+      MakeTopViewCheckContext(ipm_splines, frame.top_view, frame.ipm, options);
+  const double scale = frame.ipm.camera().image_width / 640.0;
+  std::vector<SplineCandidate> done;
+  for (SplineCandidate c : candidates) {
+    if (!PostprocessInTopView(c, frame, options, context)) continue;
+    if (!PostprocessInImage(c, frame, options, marking_width_m)) continue;
+    bool dup = false;
+    for (const auto& d : done) {
+      dup = dup || MeanNearestDistance(c.image, d.image) < merge_distance_px * scale * 2.5;
+    }
+    if (!dup) done.push_back(c);
+  }
+  return done;
 }
 
 }  // namespace lane

@@ -41,6 +41,37 @@ std::optional<Bezier> FitBezier(const std::vector<Eigen::Vector2d>& pts);
 std::vector<double> NearestPointDistances(const std::vector<Eigen::Vector2d>& from,
                                           const std::vector<Eigen::Vector2d>& to);
 
+// Mean distance from 21 samples of the shorter curve to the nearest of 101
+// samples of the other: small when one lies along the other (the detector's
+// duplicate test).
+double MeanNearestDistance(const Bezier& a, const Bezier& b);
+
+// Angle of the direction `d` from the vertical (an image or top-view column),
+// degrees in [0, 90]; the one angle every direction check uses.
+double AngleFromVerticalDeg(const Eigen::Vector2d& d);
+// The same for the chord P0 -> P3.
+inline double ChordAngleFromVerticalDeg(const Bezier& s) {
+  return AngleFromVerticalDeg(s.p[3] - s.p[0]);
+}
+
+// The control points reordered, if needed, so that P0 is the upper (in the
+// top view: farther) end.
+Bezier TopDown(Bezier s);
+
+// Least-squares Bezier through `n` samples of `s` mapped by `f` (samples that
+// map to non-finite points are dropped): a spline carried into another frame
+// (top view, image, ground).
+template <typename Fn>
+std::optional<Bezier> MapSpline(const Bezier& s, int n, Fn f) {
+  std::vector<Eigen::Vector2d> pts;
+  pts.reserve(n);
+  for (const auto& p : s.Sample(n)) {
+    const Eigen::Vector2d q = f(p);
+    if (q.allFinite()) pts.push_back(q);
+  }
+  return FitBezier(pts);
+}
+
 // Max over samples of one curve of the distance to the nearest sample of the
 // other, both ways (symmetric Hausdorff on n samples each).
 double CurveDistance(const Bezier& a, const Bezier& b, int n = 101);

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,7 @@
 #include "lane/postprocess.h"
 #include "lane/spline_fit.h"
 #include "lane/threshold.h"
+#include "lane/two_lanes.h"
 
 namespace lane {
 
@@ -40,24 +42,6 @@ std::optional<Mode> ParseMode(const std::string& name);
 enum class Channel { kRed, kGreen, kBlue, kGray, kMinRedGreen };
 const char* ChannelName(Channel channel);
 std::optional<Channel> ParseChannel(const std::string& name);
-
-struct TwoLaneOptions {
-  // Only columns within this lateral distance of the camera are searched for
-  // the ego lane's boundaries, metres. The reference keeps IPM columns 59..100
-  // of 160 (about +-2.3 m); we widen it so a car driving 0.7 m off its lane's
-  // centre still has both boundaries inside, while the next boundaries out
-  // (>= 4.3 m away) stay outside.
-  double search_half_width_m = 2.9;
-  // Expected ego-lane width and tolerance (Gaussian sigma), metres
-  // (reference: 30 and 10 IPM px at 8.9 px/m).
-  double lane_width_m = 3.4;
-  double lane_width_sigma_m = 1.1;
-  // A pair is accepted when its width score exp(-d^2/2s^2) reaches this;
-  // otherwise only the strongest line is kept.
-  double min_pair_score = 0.3;
-
-  absl::Status Validate() const;
-};
 
 struct DetectorOptions {
   Mode mode = Mode::kAll;
@@ -145,6 +129,20 @@ class Detector {
   ChannelView ViewChannel(const cv::Mat& frame) const;
 
  private:
+  // The stages of Detect (detector.cc), in order.
+  absl::Status CheckFrame(const cv::Mat& frame) const;
+  cv::Mat TopView(const ChannelView& channel, cv::Mat* void_mask) const;
+  cv::Mat Filter(const cv::Mat& top_view, const cv::Mat& void_mask) const;
+  cv::Mat Threshold(const cv::Mat& filtered, float* threshold) const;
+  std::vector<IpmLine> FindLines(const cv::Mat& thresholded, std::mt19937_64& rng,
+                                 std::vector<ColumnPeak>* peaks) const;
+  std::vector<SplineCandidate> FitSplines(const cv::Mat& thresholded,
+                                          const std::vector<IpmLine>& lines,
+                                          std::mt19937_64& rng) const;
+  std::vector<Lane> ToLanes(const std::vector<SplineCandidate>& done) const;
+  // The camera's column in the top view (x = 0 at its near edge).
+  double CameraColumn() const;
+
   Detector(IpmMapping ipm, DetectorOptions options, FilterKernels kernels)
       : ipm_(std::move(ipm)), options_(std::move(options)), kernels_(std::move(kernels)) {}
 

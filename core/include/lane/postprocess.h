@@ -10,6 +10,8 @@
 
 #include "absl/status/status.h"
 #include "lane/bezier.h"
+#include "lane/ipm.h"
+#include "lane/line_fit.h"
 
 namespace lane {
 
@@ -201,6 +203,39 @@ struct ExtendOptions {
 // Extension at both ends along the tangent, then a refit through the old
 // samples and the new points. Returns the input when nothing was added.
 Bezier ExtendSpline(const Bezier& spline, const ChannelView& image, const ExtendOptions& options);
+
+// ---- Stage 7 as a whole ------------------------------------------------------
+
+// A lane candidate through stages 6 to 8.
+struct SplineCandidate {
+  IpmLine line;  // the RANSAC line it was fitted around: the shape checks' fallback
+  Bezier ipm;    // top view, P0 the farther end
+  Bezier image;  // image, set by post-processing, P0 the upper end
+  double score = 0;
+};
+
+// One frame's images that post-processing reads.
+struct PostprocessFrame {
+  const IpmMapping& ipm;
+  const cv::Mat& top_view;     // CV_32F, mean removed
+  const cv::Mat& filtered;     // the filter's response
+  const ChannelView& channel;  // the detector's channel of the frame
+  const cv::Mat& frame;        // the frame itself (colour checks)
+};
+
+// Stage 7: for each candidate, in order, in the top view: localise, check
+// the shape (else fall back to its line), extend, check the direction and the
+// top-view marking checks (candidate_checks.h); back-project into the image;
+// there localise, extend and finish (clip, colour, ground angle); finally drop
+// an image spline that lies along one kept before it. `marking_width_m` is
+// the filter's marking width; `merge_distance_px` the spline RANSAC's
+// duplicate distance (scaled to the image here). Returns the survivors with
+// their image splines.
+std::vector<SplineCandidate> PostprocessCandidates(const std::vector<SplineCandidate>& candidates,
+                                                   const PostprocessFrame& frame,
+                                                   const PostprocessOptions& options,
+                                                   double marking_width_m,
+                                                   double merge_distance_px);
 
 }  // namespace lane
 
