@@ -22,6 +22,7 @@ PACKAGES=(
   clang libclang-rt-14-dev   # fuzz/: libFuzzer targets (scripts/fuzz.sh, a step of the test command)
   openssl                # tests/server/security_test: a test CA made at test time
   python3-yaml           # tests/deploy: parses the compose file and Kubernetes manifests
+  python3-grpcio python3-protobuf python3-numpy   # client/python: the Python client and tests/python (numpy: array frames; cv2 stays optional)
 )
 
 missing=()

@@ -11,6 +11,7 @@
 #include "cli/cli_config.h"
 #include "commands.h"
 #include "lane/config.h"
+#include "lane/eval/render_labels.h"
 #include "lane/synthetic.h"
 
 namespace lane_tools {
@@ -85,7 +86,7 @@ int RunRender(const RenderFlags& flags) {
       return Failure("render", absl::StrCat("cannot write ", path, ": ", e.what()));
     }
     if (!written) return Failure("render", absl::StrCat("cannot write ", path));
-    labels << lane::SyntheticLabelsJson(name, *frame) << '\n';
+    labels << lane::eval::RenderLabelsJson(name, *frame) << '\n';
     list << name << '\n';
   }
   labels.close();

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -358,28 +357,6 @@ absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
   }
   frame.bgr = img;
   return frame;
-}
-
-std::string SyntheticLabelsJson(const std::string& frame_name, const SyntheticFrame& frame) {
-  auto round2 = [](double v) { return std::round(v * 100.0) / 100.0; };
-  nlohmann::ordered_json j;
-  j["frame"] = frame_name;
-  j["width"] = frame.bgr.cols;
-  j["height"] = frame.bgr.rows;
-  nlohmann::ordered_json list = nlohmann::ordered_json::array();
-  for (int i = 0; i < static_cast<int>(frame.boundaries.size()); ++i) {
-    const SyntheticBoundary& b = frame.boundaries[i];
-    nlohmann::ordered_json pts = nlohmann::ordered_json::array();
-    for (const auto& p : b.image) pts.push_back({round2(p.x()), round2(p.y())});
-    nlohmann::ordered_json e;
-    e["points"] = pts;
-    e["dashed"] = b.dashed;
-    e["color"] = b.yellow ? "yellow" : "white";
-    e["ego"] = i == frame.ego_left ? "left" : (i == frame.ego_right ? "right" : "none");
-    list.push_back(e);
-  }
-  j["boundaries"] = list;
-  return j.dump();
 }
 
 }  // namespace lane

@@ -6,7 +6,7 @@
 
 #include <cstdio>
 
-#include "lane/match.h"
+#include "lane/eval/match.h"
 #include "lane/synthetic.h"
 
 namespace lane {

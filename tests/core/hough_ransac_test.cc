@@ -4,9 +4,9 @@
 #include <random>
 
 #include "lane/bezier.h"
+#include "lane/eval/match.h"
 #include "lane/line_detection.h"
 #include "lane/line_fit.h"
-#include "lane/match.h"
 #include "lane/spline_fit.h"
 
 namespace lane {

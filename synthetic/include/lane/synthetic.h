@@ -59,10 +59,6 @@ struct SyntheticFrame {
 absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
                                                     const SyntheticOptions& options, uint64_t seed);
 
-// Labels file: one JSON object per line,
-// {"frame":"000000.png","width":W,"height":H,"boundaries":[{"points":[[x,y]x4],
-//  "dashed":b,"color":"white|yellow","ego":"left|right|none"}]}
-std::string SyntheticLabelsJson(const std::string& frame_name, const SyntheticFrame& frame);
 
 }  // namespace lane
 

@@ -12,6 +12,7 @@
 
 #include "lane/bezier.h"
 #include "lane/camera.h"
+#include "lane/eval/render_labels.h"
 #include "test_cameras.h"
 
 namespace {
@@ -74,7 +75,7 @@ TEST(SyntheticTest, SameSeedIsDeterministic) {
     const SyntheticFrame b = Render(cam, opt, 1234);
     EXPECT_TRUE(SameBytes(a.bgr, b.bgr));
     EXPECT_TRUE(SameTruth(a, b));
-    EXPECT_EQ(lane::SyntheticLabelsJson("x.png", a), lane::SyntheticLabelsJson("x.png", b));
+    EXPECT_EQ(lane::eval::RenderLabelsJson("x.png", a), lane::eval::RenderLabelsJson("x.png", b));
   }
 }
 
@@ -275,7 +276,7 @@ TEST(SyntheticTest, DegenerateViewsRenderWithoutTruth) {
 TEST(SyntheticTest, LabelsJsonIsOneLineInTheDocumentedForm) {
   const SyntheticFrame f = Render(CaltechCamera(), SyntheticOptions{}, 21);
   ASSERT_FALSE(f.boundaries.empty());
-  const std::string line = lane::SyntheticLabelsJson("000021.png", f);
+  const std::string line = lane::eval::RenderLabelsJson("000021.png", f);
   EXPECT_EQ(line.find('\n'), std::string::npos);
   EXPECT_EQ(
       line.rfind("{\"frame\":\"000021.png\",\"width\":640,\"height\":480,\"boundaries\":[", 0), 0u)

@@ -1,4 +1,4 @@
-#include "lane/match.h"
+#include "lane/eval/match.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
 // The paper's rule for deciding that a detected boundary and a labelled one
 // are the same (Aly 2008, section III-A).
-#ifndef LANE_MATCH_H_
-#define LANE_MATCH_H_
+#ifndef LANE_EVAL_MATCH_H_
+#define LANE_EVAL_MATCH_H_
 
 #include <Eigen/Core>
 #include <vector>
@@ -25,4 +25,4 @@ bool PaperMatch(const Bezier& detected, const Bezier& label, int image_width);
 
 }  // namespace lane
 
-#endif  // LANE_MATCH_H_
+#endif  // LANE_EVAL_MATCH_H_

@@ -269,7 +269,7 @@ std::string BaselineJson(const EvalReport& report, const std::string& command,
   const bool over_seeds = seeds != nullptr && !seeds->seeds.empty();
   Json out = Json::object();
   out["about"] =
-      "Regression baseline of lane eval (tests/core/eval_regression_test.cc fails when the "
+      "Regression baseline of lane eval (tests/eval/eval_regression_test.cc fails when the "
       "CULane F1, the mean over `seeds`, drops more than 0.02 below culane_f1, or the paper "
       "rule's correct rate drops / false-positive rate rises by more than one point). "
       "Regenerate with `command`; see docs/evaluation.md.";

@@ -10,6 +10,7 @@
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
 #include "lane/eval/labels.h"
+#include "lane/synthetic.h"
 
 namespace lane::eval {
 
@@ -19,6 +20,13 @@ namespace lane::eval {
 absl::StatusOr<std::vector<LabelledFrame>> ParseRenderLabels(absl::string_view text,
                                                              absl::string_view source);
 absl::StatusOr<std::vector<LabelledFrame>> ReadRenderLabels(const std::string& path);
+
+// The writer of the same format: one line for a rendered frame (what `lane
+// render` writes; ParseRenderLabels reads it back).
+// Labels file: one JSON object per line,
+// {"frame":"000000.png","width":W,"height":H,"boundaries":[{"points":[[x,y]x4],
+//  "dashed":b,"color":"white|yellow","ego":"left|right|none"}]}
+std::string RenderLabelsJson(const std::string& frame_name, const SyntheticFrame& frame);
 
 }  // namespace lane::eval
 

@@ -11,6 +11,7 @@
 #include "lane/detector.h"
 #include "lane/eval/dataset.h"
 #include "lane/eval/evaluate.h"
+#include "lane/eval/render_labels.h"
 #include "lane/eval/report.h"
 #include "lane/eval/results_txt.h"
 #include "lane/synthetic.h"
@@ -124,7 +125,7 @@ fs::path RenderClip(const std::string& name, int frames) {
     char file[32];
     std::snprintf(file, sizeof(file), "%06d.png", i);
     EXPECT_TRUE(cv::imwrite((dir / file).string(), frame->bgr));
-    labels << SyntheticLabelsJson(file, *frame) << "\n";
+    labels << RenderLabelsJson(file, *frame) << "\n";
     list << file << "\n";
   }
   return dir;

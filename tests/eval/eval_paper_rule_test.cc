@@ -5,8 +5,8 @@
 #include <cmath>
 
 #include "lane/eval/curve.h"
+#include "lane/eval/match.h"
 #include "lane/eval/paper_rule.h"
-#include "lane/match.h"
 
 namespace lane::eval {
 namespace {
