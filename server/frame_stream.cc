@@ -202,6 +202,13 @@ void FrameStream::OnCancel() {
 }
 
 void FrameStream::OnDone() {
+  // gRPC runs OnDone after every other reaction, OnCancel included, but it
+  // hands OnCancel's end to OnDone inside libgrpc++ (the reference it drops
+  // after OnCancel), where a race detector cannot see the order. Taking mu_,
+  // which every reaction holds while it touches the stream, states that order
+  // in this code: nothing the reactions wrote is read or freed before they
+  // have let go of the stream.
+  { std::lock_guard<std::mutex> lock(mu_); }
   if (deps_.on_done) deps_.on_done(this);
   Unref();
 }

@@ -411,4 +411,24 @@ std::string RepeatedScanBomb(int repeats) {
   return bomb;
 }
 
+std::string PngDeclaring(const std::string& png, uint32_t width, uint32_t height) {
+  std::string out = png;
+  for (int i = 0; i < 4; ++i) {
+    out[16 + i] = static_cast<char>((width >> (24 - 8 * i)) & 0xFF);
+    out[20 + i] = static_cast<char>((height >> (24 - 8 * i)) & 0xFF);
+  }
+  return out;
+}
+
+std::string JpegDeclaring(const std::string& jpeg, uint16_t width, uint16_t height) {
+  std::string out = jpeg;
+  const size_t sof = out.find("\xFF\xC0");
+  if (sof == std::string::npos) return out;
+  out[sof + 5] = static_cast<char>(height >> 8);
+  out[sof + 6] = static_cast<char>(height & 0xFF);
+  out[sof + 7] = static_cast<char>(width >> 8);
+  out[sof + 8] = static_cast<char>(width & 0xFF);
+  return out;
+}
+
 }  // namespace lane::testing

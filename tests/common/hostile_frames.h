@@ -88,6 +88,12 @@ void PutChunk(std::string& out, const char type[5], const std::string& data);
 // with `extra_mib` MiB of zeros.
 std::string PngBomb(const cv::Mat& bgr, int extra_mib);
 
+// The encoded frame with its header edited to declare width x height (the
+// body unchanged): JPEG's baseline SOF0, PNG's IHDR (CRC not fixed: the
+// header is read before any decoder sees it).
+std::string JpegDeclaring(const std::string& jpeg, uint16_t width, uint16_t height);
+std::string PngDeclaring(const std::string& png, uint32_t width, uint32_t height);
+
 }  // namespace lane::testing
 
 #endif  // LANE_TESTS_COMMON_HOSTILE_FRAMES_H_

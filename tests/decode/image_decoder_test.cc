@@ -116,13 +116,7 @@ TEST(ImageDecoderTest, WrongSizeAndHugeFramesAreRefusedFromTheHeader) {
             "frame is 160x120 but the session's camera delivers 320x240");
 
   // A header claiming 60000x60000 (a decompression bomb).
-  std::string bomb = Jpeg(Frame(64, 48));
-  const size_t sof = bomb.find("\xFF\xC0");
-  ASSERT_NE(sof, std::string::npos);
-  bomb[sof + 5] = static_cast<char>(0xEA);  // height 0xEA60 = 60000
-  bomb[sof + 6] = 0x60;
-  bomb[sof + 7] = static_cast<char>(0xEA);
-  bomb[sof + 8] = 0x60;
+  const std::string bomb = lane::testing::JpegDeclaring(Jpeg(Frame(64, 48)), 60000, 60000);
   DecodeOptions any;  // no expected size: only the pixel limit applies
   absl::StatusOr<cv::Mat> refused = DecodeImage(bomb, any);
   EXPECT_EQ(refused.status().code(), absl::StatusCode::kInvalidArgument);

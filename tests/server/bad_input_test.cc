@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "hostile_frames.h"
 #include "test_util.h"
 #include "wire/status_map.h"
 
@@ -74,14 +75,7 @@ class BadInputTest : public ::testing::Test {
   }
 
   grpc::Status Create(const std::string& id, const v1::SessionConfig& config) {
-    grpc::ClientContext context;
-    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
-    v1::CreateSessionRequest request;
-    request.set_camera_id(id);
-    *request.mutable_config() = config;
-    v1::CreateSessionResponse response;
-    const grpc::Status status = server_->stub().CreateSession(&context, request, &response);
-    return status;
+    return CreateSessionStatus(server_->stub(), id, config);
   }
 
   grpc::Status CreateLogged(const v1::SessionConfig& config) {
@@ -102,27 +96,8 @@ class BadInputTest : public ::testing::Test {
   std::unique_ptr<TestServer> server_;
 };
 
-// A PNG whose IHDR declares width x height (CRC not fixed: the header is
-// read before any decoder sees it).
-std::string PngDeclaring(const std::string& png, uint32_t width, uint32_t height) {
-  std::string out = png;
-  for (int i = 0; i < 4; ++i) {
-    out[16 + i] = static_cast<char>((width >> (24 - 8 * i)) & 0xFF);
-    out[20 + i] = static_cast<char>((height >> (24 - 8 * i)) & 0xFF);
-  }
-  return out;
-}
-
-std::string JpegDeclaring(const std::string& jpeg, uint16_t width, uint16_t height) {
-  std::string out = jpeg;
-  const size_t sof = out.find("\xFF\xC0");
-  if (sof == std::string::npos) return out;
-  out[sof + 5] = static_cast<char>(height >> 8);
-  out[sof + 6] = static_cast<char>(height & 0xFF);
-  out[sof + 7] = static_cast<char>(width >> 8);
-  out[sof + 8] = static_cast<char>(width & 0xFF);
-  return out;
-}
+using lane::testing::JpegDeclaring;
+using lane::testing::PngDeclaring;
 
 TEST_F(BadInputTest, HugeDeclaredDimensionsAreRefusedFromTheHeader) {
   Start();

@@ -152,13 +152,7 @@ class HostileInputTest : public ::testing::Test {
   }
 
   grpc::Status Create(const std::string& id, const v1::SessionConfig& config) {
-    grpc::ClientContext context;
-    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
-    v1::CreateSessionRequest request;
-    request.set_camera_id(id);
-    *request.mutable_config() = config;
-    v1::CreateSessionResponse response;
-    return server_->stub().CreateSession(&context, request, &response);
+    return CreateSessionStatus(server_->stub(), id, config);
   }
 
   lane::CameraModel camera_;

@@ -52,6 +52,17 @@ uint64_t TestServer::CreateSession(const std::string& camera_id, const v1::Sessi
   return response.session().version();
 }
 
+grpc::Status CreateSessionStatus(v1::LaneService::Stub& stub, const std::string& camera_id,
+                                 const v1::SessionConfig& config) {
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+  v1::CreateSessionRequest request;
+  request.set_camera_id(camera_id);
+  *request.mutable_config() = config;
+  v1::CreateSessionResponse response;
+  return stub.CreateSession(&context, request, &response);
+}
+
 double MetricValue(const prometheus::Registry& registry, const std::string& name,
                    const std::vector<std::pair<std::string, std::string>>& labels) {
   double sum = 0;

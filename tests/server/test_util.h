@@ -55,6 +55,10 @@ class TestServer {
   std::unique_ptr<v1::LaneService::Stub> stub_;
 };
 
+// CreateSession(camera_id, config) with a 30 s deadline: the call's status.
+grpc::Status CreateSessionStatus(v1::LaneService::Stub& stub, const std::string& camera_id,
+                                 const v1::SessionConfig& config);
+
 // Sum of the samples of a counter/gauge family whose labels include all of
 // `labels` (an empty list matches every sample). Histograms: the count.
 double MetricValue(const prometheus::Registry& registry, const std::string& name,

@@ -4,6 +4,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "hostile_frames.h"
 #include "road_frames.h"
 
 namespace lane::wire {
@@ -66,13 +67,7 @@ TEST(FrameDecoderTest, RefusesWrongSizeAndHugeFramesBeforeDecoding) {
 
   // A header that claims 60000x60000 (a decompression bomb): refused on the
   // header alone.
-  std::string bomb = EncodeJpeg(Pattern(64, 48));
-  const size_t sof = bomb.find("\xFF\xC0");
-  ASSERT_NE(sof, std::string::npos);
-  bomb[sof + 5] = static_cast<char>(0xEA);  // height 0xEA60 = 60000
-  bomb[sof + 6] = 0x60;
-  bomb[sof + 7] = static_cast<char>(0xEA);
-  bomb[sof + 8] = 0x60;
+  const std::string bomb = lane::testing::JpegDeclaring(EncodeJpeg(Pattern(64, 48)), 60000, 60000);
   request.set_encoded(bomb);
   DecodeOptions options = For(64, 48);
   options.max_pixels = 1920 * 1080;
