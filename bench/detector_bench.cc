@@ -34,6 +34,7 @@
 #include <string>
 #include <vector>
 
+#include "lane/config.h"
 #include "lane/decode/image_decoder.h"
 #include "lane/detector.h"
 #include "lane/synthetic.h"
@@ -147,13 +148,14 @@ void SetLabel(benchmark::State& state) {
   state.SetLabel(state.range(0) == 0 ? "synthetic" : "culane");
 }
 
-void BM_Detect(benchmark::State& state) {
-  FrameSet* set = Get(state);
-  if (Skip(state, set)) return;
+// Detects the frames in turn; the mean time of each stage and the mean lane
+// count are the run's counters.
+void RunDetect(benchmark::State& state, const Detector& detector,
+               const std::vector<cv::Mat>& frames) {
   size_t i = 0;
   std::map<std::string, double> stage;
   for (auto _ : state) {
-    auto r = set->detector->Detect(set->frames[i++ % set->frames.size()]);
+    auto r = detector.Detect(frames[i++ % frames.size()]);
     benchmark::DoNotOptimize(r);
     const auto& t = r->timings;
     stage["ipm_ms"] += t.ipm_ms;
@@ -165,6 +167,12 @@ void BM_Detect(benchmark::State& state) {
     stage["lanes"] += r->lanes.size();
   }
   for (const auto& [k, v] : stage) state.counters[k] = v / state.iterations();
+}
+
+void BM_Detect(benchmark::State& state) {
+  FrameSet* set = Get(state);
+  if (Skip(state, set)) return;
+  RunDetect(state, *set->detector, set->frames);
   SetLabel(state);
 }
 
@@ -263,6 +271,58 @@ void BM_StageSplines(benchmark::State& state) {
   }
   SetLabel(state);
 }
+
+// ---- Real clips on the shipped configs ---------------------------------------------
+//
+// What users run: the frames at their own size with the config shipped for
+// their camera (Arg 0: cordova1, 640x480, configs/caltech.json; Arg 1:
+// driver161, 1640x590, configs/culane-driver161.json). The issue 14 targets
+// are the medians of BM_DetectClip.
+
+struct ClipSet {
+  std::string name;
+  std::unique_ptr<Detector> detector;
+  std::vector<cv::Mat> frames;  // decoded BGR, full size
+};
+
+ClipSet* LoadClip(const std::string& name, const std::string& config, const std::string& ext,
+                  size_t max_frames) {
+  const std::string dir = SharedDataDir(name);
+  if (dir.empty()) return nullptr;
+  auto parsed = lane::LoadConfigFile(std::string(LANE_SOURCE_DIR) + "/configs/" + config);
+  if (!parsed.ok()) return nullptr;
+  auto det = Detector::Create(parsed->camera, parsed->ipm, parsed->detector);
+  if (!det.ok()) return nullptr;
+  auto* set = new ClipSet;
+  set->name = name + " " + config;
+  set->detector = std::make_unique<Detector>(*std::move(det));
+  const std::vector<std::string> files = FilesWithExtension(dir, ext);
+  // Spread over the clip: every k-th frame.
+  const size_t step = std::max<size_t>(1, files.size() / max_frames);
+  for (size_t i = 0; i < files.size() && set->frames.size() < max_frames; i += step) {
+    cv::Mat img = cv::imread(files[i]);
+    if (!img.empty()) set->frames.push_back(img);
+  }
+  return set;
+}
+
+ClipSet* GetClip(int which) {
+  static ClipSet* cordova = LoadClip("caltech-cordova1", "caltech.json", ".png", 64);
+  static ClipSet* driver161 = LoadClip("culane-driver161-a", "culane-driver161.json", ".jpg", 60);
+  ClipSet* set = which == 0 ? cordova : driver161;
+  return set != nullptr && !set->frames.empty() ? set : nullptr;
+}
+
+void BM_DetectClip(benchmark::State& state) {
+  ClipSet* set = GetClip(static_cast<int>(state.range(0)));
+  if (set == nullptr) {
+    state.SkipWithError("clip not present (../shared/data)");
+    return;
+  }
+  RunDetect(state, *set->detector, set->frames);
+  state.SetLabel(set->name);
+}
+BENCHMARK(BM_DetectClip)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 // ---- Decoding ---------------------------------------------------------------------
 

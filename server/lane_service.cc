@@ -42,7 +42,13 @@ LaneServiceImpl::LaneServiceImpl(ServiceOptions options, SessionRegistry& sessio
                                  WorkerPool& pool, Metrics& metrics)
     : options_(std::move(options)), sessions_(sessions), pool_(pool), metrics_(metrics) {}
 
-LaneServiceImpl::~LaneServiceImpl() = default;
+LaneServiceImpl::~LaneServiceImpl() {
+  // The server has shut down, so every stream's OnDone has returned; the last
+  // of them may still have been in Unregister on another thread a moment
+  // ago. Taking mu_ orders this destructor after it (gRPC's own ordering runs
+  // through libgrpc++'s atomics, which a race detector does not see).
+  std::lock_guard<std::mutex> lock(mu_);
+}
 
 void LaneServiceImpl::SetServing() {
   std::lock_guard<std::mutex> lock(mu_);
@@ -242,8 +248,8 @@ grpc::ServerUnaryReactor* LaneServiceImpl::GetServerInfo(grpc::CallbackServerCon
 void LaneServiceImpl::FillServerInfo(v1::ServerInfo* response) const {
   const BuildInfo& build = options_.build;
   response->set_version(build.version);
-  response->set_build("git " + build.git_revision + ", " + build.build_type + ", gRPC " + build.grpc_version + ", OpenCV " +
-                      build.opencv_version);
+  response->set_build("git " + build.git_revision + ", " + build.build_type + ", gRPC " +
+                      build.grpc_version + ", OpenCV " + build.opencv_version);
   response->add_encoded_formats("jpeg");
   response->add_encoded_formats("png");
   response->add_raw_formats(v1::PIXEL_FORMAT_BGR8);
