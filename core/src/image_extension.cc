@@ -45,11 +45,14 @@ std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
     raw[i + h] = image.Bilinear(q.x(), q.y());
   }
   const int k = std::max(1, static_cast<int>(std::ceil(2.5 * sigma)));
+  thread_local std::vector<double> kernel;  // the Gaussian's taps -k..k
+  kernel.resize(2 * k + 1);
+  for (int j = -k; j <= k; ++j) kernel[j + k] = std::exp(-0.5 * j * j / (sigma * sigma));
   smooth.assign(raw.size(), 0.0);
   for (int i = 0; i < static_cast<int>(raw.size()); ++i) {
     double acc = 0, ws = 0;
     for (int j = std::max(-k, -i); j <= k && i + j < static_cast<int>(raw.size()); ++j) {
-      const double w = std::exp(-0.5 * j * j / (sigma * sigma));
+      const double w = kernel[j + k];
       acc += w * raw[i + j];
       ws += w;
     }

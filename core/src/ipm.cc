@@ -238,24 +238,29 @@ void IpmMapping::BuildSegments() {
   // a box along the image row, and linear interpolation between the two
   // image rows around it. nv follows the footprint's height in image rows,
   // so every image row of the footprint is read.
+  struct Box {
+    int row;       // the upper image row
+    float u0, u1;  // prefix coordinates of the box
+    float w0, w1;  // weights of the upper and the lower row
+  };
   const int n = width_ * height_;
   const int iw = camera_.image_width;
   const int ih = camera_.image_height;
+  std::vector<Box> boxes;
+  boxes.reserve(2 * n);
   seg_start_.assign(n + 1, 0);
-  segments_.clear();
-  segments_.reserve(4 * n);
   seg_row0_ = ih;
   seg_row1_ = -1;
-  seg_col1_ = 0;
+  int col1 = 0;
   for (int r = 0; r < height_; ++r) {
     for (int c = 0; c < width_; ++c) {
       const int i = r * width_ + c;
-      seg_start_[i] = static_cast<int32_t>(segments_.size());
+      seg_start_[i] = static_cast<int32_t>(boxes.size());
       if (tap_start_[i] == tap_start_[i + 1]) continue;  // invalid
       const double v_top = IpmToImage({c, r - 0.5}).y(), v_bot = IpmToImage({c, r + 0.5}).y();
       const int nv =
           std::clamp(static_cast<int>(std::ceil(std::abs(v_bot - v_top))), 1, kMaxSubsamples);
-      const size_t first = segments_.size();
+      const size_t first = boxes.size();
       double total = 0;
       for (int b = 0; b < nv; ++b) {
         const double t = r - 0.5 + (b + 0.5) / nv;
@@ -274,70 +279,89 @@ void IpmMapping::BuildSegments() {
         if (!(v >= 0 && v <= ih - 1)) continue;
         const int v0 = std::min(static_cast<int>(v), ih - 2);
         const double fv = v - v0;
-        for (const auto& [row, w] : {std::pair<int, double>{v0, 1 - fv}, {v0 + 1, fv}}) {
-          if (w <= 0) continue;
-          // Pixel k covers [k - 0.5, k + 0.5]: the box [u0, u1] in prefix
-          // coordinates is [u0 + 0.5, u1 + 0.5].
-          segments_.push_back({row, static_cast<float>(u0 + 0.5), static_cast<float>(u1 + 0.5),
-                               static_cast<float>(w)});
-          total += w;
-          seg_row0_ = std::min(seg_row0_, row);
-          seg_row1_ = std::max(seg_row1_, row);
-          seg_col1_ = std::max(seg_col1_, static_cast<int>(std::ceil(u1 + 0.5)) + 1);
-        }
+        // Pixel k covers [k - 0.5, k + 0.5]: the box [u0, u1] in prefix
+        // coordinates is [u0 + 0.5, u1 + 0.5]. Weights as floats, as they
+        // are applied.
+        Box box{v0, static_cast<float>(u0 + 0.5), static_cast<float>(u1 + 0.5),
+                static_cast<float>(1 - fv), static_cast<float>(fv)};
+        if (1 - fv > 0) total += 1 - fv;
+        if (fv > 0) total += fv;
+        seg_row0_ = std::min(seg_row0_, v0);
+        seg_row1_ = std::max(seg_row1_, v0 + 1);
+        col1 = std::max(col1, static_cast<int>(std::ceil(u1 + 0.5)) + 1);
+        boxes.push_back(box);
       }
-      for (size_t k = first; k < segments_.size(); ++k) {
-        Segment& sg = segments_[k];
-        sg.w = static_cast<float>(sg.w / total / (sg.u1 - sg.u0));
+      for (size_t k = first; k < boxes.size(); ++k) {
+        Box& bx = boxes[k];
+        const double width = bx.u1 - bx.u0;
+        bx.w0 = bx.w0 > 0 ? static_cast<float>(bx.w0 / total / width) : 0.f;
+        bx.w1 = bx.w1 > 0 ? static_cast<float>(bx.w1 / total / width) : 0.f;
       }
     }
   }
-  seg_start_[n] = static_cast<int32_t>(segments_.size());
-  seg_col1_ = std::min(seg_col1_, iw);
+  seg_start_[n] = static_cast<int32_t>(boxes.size());
+  seg_cols_ = std::min(col1, iw) + 1;
+  // The prefix lookups, resolved: column k of a prefix coordinate u and the
+  // fraction beyond it, as Apply's interpolation reads them.
+  const auto column = [this](float u) { return std::min(static_cast<int>(u), seg_cols_ - 2); };
+  segments_.clear();
+  segments_.reserve(boxes.size());
+  for (const Box& bx : boxes) {
+    const int k0 = column(bx.u0), k1 = column(bx.u1);
+    segments_.push_back(
+        {(bx.row - seg_row0_) * seg_cols_ + k0, k1 - k0, bx.u0 - k0, bx.u1 - k1, bx.w0, bx.w1});
+  }
 }
 
 cv::Mat IpmMapping::ApplySegments(const cv::Mat& image, int channel, int channel2) const {
-  // Prefix sums of the rows read: P[k] = sum of pixels 0 .. k - 1 of a row
-  // (exact in int32: at most 16384 * 255).
-  const int cols = seg_col1_ + 1;
+  // The channel over the rows and columns read, then the prefix sums of each
+  // of its rows: P[k] = sum of pixels 0 .. k - 1 (exact in int32: at most
+  // 16384 * 255).
+  const int cols = seg_cols_;
   const int rows = seg_row1_ - seg_row0_ + 1;
+  const cv::Mat src = image(cv::Rect(0, seg_row0_, cols - 1, rows));
+  thread_local cv::Mat band, second;
+  if (channel2 == kGrayOfBgr) {
+    cv::cvtColor(src, band, cv::COLOR_BGR2GRAY);  // BT.601 in fixed point, as GrayOfBgr
+  } else if (channel2 >= 0) {
+    cv::extractChannel(src, band, channel);
+    cv::extractChannel(src, second, channel2);
+    cv::min(band, second, band);
+  } else if (src.channels() == 1) {
+    band = src;
+  } else {
+    cv::extractChannel(src, band, channel);
+  }
   thread_local std::vector<int32_t> prefix;
-  prefix.resize(static_cast<size_t>(std::max(0, rows)) * cols);
-  const int cn = image.channels();
+  prefix.resize(static_cast<size_t>(rows) * cols);
   for (int v = 0; v < rows; ++v) {
-    const uint8_t* src = image.ptr<uint8_t>(seg_row0_ + v) + channel;
+    const uint8_t* px = band.ptr<uint8_t>(v);
     int32_t* p = prefix.data() + static_cast<size_t>(v) * cols;
     int32_t acc = 0;
     p[0] = 0;
-    if (channel2 == kGrayOfBgr) {
-      const uint8_t* px = image.ptr<uint8_t>(seg_row0_ + v);
-      for (int k = 0; k + 1 < cols; ++k) p[k + 1] = acc += GrayOfBgr(px + 3 * k);
-    } else if (channel2 >= 0) {
-      const int d = channel2 - channel;
-      for (int k = 0; k + 1 < cols; ++k) p[k + 1] = acc += std::min(src[k * cn], src[k * cn + d]);
-    } else if (cn == 1) {
-      for (int k = 0; k + 1 < cols; ++k) p[k + 1] = acc += src[k];
-    } else {
-      for (int k = 0; k + 1 < cols; ++k) p[k + 1] = acc += src[k * cn];
-    }
+    for (int k = 0; k + 1 < cols; ++k) p[k + 1] = acc += px[k];
   }
-  const auto at = [&](const int32_t* p, float u) {
-    const int k = std::min(static_cast<int>(u), cols - 2);
-    const float f = u - k;
-    return p[k] + f * static_cast<float>(p[k + 1] - p[k]);
+  // The box average of one row: prefix difference between the two
+  // interpolated prefix positions.
+  const auto box = [](const int32_t* p, int len, float f0, float f1) {
+    const float at1 = p[len] + f1 * static_cast<float>(p[len + 1] - p[len]);
+    const float at0 = p[0] + f0 * static_cast<float>(p[1] - p[0]);
+    return at1 - at0;
   };
   cv::Mat out(height_, width_, CV_32F);
   float* dst = out.ptr<float>(0);
   const int n = width_ * height_;
+  const int32_t* base = prefix.data();
   double sum = 0;
   for (int i = 0; i < n; ++i) {
     const int a = seg_start_[i], b = seg_start_[i + 1];
     if (a == b) continue;
     float value = 0;
     for (int k = a; k < b; ++k) {
-      const Segment& sg = segments_[k];
-      const int32_t* p = prefix.data() + static_cast<size_t>(sg.row - seg_row0_) * cols;
-      value += sg.w * (at(p, sg.u1) - at(p, sg.u0));
+      const SubRow& sr = segments_[k];
+      const int32_t* p = base + sr.off0;
+      value += sr.w0 * box(p, sr.len, sr.f0, sr.f1);
+      value += sr.w1 * box(p + cols, sr.len, sr.f0, sr.f1);
     }
     value *= 1.f / 255.f;
     dst[i] = value;
@@ -353,7 +377,9 @@ cv::Mat IpmMapping::ApplySegments(const cv::Mat& image, int channel, int channel
 double IpmMapping::mean_taps() const {
   if (valid_count_ == 0) return 0.0;
   if (options_.interpolation == Interpolation::kArea) {
-    return static_cast<double>(segments_.size()) / valid_count_;
+    double rows = 0;  // each sub-row reads two image rows
+    for (const SubRow& sr : segments_) rows += (sr.w0 > 0) + (sr.w1 > 0);
+    return rows / valid_count_;
   }
   return static_cast<double>(taps_.size()) / valid_count_;
 }
@@ -421,7 +447,7 @@ Eigen::Vector2d IpmMapping::ImageToIpm(const Eigen::Vector2d& image) const {
 
 size_t IpmMapping::MemoryBytes() const {
   return tap_start_.capacity() * sizeof(tap_start_[0]) + taps_.capacity() * sizeof(Tap) +
-         seg_start_.capacity() * sizeof(seg_start_[0]) + segments_.capacity() * sizeof(Segment) +
+         seg_start_.capacity() * sizeof(seg_start_[0]) + segments_.capacity() * sizeof(SubRow) +
          valid_.total() * valid_.elemSize() + invalid_.total() * invalid_.elemSize();
 }
 

@@ -117,9 +117,14 @@ std::optional<ProfilePeak> FindProfilePeak(const std::vector<float>& profile, do
   s.resize(n);
   if (sigma_px > 0) {
     const int h = std::max(1, static_cast<int>(std::ceil(2.5 * sigma_px)));
+    // The kernel of the last sigma, kept: a spline's profiles mostly share one.
     thread_local std::vector<double> kernel;
-    kernel.resize(2 * h + 1);
-    for (int j = -h; j <= h; ++j) kernel[j + h] = std::exp(-0.5 * j * j / (sigma_px * sigma_px));
+    thread_local double kernel_sigma = -1;
+    if (sigma_px != kernel_sigma) {
+      kernel.resize(2 * h + 1);
+      for (int j = -h; j <= h; ++j) kernel[j + h] = std::exp(-0.5 * j * j / (sigma_px * sigma_px));
+      kernel_sigma = sigma_px;
+    }
     for (int i = 0; i < n; ++i) {
       double acc = 0, ws = 0;
       for (int j = std::max(-h, -i); j <= h && i + j < n; ++j) {

@@ -155,20 +155,26 @@ class IpmMapping {
   };
   std::vector<int32_t> tap_start_;
   std::vector<Tap> taps_;
-  // kArea: per IPM pixel, segments seg_start_[i] .. seg_start_[i + 1] - 1,
-  // each the average of one image row between columns u0 and u1 (a box
-  // along the row, read from the row's prefix sums at Apply), weighted by
-  // w / (u1 - u0). Sub-rows of the footprint between two image rows give
-  // two segments. Rows seg_row0_ .. seg_row1_ and columns up to seg_col1_
-  // are read.
-  struct Segment {
-    int32_t row;
-    float u0, u1;
-    float w;
+  // kArea: per IPM pixel, sub-rows seg_start_[i] .. seg_start_[i + 1] - 1.
+  // A sub-row of the footprint is a box along the image between columns u0
+  // and u1, at an image position between two rows: the box's average on the
+  // upper row (weight w0) plus that on the lower row (w1), each read from
+  // the row's prefix sums at Apply. Everything but the prefix sums is
+  // precomputed: `off0` is the upper row's index into the prefix band
+  // ((row - seg_row0_) * seg_cols_) plus the prefix column k0 of u0, `len`
+  // the columns from k0 to u1's k1, f0 and f1 the fractions of u0 and u1
+  // beyond them, and w0 and w1 already divide by the box's width and the
+  // footprint's total weight. Rows seg_row0_ .. seg_row1_ and columns up to
+  // seg_cols_ - 1 are read.
+  struct SubRow {
+    int32_t off0;
+    int32_t len;
+    float f0, f1;
+    float w0, w1;
   };
   std::vector<int32_t> seg_start_;
-  std::vector<Segment> segments_;
-  int seg_row0_ = 0, seg_row1_ = -1, seg_col1_ = 0;
+  std::vector<SubRow> segments_;
+  int seg_row0_ = 0, seg_row1_ = -1, seg_cols_ = 0;
   cv::Mat valid_;
   cv::Mat invalid_;
   int valid_count_ = 0;
