@@ -194,19 +194,23 @@ void IpmMapping::BuildTaps() {
     return img.allFinite() && img.x() >= roi.left && img.x() <= roi.right && img.y() >= roi.top &&
            img.y() <= roi.bottom;
   };
+  struct XyTap {
+    int x, y;
+    float w;
+  };
+  std::vector<XyTap> xy;
+  xy.reserve(4 * n);
   tap_start_.assign(n + 1, 0);
-  taps_.clear();
-  taps_.reserve(4 * n);
   valid_ = cv::Mat::zeros(height_, width_, CV_8U);
   valid_count_ = 0;
   for (int r = 0; r < height_; ++r) {
     for (int c = 0; c < width_; ++c) {
       const int i = r * width_ + c;
-      tap_start_[i] = static_cast<int32_t>(taps_.size());
+      tap_start_[i] = static_cast<int32_t>(xy.size());
       const Eigen::Vector2d img = IpmToImage(Eigen::Vector2d(c, r));
       if (!inside(img)) continue;
-      const auto add = [this](int x, int y, float w) {
-        if (w > 0) taps_.push_back({x, y, w});
+      const auto add = [&xy](int x, int y, float w) {
+        if (w > 0) xy.push_back({x, y, w});
       };
       switch (options_.interpolation) {
         case Interpolation::kNearest:
@@ -219,12 +223,29 @@ void IpmMapping::BuildTaps() {
           BilinearTaps(img, iw, ih, 1.f, add);
           break;
       }
-      if (static_cast<int32_t>(taps_.size()) == tap_start_[i]) continue;
+      if (static_cast<int32_t>(xy.size()) == tap_start_[i]) continue;
       valid_.at<uint8_t>(r, c) = 255;
       ++valid_count_;
     }
   }
-  tap_start_[n] = static_cast<int32_t>(taps_.size());
+  tap_start_[n] = static_cast<int32_t>(xy.size());
+  // The band the taps read, and each tap's index into it.
+  int x0 = iw, x1 = -1, y0 = ih, y1 = -1;
+  for (const XyTap& t : xy) {
+    x0 = std::min(x0, t.x);
+    x1 = std::max(x1, t.x);
+    y0 = std::min(y0, t.y);
+    y1 = std::max(y1, t.y);
+  }
+  tap_row0_ = xy.empty() ? 0 : y0;
+  tap_rows_ = xy.empty() ? 0 : y1 - y0 + 1;
+  tap_col0_ = xy.empty() ? 0 : x0;
+  tap_cols_ = xy.empty() ? 0 : x1 - x0 + 1;
+  taps_.clear();
+  taps_.reserve(xy.size());
+  for (const XyTap& t : xy) {
+    taps_.push_back({(t.y - tap_row0_) * tap_cols_ + t.x - tap_col0_, t.w});
+  }
   cv::bitwise_not(valid_, invalid_);
   if (options_.interpolation == Interpolation::kArea) BuildSegments();
 }
@@ -319,19 +340,9 @@ cv::Mat IpmMapping::ApplySegments(const cv::Mat& image, int channel, int channel
   // 16384 * 255).
   const int cols = seg_cols_;
   const int rows = seg_row1_ - seg_row0_ + 1;
-  const cv::Mat src = image(cv::Rect(0, seg_row0_, cols - 1, rows));
-  thread_local cv::Mat band, second;
-  if (channel2 == kGrayOfBgr) {
-    cv::cvtColor(src, band, cv::COLOR_BGR2GRAY);  // BT.601 in fixed point, as GrayOfBgr
-  } else if (channel2 >= 0) {
-    cv::extractChannel(src, band, channel);
-    cv::extractChannel(src, second, channel2);
-    cv::min(band, second, band);
-  } else if (src.channels() == 1) {
-    band = src;
-  } else {
-    cv::extractChannel(src, band, channel);
-  }
+  thread_local cv::Mat scratch, scratch2;
+  const cv::Mat band = ChannelBand(image, cv::Rect(0, seg_row0_, cols - 1, rows), channel,
+                                   channel2, scratch, scratch2);
   thread_local std::vector<int32_t> prefix;
   prefix.resize(static_cast<size_t>(rows) * cols);
   for (int v = 0; v < rows; ++v) {
@@ -384,16 +395,41 @@ double IpmMapping::mean_taps() const {
   return static_cast<double>(taps_.size()) / valid_count_;
 }
 
+cv::Mat IpmMapping::ChannelBand(const cv::Mat& image, const cv::Rect& rect, int channel,
+                                int channel2, cv::Mat& scratch, cv::Mat& scratch2) {
+  const cv::Mat src = image(rect);
+  if (src.channels() == 1) return src;
+  if (channel2 == kGrayOfBgr) {
+    cv::cvtColor(src, scratch, cv::COLOR_BGR2GRAY);  // BT.601 in fixed point, as GrayOfBgr
+  } else if (channel2 >= 0) {
+    cv::extractChannel(src, scratch, channel);
+    cv::extractChannel(src, scratch2, channel2);
+    cv::min(scratch, scratch2, scratch);
+  } else {
+    cv::extractChannel(src, scratch, channel);
+  }
+  return scratch;
+}
+
 cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel, int channel2) const {
   CV_Assert(image.depth() == CV_8U && image.cols == camera_.image_width &&
             image.rows == camera_.image_height && channel >= 0 && channel < image.channels() &&
             channel2 < image.channels() && (channel2 != kGrayOfBgr || image.channels() == 3));
   if (options_.interpolation == Interpolation::kArea)
     return ApplySegments(image, channel, channel2);
+  thread_local cv::Mat scratch, scratch2;
+  const cv::Mat band = ChannelBand(image, cv::Rect(tap_col0_, tap_row0_, tap_cols_, tap_rows_),
+                                   channel, channel2, scratch, scratch2);
+  // The taps index a continuous band; a view of a one-channel image has the
+  // image's stride, so it is copied when the two differ.
+  thread_local cv::Mat packed;
+  const cv::Mat* src = &band;
+  if (!band.isContinuous()) {
+    band.copyTo(packed);
+    src = &packed;
+  }
+  const uint8_t* base = src->ptr<uint8_t>(0);
   cv::Mat out(height_, width_, CV_32F);
-  const int cn = image.channels();
-  const size_t step = image.step[0];
-  const uint8_t* base = image.data + channel;
   float* dst = out.ptr<float>(0);  // continuous: freshly allocated
   const int n = width_ * height_;
   double sum = 0;
@@ -405,19 +441,7 @@ cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel, int channel2) const
       continue;
     }
     float v = 0.f;
-    if (channel2 == kGrayOfBgr) {
-      for (int k = a; k < b; ++k) {
-        v += taps[k].w * GrayOfBgr(image.data + taps[k].y * step + taps[k].x * cn);
-      }
-    } else if (channel2 >= 0) {
-      const int d = channel2 - channel;
-      for (int k = a; k < b; ++k) {
-        const uint8_t* p = base + taps[k].y * step + taps[k].x * cn;
-        v += taps[k].w * std::min(p[0], p[d]);
-      }
-    } else {
-      for (int k = a; k < b; ++k) v += taps[k].w * base[taps[k].y * step + taps[k].x * cn];
-    }
+    for (int k = a; k < b; ++k) v += taps[k].w * base[taps[k].off];
     v *= 1.f / 255.f;
     dst[i] = v;
     sum += v;

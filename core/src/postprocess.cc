@@ -120,16 +120,24 @@ std::optional<ProfilePeak> FindProfilePeak(const std::vector<float>& profile, do
     // The kernel of the last sigma, kept: a spline's profiles mostly share one.
     thread_local std::vector<double> kernel;
     thread_local double kernel_sigma = -1;
+    thread_local double kernel_sum = 0;  // of all taps, summed in order
     if (sigma_px != kernel_sigma) {
       kernel.resize(2 * h + 1);
-      for (int j = -h; j <= h; ++j) kernel[j + h] = std::exp(-0.5 * j * j / (sigma_px * sigma_px));
+      kernel_sum = 0;
+      for (int j = -h; j <= h; ++j) {
+        kernel[j + h] = std::exp(-0.5 * j * j / (sigma_px * sigma_px));
+        kernel_sum += kernel[j + h];
+      }
       kernel_sigma = sigma_px;
     }
     for (int i = 0; i < n; ++i) {
-      double acc = 0, ws = 0;
-      for (int j = std::max(-h, -i); j <= h && i + j < n; ++j) {
-        acc += kernel[j + h] * profile[i + j];
-        ws += kernel[j + h];
+      const int j0 = std::max(-h, -i), j1 = std::min(h, n - 1 - i);
+      double acc = 0;
+      for (int j = j0; j <= j1; ++j) acc += kernel[j + h] * profile[i + j];
+      double ws = kernel_sum;  // the whole kernel, except near the ends
+      if (j0 != -h || j1 != h) {
+        ws = 0;
+        for (int j = j0; j <= j1; ++j) ws += kernel[j + h];
       }
       s[i] = acc / ws;
     }

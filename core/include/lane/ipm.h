@@ -138,6 +138,10 @@ class IpmMapping {
   void BuildTaps();
   void BuildSegments();
   cv::Mat ApplySegments(const cv::Mat& image, int channel, int channel2) const;
+  // The detector's channel of `rect` of `image` as a CV_8UC1 image: a view
+  // when `image` has one channel, else converted into `scratch`.
+  static cv::Mat ChannelBand(const cv::Mat& image, const cv::Rect& rect, int channel, int channel2,
+                             cv::Mat& scratch, cv::Mat& scratch2);
 
   CameraModel camera_;
   IpmOptions options_;
@@ -148,11 +152,14 @@ class IpmMapping {
   // Per IPM pixel (row-major): taps tap_start_[i] .. tap_start_[i + 1] - 1,
   // each an image pixel and its weight (bilinear: the 4 neighbours; nearest:
   // one; area: every pixel of the footprint). Invalid pixels have none.
-  // Applied by a plain loop that reads one channel in place.
+  // Each tap's `off` indexes the band of the image that the taps read (rows
+  // tap_row0_.., columns tap_col0_.., tap_cols_ wide), into which Apply
+  // first copies the channel: off = (y - tap_row0_) * tap_cols_ + x - tap_col0_.
   struct Tap {
-    int32_t x, y;
+    int32_t off;
     float w;
   };
+  int tap_row0_ = 0, tap_rows_ = 0, tap_col0_ = 0, tap_cols_ = 0;
   std::vector<int32_t> tap_start_;
   std::vector<Tap> taps_;
   // kArea: per IPM pixel, sub-rows seg_start_[i] .. seg_start_[i + 1] - 1.
