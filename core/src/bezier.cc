@@ -148,6 +148,20 @@ double MeanNearestDistance(const Bezier& a, const Bezier& b) {
   return sum / d.size();
 }
 
+bool MeanNearestDistanceBelow(const Bezier& a, const Bezier& b, double limit) {
+  Eigen::Vector2d a_min = a.p[0], a_max = a.p[0], b_min = b.p[0], b_max = b.p[0];
+  for (int i = 1; i < 4; ++i) {
+    a_min = a_min.cwiseMin(a.p[i]);
+    a_max = a_max.cwiseMax(a.p[i]);
+    b_min = b_min.cwiseMin(b.p[i]);
+    b_max = b_max.cwiseMax(b.p[i]);
+  }
+  const double gap_x = std::max({0.0, a_min.x() - b_max.x(), b_min.x() - a_max.x()});
+  const double gap_y = std::max({0.0, a_min.y() - b_max.y(), b_min.y() - a_max.y()});
+  if (std::hypot(gap_x, gap_y) >= limit) return false;
+  return MeanNearestDistance(a, b) < limit;
+}
+
 double AngleFromVerticalDeg(const Eigen::Vector2d& d) {
   constexpr double kRadToDeg = 180.0 / M_PI;
   return std::atan2(std::abs(d.x()), std::abs(d.y())) * kRadToDeg;

@@ -248,7 +248,7 @@ std::vector<SplineCandidate> Detector::FitSplines(const cv::Mat& thresholded,
   for (const auto& c : candidates) {
     bool dup = false;
     for (const auto& u : unique) {
-      dup = dup || MeanNearestDistance(c.ipm, u.ipm) < so.merge_distance_px;
+      dup = dup || MeanNearestDistanceBelow(c.ipm, u.ipm, so.merge_distance_px);
     }
     if (!dup) unique.push_back(c);
   }

@@ -185,7 +185,7 @@ absl::StatusOr<IpmMapping> IpmMapping::Create(const CameraModel& camera,
 }
 
 void IpmMapping::BuildTaps() {
-  // The per-pixel taps, computed once per calibration.
+  // The per-pixel quads, computed once per calibration.
   const int n = width_ * height_;
   const Roi& roi = roi_;
   const int iw = camera_.image_width;
@@ -194,57 +194,58 @@ void IpmMapping::BuildTaps() {
     return img.allFinite() && img.x() >= roi.left && img.x() <= roi.right && img.y() >= roi.top &&
            img.y() <= roi.bottom;
   };
-  struct XyTap {
-    int x, y;
-    float w;
+  struct XyQuad {
+    int x = -1, y = -1;  // top-left image pixel; x < 0: invalid
+    float w[4] = {0, 0, 0, 0};
   };
-  std::vector<XyTap> xy;
-  xy.reserve(4 * n);
-  tap_start_.assign(n + 1, 0);
+  std::vector<XyQuad> xy(n);
   valid_ = cv::Mat::zeros(height_, width_, CV_8U);
   valid_count_ = 0;
+  int x0 = iw, x1 = -1, y0 = ih, y1 = -1;  // the band: every quad's 2x2
   for (int r = 0; r < height_; ++r) {
     for (int c = 0; c < width_; ++c) {
-      const int i = r * width_ + c;
-      tap_start_[i] = static_cast<int32_t>(xy.size());
       const Eigen::Vector2d img = IpmToImage(Eigen::Vector2d(c, r));
       if (!inside(img)) continue;
-      const auto add = [&xy](int x, int y, float w) {
-        if (w > 0) xy.push_back({x, y, w});
-      };
-      switch (options_.interpolation) {
-        case Interpolation::kNearest:
-          add(static_cast<int>(std::lround(img.x())), static_cast<int>(std::lround(img.y())), 1.f);
-          break;
-        case Interpolation::kBilinear:
-          BilinearTaps(img, iw, ih, 1.f, add);
-          break;
-        case Interpolation::kArea:  // the taps mark validity; BuildSegments samples
-          BilinearTaps(img, iw, ih, 1.f, add);
-          break;
+      XyQuad& q = xy[r * width_ + c];
+      if (options_.interpolation == Interpolation::kNearest) {
+        const int x = std::clamp(static_cast<int>(std::lround(img.x())), 0, iw - 1);
+        const int y = std::clamp(static_cast<int>(std::lround(img.y())), 0, ih - 1);
+        q.x = std::min(x, std::max(0, iw - 2));
+        q.y = std::min(y, std::max(0, ih - 2));
+        q.w[(x - q.x) + 2 * (y - q.y)] = 1.f;
+      } else {  // bilinear; area uses the quads for validity (BuildSegments samples)
+        BilinearTaps(img, iw, ih, 1.f, [&q](int x, int y, float w) {
+          if (q.x < 0) {
+            q.x = x;
+            q.y = y;
+          }
+          q.w[(x - q.x) + 2 * (y - q.y)] = std::max(0.f, w);
+        });
       }
-      if (static_cast<int32_t>(xy.size()) == tap_start_[i]) continue;
+      if (!(q.w[0] > 0 || q.w[1] > 0 || q.w[2] > 0 || q.w[3] > 0)) {
+        q.x = -1;
+        continue;
+      }
       valid_.at<uint8_t>(r, c) = 255;
       ++valid_count_;
+      x0 = std::min(x0, q.x);
+      y0 = std::min(y0, q.y);
+      x1 = std::max(x1, q.x + 1);
+      y1 = std::max(y1, q.y + 1);
     }
   }
-  tap_start_[n] = static_cast<int32_t>(xy.size());
-  // The band the taps read, and each tap's index into it.
-  int x0 = iw, x1 = -1, y0 = ih, y1 = -1;
-  for (const XyTap& t : xy) {
-    x0 = std::min(x0, t.x);
-    x1 = std::max(x1, t.x);
-    y0 = std::min(y0, t.y);
-    y1 = std::max(y1, t.y);
-  }
-  tap_row0_ = xy.empty() ? 0 : y0;
-  tap_rows_ = xy.empty() ? 0 : y1 - y0 + 1;
-  tap_col0_ = xy.empty() ? 0 : x0;
-  tap_cols_ = xy.empty() ? 0 : x1 - x0 + 1;
-  taps_.clear();
-  taps_.reserve(xy.size());
-  for (const XyTap& t : xy) {
-    taps_.push_back({(t.y - tap_row0_) * tap_cols_ + t.x - tap_col0_, t.w});
+  const bool any = valid_count_ > 0;
+  tap_row0_ = any ? y0 : 0;
+  tap_rows_ = any ? y1 - y0 + 1 : 0;
+  tap_col0_ = any ? x0 : 0;
+  tap_cols_ = any ? x1 - x0 + 1 : 0;
+  quads_.clear();
+  quads_.reserve(valid_count_);
+  for (int i = 0; i < n; ++i) {
+    const XyQuad& q = xy[i];
+    if (q.x < 0) continue;
+    quads_.push_back(
+        {i, (q.y - tap_row0_) * tap_cols_ + q.x - tap_col0_, {q.w[0], q.w[1], q.w[2], q.w[3]}});
   }
   cv::bitwise_not(valid_, invalid_);
   if (options_.interpolation == Interpolation::kArea) BuildSegments();
@@ -277,7 +278,7 @@ void IpmMapping::BuildSegments() {
     for (int c = 0; c < width_; ++c) {
       const int i = r * width_ + c;
       seg_start_[i] = static_cast<int32_t>(boxes.size());
-      if (tap_start_[i] == tap_start_[i + 1]) continue;  // invalid
+      if (valid_.at<uint8_t>(r, c) == 0) continue;  // invalid
       const double v_top = IpmToImage({c, r - 0.5}).y(), v_bot = IpmToImage({c, r + 0.5}).y();
       const int nv =
           std::clamp(static_cast<int>(std::ceil(std::abs(v_bot - v_top))), 1, kMaxSubsamples);
@@ -341,8 +342,8 @@ cv::Mat IpmMapping::ApplySegments(const cv::Mat& image, int channel, int channel
   const int cols = seg_cols_;
   const int rows = seg_row1_ - seg_row0_ + 1;
   thread_local cv::Mat scratch, scratch2;
-  const cv::Mat band = ChannelBand(image, cv::Rect(0, seg_row0_, cols - 1, rows), channel,
-                                   channel2, scratch, scratch2);
+  const cv::Mat band = ChannelBand(image, cv::Rect(0, seg_row0_, cols - 1, rows), channel, channel2,
+                                   scratch, scratch2);
   thread_local std::vector<int32_t> prefix;
   prefix.resize(static_cast<size_t>(rows) * cols);
   for (int v = 0; v < rows; ++v) {
@@ -392,7 +393,9 @@ double IpmMapping::mean_taps() const {
     for (const SubRow& sr : segments_) rows += (sr.w0 > 0) + (sr.w1 > 0);
     return rows / valid_count_;
   }
-  return static_cast<double>(taps_.size()) / valid_count_;
+  double taps = 0;
+  for (const Quad& q : quads_) taps += (q.w[0] > 0) + (q.w[1] > 0) + (q.w[2] > 0) + (q.w[3] > 0);
+  return taps / valid_count_;
 }
 
 cv::Mat IpmMapping::ChannelBand(const cv::Mat& image, const cv::Rect& rect, int channel,
@@ -429,26 +432,26 @@ cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel, int channel2) const
     src = &packed;
   }
   const uint8_t* base = src->ptr<uint8_t>(0);
-  cv::Mat out(height_, width_, CV_32F);
+  const int stride = tap_cols_;
+  // Invalid pixels (outside the ROI) get the valid ones' mean.
+  cv::Mat out(height_, width_, CV_32F, cv::Scalar(0));
   float* dst = out.ptr<float>(0);  // continuous: freshly allocated
-  const int n = width_ * height_;
   double sum = 0;
-  const Tap* taps = taps_.data();
-  for (int i = 0; i < n; ++i) {
-    const int a = tap_start_[i], b = tap_start_[i + 1];
-    if (a == b) {
-      dst[i] = -1.f;  // invalid, filled below
-      continue;
-    }
+  // A quad's zero weights add an exact 0: the sum equals that of its
+  // non-zero taps alone.
+  for (const Quad& q : quads_) {
+    const uint8_t* p = base + q.off;
     float v = 0.f;
-    for (int k = a; k < b; ++k) v += taps[k].w * base[taps[k].off];
+    v += q.w[0] * p[0];
+    v += q.w[1] * p[1];
+    v += q.w[2] * p[stride];
+    v += q.w[3] * p[stride + 1];
     v *= 1.f / 255.f;
-    dst[i] = v;
+    dst[q.pixel] = v;
     sum += v;
   }
-  const float mean = static_cast<float>(sum / valid_count_);
-  for (int i = 0; i < n; ++i) {
-    if (tap_start_[i] == tap_start_[i + 1]) dst[i] = mean;
+  if (static_cast<int>(quads_.size()) < width_ * height_) {
+    out.setTo(static_cast<float>(sum / valid_count_), invalid_);
   }
   return out;
 }
@@ -470,9 +473,9 @@ Eigen::Vector2d IpmMapping::ImageToIpm(const Eigen::Vector2d& image) const {
 }
 
 size_t IpmMapping::MemoryBytes() const {
-  return tap_start_.capacity() * sizeof(tap_start_[0]) + taps_.capacity() * sizeof(Tap) +
-         seg_start_.capacity() * sizeof(seg_start_[0]) + segments_.capacity() * sizeof(SubRow) +
-         valid_.total() * valid_.elemSize() + invalid_.total() * invalid_.elemSize();
+  return quads_.capacity() * sizeof(Quad) + seg_start_.capacity() * sizeof(seg_start_[0]) +
+         segments_.capacity() * sizeof(SubRow) + valid_.total() * valid_.elemSize() +
+         invalid_.total() * invalid_.elemSize();
 }
 
 }  // namespace lane

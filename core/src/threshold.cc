@@ -36,9 +36,11 @@ float Quantile(std::vector<float>& values, double q) {
 
 namespace {
 
-// The k-th smallest (0-based) of `values`, all > 0 and <= vmax, found through
-// a histogram so that only one bin's values need a selection.
-float KthPositive(const std::vector<float>& values, size_t k, float vmax) {
+// The k-th and (k+1)-th smallest (0-based) of `values`, all > 0 and <= vmax,
+// found through one histogram so that only the bins holding them need a
+// selection. `second` is only computed when asked for (k + 1 < size).
+void KthPositives(const std::vector<float>& values, size_t k, float vmax, bool want_second,
+                  float* first, float* second) {
   constexpr int kBins = 256;
   const float scale = kBins / vmax;
   int counts[kBins + 1] = {0};
@@ -52,7 +54,21 @@ float KthPositive(const std::vector<float>& values, size_t k, float vmax) {
     if (std::min(kBins, static_cast<int>(v * scale)) == bin) in_bin.push_back(v);
   }
   std::nth_element(in_bin.begin(), in_bin.begin() + (k - below), in_bin.end());
-  return in_bin[k - below];
+  *first = in_bin[k - below];
+  if (!want_second) return;
+  if (k + 1 - below < in_bin.size()) {
+    // In the same bin: the smallest of those above the k-th.
+    *second = *std::min_element(in_bin.begin() + (k + 1 - below), in_bin.end());
+    return;
+  }
+  // The smallest value of the next non-empty bin.
+  int next = bin + 1;
+  while (counts[next] == 0) ++next;
+  float smallest = vmax;
+  for (float v : values) {
+    if (std::min(kBins, static_cast<int>(v * scale)) == next) smallest = std::min(smallest, v);
+  }
+  *second = smallest;
 }
 
 }  // namespace
@@ -86,12 +102,11 @@ float ApplyQuantileThreshold(cv::Mat& image, double q) {
     const double rank = pos - zeros;
     const size_t lo = static_cast<size_t>(std::floor(rank));
     const double frac = rank - lo;
-    const float v_lo = KthPositive(positives, lo, vmax);
+    const bool interpolate = frac > 0 && lo + 1 < positives.size();
+    float v_lo = 0, v_hi = 0;
+    KthPositives(positives, lo, vmax, interpolate, &v_lo, &v_hi);
     threshold = v_lo;
-    if (frac > 0 && lo + 1 < positives.size()) {
-      const float v_hi = KthPositive(positives, lo + 1, vmax);
-      threshold = static_cast<float>(v_lo + frac * (v_hi - v_lo));
-    }
+    if (interpolate) threshold = static_cast<float>(v_lo + frac * (v_hi - v_lo));
   } else if (pos > zeros - 1.0) {
     // Interpolating between the last zero and the smallest positive.
     const float v_hi = *std::min_element(positives.begin(), positives.end());
@@ -116,11 +131,10 @@ int SuppressTransverseRows(cv::Mat& image, const cv::Mat& valid, double max_frac
   for (int r = 0; r < image.rows; ++r) {
     const float* v = image.ptr<float>(r);
     const uint8_t* m = valid.ptr<uint8_t>(r);
+    // Two plain counting loops (each vectorises; one mixing the types does not).
     int kept = 0, width = 0;
-    for (int c = 0; c < image.cols; ++c) {
-      width += m[c] ? 1 : 0;
-      kept += v[c] > 0 ? 1 : 0;
-    }
+    for (int c = 0; c < image.cols; ++c) width += m[c] != 0;
+    for (int c = 0; c < image.cols; ++c) kept += v[c] > 0.f;
     if (width > 0 && kept > max_fraction * width) {
       transverse[r] = true;
       ++found;

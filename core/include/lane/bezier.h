@@ -45,6 +45,10 @@ std::vector<double> NearestPointDistances(const std::vector<Eigen::Vector2d>& fr
 // samples of the other: small when one lies along the other (the detector's
 // duplicate test).
 double MeanNearestDistance(const Bezier& a, const Bezier& b);
+// MeanNearestDistance(a, b) < limit, without sampling when the curves' control
+// polygons' bounding boxes lie `limit` or more apart (a curve lies inside its
+// control points' convex hull, so every distance is at least that gap).
+bool MeanNearestDistanceBelow(const Bezier& a, const Bezier& b, double limit);
 
 // Angle of the direction `d` from the vertical (an image or top-view column),
 // degrees in [0, 90]; the one angle every direction check uses.

@@ -149,19 +149,20 @@ class IpmMapping {
   int width_ = 0, height_ = 0;
   double x_min_ = 0, x_max_ = 0, y_min_ = 0, y_max_ = 0;
   double mpp_x_ = 0, mpp_y_ = 0;
-  // Per IPM pixel (row-major): taps tap_start_[i] .. tap_start_[i + 1] - 1,
-  // each an image pixel and its weight (bilinear: the 4 neighbours; nearest:
-  // one; area: every pixel of the footprint). Invalid pixels have none.
-  // Each tap's `off` indexes the band of the image that the taps read (rows
+  // Per valid IPM pixel (`pixel`, its row-major index), the 2x2 image pixels
+  // it reads and their weights (bilinear: the 4 neighbours; nearest: one of
+  // them with weight 1; area: only validity, see below). `off` indexes the
+  // top-left of the 2x2 in the band of the image that the quads read (rows
   // tap_row0_.., columns tap_col0_.., tap_cols_ wide), into which Apply
-  // first copies the channel: off = (y - tap_row0_) * tap_cols_ + x - tap_col0_.
-  struct Tap {
+  // first copies the channel. The ROI lies inside the image and is at least
+  // 2 pixels each way, so every 2x2 does too.
+  struct Quad {
+    int32_t pixel;
     int32_t off;
-    float w;
+    float w[4];  // (x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)
   };
+  std::vector<Quad> quads_;
   int tap_row0_ = 0, tap_rows_ = 0, tap_col0_ = 0, tap_cols_ = 0;
-  std::vector<int32_t> tap_start_;
-  std::vector<Tap> taps_;
   // kArea: per IPM pixel, sub-rows seg_start_[i] .. seg_start_[i + 1] - 1.
   // A sub-row of the footprint is a box along the image between columns u0
   // and u1, at an image position between two rows: the box's average on the

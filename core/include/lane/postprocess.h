@@ -157,9 +157,43 @@ struct ChannelView {
     if (channel2 == kGrayOfBgr) return static_cast<float>(GrayOfBgr(p));
     return channel2 >= 0 ? std::min(p[channel], p[channel2]) : p[channel];
   }
-  // Bilinear sample; 0 outside the image.
+  // Bilinear sample; 0 outside the image. Inline: profile sampling calls it
+  // tens of thousands of times per frame.
   float Bilinear(double x, double y) const;
 };
+
+namespace internal {
+template <typename T>
+inline float BilinearT(const cv::Mat& m, int cn, int channel, double x, double y) {
+  const int x0 = std::min(static_cast<int>(x), std::max(0, m.cols - 2));
+  const int y0 = std::min(static_cast<int>(y), std::max(0, m.rows - 2));
+  const int dx = m.cols > 1 ? cn : 0;
+  const size_t dy = m.rows > 1 ? m.step[0] : 0;
+  const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
+  const uint8_t* p = m.data + y0 * m.step[0] + (x0 * cn + channel) * sizeof(T);
+  const T* p00 = reinterpret_cast<const T*>(p);
+  const T* p01 = reinterpret_cast<const T*>(p + dx * sizeof(T));
+  const T* p10 = reinterpret_cast<const T*>(p + dy);
+  const T* p11 = reinterpret_cast<const T*>(p + dy + dx * sizeof(T));
+  return (1 - fy) * ((1 - fx) * *p00 + fx * *p01) + fy * ((1 - fx) * *p10 + fx * *p11);
+}
+
+}  // namespace internal
+
+inline float ChannelView::Bilinear(double x, double y) const {
+  if (!(x >= 0 && y >= 0 && x <= image.cols - 1 && y <= image.rows - 1)) return 0.f;
+  if (channel2 != -1) {
+    const int x0 = std::min(static_cast<int>(x), std::max(0, image.cols - 2));
+    const int y0 = std::min(static_cast<int>(y), std::max(0, image.rows - 2));
+    const int x1 = std::min(x0 + 1, image.cols - 1), y1 = std::min(y0 + 1, image.rows - 1);
+    const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
+    return (1 - fy) * ((1 - fx) * At(x0, y0) + fx * At(x1, y0)) +
+           fy * ((1 - fx) * At(x0, y1) + fx * At(x1, y1));
+  }
+  if (image.depth() == CV_32F)
+    return internal::BilinearT<float>(image, image.channels(), channel, x, y);
+  return internal::BilinearT<uint8_t>(image, image.channels(), channel, x, y);
+}
 
 // Samples of one channel along the segment center +- half * normal, one per
 // pixel step, bilinear; positions outside the image read as 0.
