@@ -39,6 +39,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s\n", std::string(detector.status().message()).c_str());
     return 1;
   }
+  cv::setNumThreads(1);  // as lane-server (--opencv_threads 1): one frame per thread
   const int passes = std::max(1, std::atoi(argv[2]));
   std::vector<cv::Mat> frames;
   lane::decode::DecodeOptions options;

@@ -11,9 +11,11 @@
 // Decoding (lane_decode), BM_Decode*: the full decode against the region a
 // lane detector reads, on four sets of JPEGs (the Arg):
 //   0 caltech-synth  16 rendered 640x480 frames of the Caltech camera, q90;
-//                    region rows 200..480, all columns, red
+//                    the region configs/caltech.json's detector reads (rows
+//                    149..435, BGR: Detector::Needs)
 //   1 culane-synth   16 rendered 1640x590 frames of the CULane clip's camera,
-//                    q90; region rows 400..590, all columns, grey
+//                    q90; the region of configs/culane-driver161.json (rows
+//                    295..590, BGR)
 //   2 culane-clip    ../shared/data/culane-driver161-a as they are (1640x590,
 //                    the dataset's own JPEGs); the region of 1
 //   3 cordova1       ../shared/data/caltech-cordova1 (640x480 PNGs) as q90
@@ -35,6 +37,7 @@
 #include <vector>
 
 #include "lane/config.h"
+#include "lane/decode/detector_region.h"
 #include "lane/decode/image_decoder.h"
 #include "lane/detector.h"
 #include "lane/synthetic.h"
@@ -283,6 +286,8 @@ struct ClipSet {
   std::string name;
   std::unique_ptr<Detector> detector;
   std::vector<cv::Mat> frames;  // decoded BGR, full size
+  // The frames as JPEG: the clip's own files, or its PNGs encoded at q90.
+  std::vector<std::string> jpegs;
 };
 
 ClipSet* LoadClip(const std::string& name, const std::string& config, const std::string& ext,
@@ -301,7 +306,16 @@ ClipSet* LoadClip(const std::string& name, const std::string& config, const std:
   const size_t step = std::max<size_t>(1, files.size() / max_frames);
   for (size_t i = 0; i < files.size() && set->frames.size() < max_frames; i += step) {
     cv::Mat img = cv::imread(files[i]);
-    if (!img.empty()) set->frames.push_back(img);
+    if (img.empty()) continue;
+    set->frames.push_back(img);
+    if (ext == ".jpg") {
+      std::ifstream in(files[i], std::ios::binary);
+      set->jpegs.emplace_back(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    } else {
+      std::vector<uchar> buf;
+      cv::imencode(".jpg", img, buf, {cv::IMWRITE_JPEG_QUALITY, 90});
+      set->jpegs.emplace_back(buf.begin(), buf.end());
+    }
   }
   return set;
 }
@@ -324,6 +338,43 @@ void BM_DetectClip(benchmark::State& state) {
 }
 BENCHMARK(BM_DetectClip)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
+// Decode + detect of the clips' frames as JPEGs (driver161's own files,
+// cordova1's PNGs encoded at q90), the whole frame (range(1) = 0, DecodeImage:
+// what the service did before issue 14) or only what the detector reads
+// (range(1) = 1, DecodeForDetector: the service's and `lane detect`'s
+// default now).
+void BM_DecodeDetectClip(benchmark::State& state) {
+  ClipSet* set = GetClip(static_cast<int>(state.range(0)));
+  if (set == nullptr) {
+    state.SkipWithError("clip not present (../shared/data)");
+    return;
+  }
+  const std::vector<std::string>& encoded = set->jpegs;
+  const bool fast = state.range(1) == 1;
+  lane::decode::DecodeOptions options;
+  options.width = set->frames[0].cols;
+  options.height = set->frames[0].rows;
+  size_t i = 0;
+  for (auto _ : state) {
+    const std::string& bytes = encoded[i++ % encoded.size()];
+    auto frame = fast ? lane::decode::DecodeForDetector(bytes, options, set->detector->Needs())
+                      : lane::decode::DecodeImage(bytes, options);
+    if (!frame.ok()) {
+      state.SkipWithError(std::string(frame.status().message()).c_str());
+      return;
+    }
+    auto r = set->detector->Detect(*frame);
+    benchmark::DoNotOptimize(r);
+  }
+  state.SetLabel(set->name + (fast ? " fast" : " full"));
+}
+BENCHMARK(BM_DecodeDetectClip)
+    ->Args({0, 0})
+    ->Args({0, 1})
+    ->Args({1, 0})
+    ->Args({1, 1})
+    ->Unit(benchmark::kMicrosecond);
+
 // ---- Decoding ---------------------------------------------------------------------
 
 struct DecodeSet {
@@ -339,19 +390,19 @@ std::string EncodeJpeg(const cv::Mat& bgr, int quality) {
   return std::string(buf.begin(), buf.end());
 }
 
-lane::decode::DecodeRegion CaltechRegion() {
-  lane::decode::DecodeRegion region;
-  region.top = 200;
-  region.output = lane::decode::DecodeRegion::Output::kRed;
-  return region;
+// What the shipped config's detector reads of a frame (Detector::Needs): the
+// region the service and `lane detect` decode.
+lane::decode::DecodeRegion ShippedRegion(const std::string& config) {
+  const auto parsed = lane::LoadConfigFile(std::string(LANE_SOURCE_DIR) + "/configs/" + config);
+  if (!parsed.ok()) return lane::decode::DecodeRegion{};
+  const auto detector = Detector::Create(parsed->camera, parsed->ipm, parsed->detector);
+  if (!detector.ok()) return lane::decode::DecodeRegion{};
+  return lane::decode::RegionFor(detector->Needs());
 }
 
-lane::decode::DecodeRegion CulaneRegion() {
-  lane::decode::DecodeRegion region;
-  region.top = 400;
-  region.output = lane::decode::DecodeRegion::Output::kGray;
-  return region;
-}
+lane::decode::DecodeRegion CaltechRegion() { return ShippedRegion("caltech.json"); }
+
+lane::decode::DecodeRegion CulaneRegion() { return ShippedRegion("culane-driver161.json"); }
 
 DecodeSet* RenderedDecodeSet(const CameraModel& camera, const std::string& name,
                              const lane::decode::DecodeRegion& region) {

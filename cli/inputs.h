@@ -7,9 +7,12 @@
 #include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
+
+#include "lane/detector.h"
 
 namespace lane_tools {
 
@@ -20,7 +23,10 @@ struct InputFrame {
   std::string name;
   // `name` made into a file name stem: extension dropped, '/' and '#' -> '_'.
   std::string stem;
-  cv::Mat bgr;        // CV_8UC3; empty when `error` is set
+  // CV_8UC3; empty when `error` is set. With FrameReader::DecodeOnly, an
+  // image file's frame may hold only the detector's rows, and be CV_8UC1
+  // (its channel).
+  cv::Mat bgr;
   std::string error;  // why the frame could not be read, or empty
   double decode_ms = 0;
 };
@@ -65,8 +71,20 @@ class FrameReader {
   // Fills `frame` with the next frame; false when all inputs are done.
   bool Next(InputFrame* frame);
 
+  // From now on, JPEG files of width x height are decoded only where `needs`
+  // (a detector's) says, through lane/decode: the rows it reads and, where it
+  // needs one, only its channel. Same lanes, less decoding. Other formats
+  // (PNG: see ReadImage) and sizes, and videos, are decoded whole.
+  void DecodeOnly(const lane::FrameNeeds& needs, int width, int height);
+
  private:
+  // An image file: decoded through lane/decode's region decoding when asked
+  // to and it is a JPEG or PNG of the camera's size, else with cv::imread.
+  void ReadImage(const InputEntry& entry, InputFrame* frame) const;
+
   std::vector<InputEntry> entries_;
+  std::optional<lane::FrameNeeds> needs_;
+  int width_ = 0, height_ = 0;
   size_t next_ = 0;
   // The video being read, and its next frame index.
   std::unique_ptr<cv::VideoCapture> video_;

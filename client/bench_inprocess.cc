@@ -39,7 +39,9 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
   decode.width = config->camera.image_width;
   decode.height = config->camera.image_height;
   decode.max_pixels = std::numeric_limits<int64_t>::max();
-  decode.gray = config->detector.channel == lane::Channel::kGray;
+  // As the service decodes the session's frames: what its detector reads,
+  // unless the session asks for whole frames.
+  const lane::FrameNeeds* needs = session.decode().full_decode() ? nullptr : &detector->Needs();
 
   workers = std::max(1, workers);
   const Clock::time_point start = Clock::now();
@@ -58,7 +60,7 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
         const Clock::time_point t0 = Clock::now();
         if (t0 >= end) break;
         const BenchFrame& frame = frames[next.fetch_add(1) % frames.size()];
-        absl::StatusOr<cv::Mat> image = lane::wire::DecodeFrame(frame.request, decode);
+        absl::StatusOr<cv::Mat> image = lane::wire::DecodeFrame(frame.request, decode, needs);
         absl::Status status = image.status();
         if (image.ok()) status = detector->Detect(*image).status();
         const Clock::time_point t1 = Clock::now();

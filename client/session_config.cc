@@ -29,13 +29,18 @@ void AddSessionConfigOptions(CLI::App* app, SessionConfigFlags* flags) {
       ->check(lane_tools::Between(1, 1 << 20))
       ->default_str("the server's --max_inflight_frames")
       ->group(group);
+  app->add_flag("--full-decode", flags->full_decode,
+                "the session decodes whole JPEG/PNG frames (by default only the rows and "
+                "channel its detector reads: the same lanes)")
+      ->group(group);
 }
 
 absl::StatusOr<std::optional<lane::v1::SessionConfig>> SessionConfigFromFlags(
     const SessionConfigFlags& flags, bool required) {
   if (!required && !flags.config && !flags.mode) {
-    if (flags.backpressure || flags.max_inflight_frames) {
-      return absl::InvalidArgumentError("--backpressure and --max-inflight-frames need --config");
+    if (flags.backpressure || flags.max_inflight_frames || flags.full_decode) {
+      return absl::InvalidArgumentError(
+          "--backpressure, --max-inflight-frames and --full-decode need --config");
     }
     return std::optional<lane::v1::SessionConfig>();
   }
@@ -50,6 +55,7 @@ absl::StatusOr<std::optional<lane::v1::SessionConfig>> SessionConfigFromFlags(
                                  : lane::v1::BACKPRESSURE_BLOCK);
   }
   if (flags.max_inflight_frames) stream->set_max_inflight_frames(*flags.max_inflight_frames);
+  if (flags.full_decode) proto.mutable_decode()->set_full_decode(true);
   return std::optional<lane::v1::SessionConfig>(std::move(proto));
 }
 

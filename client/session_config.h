@@ -19,10 +19,11 @@ struct SessionConfigFlags {
   std::optional<std::string> mode;
   std::optional<std::string> backpressure;
   std::optional<uint32_t> max_inflight_frames;
+  bool full_decode = false;
 };
 
 // --config FILE, --mode all|two, --backpressure block|drop_oldest,
-// --max-inflight-frames N (old spelling --session-inflight).
+// --max-inflight-frames N (old spelling --session-inflight), --full-decode.
 void AddSessionConfigOptions(CLI::App* app, SessionConfigFlags* flags);
 
 // The SessionConfig the options describe: the config file (or the defaults)

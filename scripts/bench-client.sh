@@ -3,7 +3,12 @@
 # same cores (docs/client.md, "Measured"):
 #   1. service throughput vs the in-process decode + detect (target >= 80 %),
 #   2. open-loop p99 latency at half the maximum throughput (target <= 10 ms),
-#   3. raw vs JPEG throughput (target >= 1.5x).
+#   3. raw vs JPEG throughput (target >= 1.5x),
+#   4. 1640x590 JPEG (configs/culane-driver161.json; the clip's own frames
+#      when ../shared/data/culane-driver161-a is there, else frames rendered
+#      by its camera): the default fast decode (only the rows the detector
+#      reads) and --full-decode side by side, each against its in-process
+#      reference (issue 14).
 #
 # usage: scripts/bench-client.sh [BUILD_DIR]        (default: build)
 # environment: PORT (50051), WARMUP (2s), DURATION (10s), CAMERAS (2),
@@ -61,6 +66,15 @@ MAX=$(field "$OUT/jpeg-closed.json" "r['runs'][0]['achieved_fps']")
 PER_CAMERA=$(/usr/bin/python3 -c "print(round($MAX / 2 / $OPEN_CAMERAS, 2))")
 run jpeg-open-half --cameras "$OPEN_CAMERAS" --fps "$PER_CAMERA" --slo-p99-ms 10
 
+# 4: 1640x590 JPEG, fast and full decode.
+CULANE_DATA=${LANE_DATA_DIR:-$(dirname "$0")/../../shared/data}/culane-driver161-a
+set --
+[ -d "$CULANE_DATA" ] && set -- "$CULANE_DATA"
+run culane-fast --cameras "$CAMERAS" --window "$INFLIGHT" --inprocess \
+  --config "$(dirname "$0")/../configs/culane-driver161.json" "$@"
+run culane-full --cameras "$CAMERAS" --window "$INFLIGHT" --inprocess --full-decode \
+  --config "$(dirname "$0")/../configs/culane-driver161.json" "$@"
+
 /usr/bin/python3 - "$OUT" <<'EOF'
 import json, os, sys
 out = sys.argv[1]
@@ -78,7 +92,15 @@ print("2. open loop at %.1f frames/s (%d cameras x %g fps; achieved %.1f): p50 %
          h["latency_ms"]["max"]))
 print("3. raw / JPEG: %.1f / %.1f frames/s = %.2fx  (target >= 1.5x)"
       % (r["achieved_fps"], j["achieved_fps"], r["achieved_fps"] / j["achieved_fps"]))
-for name, run in (("jpeg-closed", j), ("raw-closed", r), ("jpeg-open-half", h)):
+fast, full = load("culane-fast"), load("culane-full")
+f, g = fast["runs"][0], full["runs"][0]
+print("4. 1640x590 JPEG, fast decode: %.1f / %.1f frames/s in-process = %.1f %%; "
+      "full decode: %.1f / %.1f = %.1f %%; fast / full service: %.2fx"
+      % (f["achieved_fps"], fast["inprocess"]["fps"], 100 * f["service_vs_inprocess"],
+         g["achieved_fps"], full["inprocess"]["fps"], 100 * g["service_vs_inprocess"],
+         f["achieved_fps"] / g["achieved_fps"]))
+for name, run in (("jpeg-closed", j), ("raw-closed", r), ("jpeg-open-half", h),
+                  ("culane-fast", f), ("culane-full", g)):
     print("   %-15s sent %d ok %d errors %d dropped %d unsent %d"
           % (name, run["frames_sent"], run["frames_ok"], run["errors_total"], run["dropped"],
              run["unsent"]))

@@ -49,13 +49,15 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
   decode.width = session.config.camera.image_width;
   decode.height = session.config.camera.image_height;
   decode.max_pixels = limits.max_frame_pixels;
-  decode.gray = session.config.detector.channel == lane::Channel::kGray;
   decode.accept_damaged = session.decode.accept_damaged_frames;
   decode.deadline = limits.decode_deadline;
 
   absl::Status status;
   try {
-    absl::StatusOr<cv::Mat> frame = wire::DecodeFrame(request, decode);
+    // Only the rows and channel the detector reads, unless the session asks
+    // for whole frames.
+    absl::StatusOr<cv::Mat> frame = wire::DecodeFrame(
+        request, decode, session.decode.full_decode ? nullptr : &session.detector.Needs());
     const SteadyTime decoded = std::chrono::steady_clock::now();
     const double decode_ms = MillisecondsBetween(start, decoded);
     timings->set_decode_ms(decode_ms);

@@ -38,9 +38,11 @@ struct StreamPolicy {
 struct DecodePolicy {
   // Accept JPEGs that decode only with libjpeg's corrupt-data warnings.
   bool accept_damaged_frames = false;
+  // Decode whole frames instead of the detector's rows and channel.
+  bool full_decode = false;
 
   bool operator==(const DecodePolicy& o) const {
-    return accept_damaged_frames == o.accept_damaged_frames;
+    return accept_damaged_frames == o.accept_damaged_frames && full_decode == o.full_decode;
   }
   bool operator!=(const DecodePolicy& o) const { return !(*this == o); }
 };

@@ -40,6 +40,7 @@ absl::StatusOr<SessionSpec> SessionSpecFromProto(const v1::SessionConfig& proto)
   if (!stream.ok()) return stream.status();
   DecodePolicy decode;
   decode.accept_damaged_frames = proto.decode().accept_damaged_frames();
+  decode.full_decode = proto.decode().full_decode();
   return SessionSpec{*std::move(config), *stream, decode};
 }
 
@@ -58,6 +59,7 @@ void SessionToProto(const Session& session, absl::Time last_used, v1::Session* o
   StreamPolicyToProto(session.stream, out->mutable_config()->mutable_stream());
   out->mutable_config()->mutable_decode()->set_accept_damaged_frames(
       session.decode.accept_damaged_frames);
+  out->mutable_config()->mutable_decode()->set_full_decode(session.decode.full_decode);
   out->set_create_time_unix_ns(absl::ToUnixNanos(session.create_time));
   out->set_last_used_unix_ns(absl::ToUnixNanos(last_used));
   out->set_frames_processed(session.frames_processed.load(std::memory_order_relaxed));

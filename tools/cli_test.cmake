@@ -68,6 +68,22 @@ endforeach()
 run(0 detect_list detect --config "${CONFIG}" "${OUT}/frames/list.txt")
 expect_contains("${detect_list_out}" "\"frame\":\"000002.png\"" "detect on list.txt")
 
+# --- JPEG frames: decoded only where the detector reads (the default) give
+# the lanes of whole frames (--full-decode) --------------------------------
+run(0 render_jpg render --config "${CONFIG}" --count 3 --seed 11 --format jpg
+    --output "${OUT}/jpg")
+run(0 detect_fast detect --config "${CONFIG}" --output "${OUT}/fast.jsonl" "${OUT}/jpg")
+run(0 detect_full detect --config "${CONFIG}" --full-decode --output "${OUT}/full.jsonl"
+    "${OUT}/jpg")
+file(READ "${OUT}/fast.jsonl" fast)
+file(READ "${OUT}/full.jsonl" full)
+string(REGEX REPLACE ",\"timing_ms\":{[^}]*}" "" fast "${fast}")
+string(REGEX REPLACE ",\"timing_ms\":{[^}]*}" "" full "${full}")
+expect_contains("${fast}" "\"lanes\":[{\"image\"" "lanes found in the JPEG frames")
+if(NOT fast STREQUAL full)
+  message(FATAL_ERROR "lane detect on JPEG frames: the default and --full-decode differ:\n${fast}\n${full}")
+endif()
+
 # --- failures: exit code 1 with a message, never a crash -------------------
 run(1 missing detect --config "${CONFIG}" "${OUT}/no-such-frame.png")
 expect_contains("${missing_err}" "no-such-frame.png" "missing file")

@@ -45,6 +45,7 @@ struct DetectFlags {
   std::optional<uint64_t> seed;
   std::optional<std::string> output;
   std::optional<std::string> overlay;
+  bool full_decode = false;
   std::vector<std::string> inputs;
 };
 
@@ -188,6 +189,12 @@ int RunDetect(const DetectFlags& flags) {
 
   DetectRun run(*detector, config, out, flags.overlay.value_or(""));
   FrameReader reader(flags.inputs);
+  // JPEG frames are decoded only in the rows and channel the detector
+  // reads (the same lanes), unless asked not to; overlays draw on the whole
+  // frame.
+  if (!flags.full_decode && !flags.overlay) {
+    reader.DecodeOnly(detector->Needs(), config.camera.image_width, config.camera.image_height);
+  }
   InputFrame frame;
   while (reader.Next(&frame)) run.Process(frame);
   if (!out) {
@@ -219,6 +226,9 @@ Command AddDetectCommand(CLI::App& lane) {
               "also write DIR/STEM.png (lanes on the frame) and DIR/STEM_ipm.png (lanes in the "
               "top view)")
       ->type_name("DIR");
+  app->add_flag("--full-decode", flags->full_decode,
+                "decode whole frames with OpenCV (by default JPEG frames are decoded only in "
+                "the rows and channel the detector reads, which gives the same lanes)");
   app->add_option("INPUT", flags->inputs, "image files, directories, list files or videos")
       ->required();
   return {app, [flags] { return RunDetect(*flags); }};

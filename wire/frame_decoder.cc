@@ -3,6 +3,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
+#include "lane/decode/detector_region.h"
 #include "wire/status_map.h"
 
 namespace lane::wire {
@@ -57,11 +58,14 @@ absl::StatusOr<cv::Mat> DecodeRaw(const v1::RawImage& raw, const DecodeOptions& 
 
 }  // namespace
 
-absl::StatusOr<cv::Mat> DecodeFrame(const v1::FrameRequest& request, const DecodeOptions& options) {
+absl::StatusOr<cv::Mat> DecodeFrame(const v1::FrameRequest& request, const DecodeOptions& options,
+                                    const lane::FrameNeeds* needs) {
   switch (request.image_case()) {
-    case v1::FrameRequest::kEncoded:
+    case v1::FrameRequest::kEncoded: {
       if (request.encoded().empty()) return InvalidFrame("encoded frame is empty");
-      return decode::DecodeImage(request.encoded(), options);
+      if (needs == nullptr) return decode::DecodeImage(request.encoded(), options);
+      return decode::DecodeForDetector(request.encoded(), options, *needs);
+    }
     case v1::FrameRequest::kRaw:
       return DecodeRaw(request.raw(), options);
     default:

@@ -9,6 +9,7 @@
 
 #include "absl/status/statusor.h"
 #include "lane/decode/image_decoder.h"
+#include "lane/detector.h"
 #include "lane/v1/lane_service.pb.h"
 
 namespace lane::wire {
@@ -25,7 +26,15 @@ using decode::ReadEncodedHeader;
 //
 // A raw BGR8 or GRAY8 frame is not copied: the returned Mat points into
 // `request`, which must outlive it.
-absl::StatusOr<cv::Mat> DecodeFrame(const v1::FrameRequest& request, const DecodeOptions& options);
+//
+// With `needs` (a detector's, lane::Detector::Needs), an encoded frame is
+// decoded only in the rows the detector reads and, where one channel is all
+// it needs, only that channel (CV_8UC1): the Mat has the frame's size, and
+// its other rows hold anything (the detector never reads them). The same
+// checks, limits and errors apply as to the whole frame; options.gray is
+// ignored then.
+absl::StatusOr<cv::Mat> DecodeFrame(const v1::FrameRequest& request, const DecodeOptions& options,
+                                    const lane::FrameNeeds* needs = nullptr);
 
 }  // namespace lane::wire
 

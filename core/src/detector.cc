@@ -90,7 +90,33 @@ absl::StatusOr<Detector> Detector::Create(const CameraModel& camera, const IpmOp
   if (!mapping.ok()) return mapping.status();
   FilterKernels kernels =
       MakeFilterKernels(options.filter, mapping->metres_per_px_x(), mapping->metres_per_px_y());
-  return Detector(*std::move(mapping), options, std::move(kernels));
+  Detector detector(*std::move(mapping), options, std::move(kernels));
+  detector.needs_ = detector.ComputeNeeds();
+  return detector;
+}
+
+FrameNeeds Detector::ComputeNeeds() const {
+  // The top view's rows, and those of post-processing in the image: the
+  // extension's rows, widened by the longest profile across a lane (its
+  // search either side, twice over for the bar's sides and smoothing), since
+  // a slanted lane's profiles reach up and down.
+  const CameraModel& cam = ipm_.camera();
+  const PostprocessOptions& pp = options_.postprocess;
+  const double scale = cam.image_width / 640.0;
+  const auto [ipm_top, ipm_bottom] = ipm_.ImageRows();
+  const ExtensionRows ext = ImageExtensionRows(cam, ipm_.roi(), pp);
+  const double margin =
+      std::ceil(2 * std::max(pp.extend_search_px, pp.localize_search_px) * scale) + 8;
+  const double top = std::min<double>(ipm_top, std::min(ext.min_row, ipm_.roi().top) - margin);
+  const double bottom =
+      std::max<double>(ipm_bottom + 1, std::max(ext.max_row, ipm_.roi().bottom) + margin + 1);
+  FrameNeeds needs;
+  needs.top = std::clamp(static_cast<int>(std::floor(top)), 0, cam.image_height - 1);
+  needs.bottom = std::clamp(static_cast<int>(std::ceil(bottom)), needs.top + 1, cam.image_height);
+  if (pp.max_redness >= 1 && options_.channel == Channel::kRed) {
+    needs.pixels = FrameNeeds::Pixels::kRed;  // no colour check: red is all it reads
+  }
+  return needs;
 }
 
 size_t Detector::MemoryBytes() const {
@@ -293,8 +319,10 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
     t = Clock::now();
   };
 
-  // 1. Channel and top view, mean removed.
-  const ChannelView channel = ViewChannel(frame);
+  // 1. Channel (the rows this detector reads) and top view, mean removed.
+  ChannelView channel = ViewChannel(frame);
+  channel.row_begin = needs_.top;
+  channel.row_end = needs_.bottom;
   cv::Mat void_mask;  // empty: no void handling beyond the ROI's
   const cv::Mat top_view = TopView(channel, &void_mask);
   lap(time.ipm_ms);

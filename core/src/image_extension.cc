@@ -10,7 +10,7 @@ namespace {
 Eigen::Vector2d Normal(const Eigen::Vector2d& t) { return Eigen::Vector2d(-t.y(), t.x()); }
 
 bool InImage(const Eigen::Vector2d& p, const ChannelView& image) {
-  return p.x() >= 0 && p.y() >= 0 && p.x() <= image.cols() - 1 && p.y() <= image.rows() - 1;
+  return image.Inside(p.x(), p.y());
 }
 
 // Image pixels per metre across the road (ground x) at image point `p`.
@@ -202,7 +202,7 @@ std::optional<Bezier> ClipToImageContent(const Bezier& spline, const ChannelView
     for (int dy = -2; dy <= 2; ++dy) {
       for (int dx = -2; dx <= 2; ++dx) {
         const int xx = std::clamp(x + dx, 0, image.cols() - 1);
-        const int yy = std::clamp(y + dy, 0, image.rows() - 1);
+        const int yy = std::clamp(y + dy, image.top(), image.bottom() - 1);
         if (image.At(xx, yy) > black) return true;
       }
     }
@@ -234,7 +234,7 @@ Bezier ExtendInImage(const Bezier& spline, const ChannelView& image, const Camer
   const double reference = ImageBarContrast(spline, image, camera, options);
   if (!(reference > 0)) return spline;
   const double min_contrast = options.continuation_threshold * reference;
-  const double max_row = std::min(options.max_row, image.rows() - 1.0);
+  const double max_row = std::min(options.max_row, image.bottom() - 1.0);
 
   // Walks from `start` along `dir`; returns the supported points, in order.
   const auto walk = [&](const Eigen::Vector2d& start, Eigen::Vector2d dir, double min_cos,

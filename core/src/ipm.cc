@@ -472,6 +472,11 @@ Eigen::Vector2d IpmMapping::ImageToIpm(const Eigen::Vector2d& image) const {
   return GroundToIpm(camera_.ImageToGround(image));
 }
 
+std::pair<int, int> IpmMapping::ImageRows() const {
+  if (options_.interpolation == Interpolation::kArea) return {seg_row0_, seg_row1_};
+  return {tap_row0_, tap_row0_ + tap_rows_ - 1};
+}
+
 size_t IpmMapping::MemoryBytes() const {
   return quads_.capacity() * sizeof(Quad) + seg_start_.capacity() * sizeof(seg_start_[0]) +
          segments_.capacity() * sizeof(SubRow) + valid_.total() * valid_.elemSize() +

@@ -44,7 +44,14 @@ class LineEstimator {
   static constexpr int kSampleSize = 4;
 
   LineEstimator(const WeightedPoints& pts, int rows, const LineRansacOptions& options)
-      : pts_(pts), rows_(rows), options_(options) {}
+      : pts_(pts), rows_(rows), options_(options) {
+    xs_.reserve(pts.points.size());
+    ys_.reserve(pts.points.size());
+    for (const Eigen::Vector2d& p : pts.points) {
+      xs_.push_back(p.x());
+      ys_.push_back(p.y());
+    }
+  }
 
   std::optional<IpmLine> Estimate(const std::vector<Eigen::Vector2d>& sample) const {
     const auto fit = FitLineTls(sample, {});
@@ -56,12 +63,19 @@ class LineEstimator {
     return line;
   }
 
+  // Branch-free over the points' coordinates as separate arrays (whether a
+  // point is an inlier is a coin toss for the branch predictor); the sum runs
+  // in the points' order, adding an exact 0 for outliers.
   double Score(const IpmLine& line) const {
     const NormalForm normal(line);
     const double tol = options_.inlier_distance_px;
+    const double nx = normal.n.x(), ny = normal.n.y(), offset = normal.offset;
+    const double* x = xs_.data();
+    const double* y = ys_.data();
+    const double* w = pts_.weights.data();
     double score = 0;
-    for (size_t i = 0; i < pts_.points.size(); ++i) {
-      if (normal.Distance(pts_.points[i]) <= tol) score += pts_.weights[i];
+    for (size_t i = 0; i < xs_.size(); ++i) {
+      score += std::abs(nx * x[i] + ny * y[i] - offset) <= tol ? w[i] : 0.0;
     }
     return score;
   }
@@ -80,6 +94,7 @@ class LineEstimator {
   const WeightedPoints& pts_;
   int rows_;
   const LineRansacOptions& options_;
+  std::vector<double> xs_, ys_;
 };
 
 }  // namespace

@@ -26,9 +26,7 @@ BarWidthReport MeasureBarWidths(const Bezier& spline, const ChannelView& image,
   std::vector<float> row, sorted;
   for (int i = 0; i < o.samples; ++i) {
     const Eigen::Vector2d p = spline.Eval((i + 0.5) / o.samples);
-    if (!(p.x() >= 0 && p.y() >= 0 && p.x() <= image.cols() - 1 && p.y() <= image.rows() - 1)) {
-      continue;
-    }
+    if (!image.Inside(p.x(), p.y())) continue;
     const double ppm = RowPixelsPerMetre(camera, p);
     if (!(ppm > 0)) continue;
     const int half = std::max(3, static_cast<int>(std::lround(o.window_m * ppm)));
@@ -78,7 +76,7 @@ double MedianRedness(const Bezier& spline, const cv::Mat& bgr, const ChannelView
     const Eigen::Vector2d p = spline.Eval((i + 0.5) / samples);
     const int y = static_cast<int>(std::lround(p.y()));
     const int cx = static_cast<int>(std::lround(p.x()));
-    if (y < 0 || y >= bgr.rows || cx < 0 || cx >= bgr.cols) continue;
+    if (!view.Inside(cx, y)) continue;
     int best = -1;
     for (int x = std::max(0, cx - s); x <= std::min(bgr.cols - 1, cx + s); ++x) {
       if (best < 0 || view.At(x, y) > view.At(best, y)) best = x;

@@ -17,7 +17,7 @@ Eigen::Vector2d Normal(const Eigen::Vector2d& tangent) {
 }
 
 bool InBounds(const Eigen::Vector2d& p, const ChannelView& image) {
-  return p.x() >= 0 && p.y() >= 0 && p.x() <= image.cols() - 1 && p.y() <= image.rows() - 1;
+  return image.Inside(p.x(), p.y());
 }
 
 }  // namespace

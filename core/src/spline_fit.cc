@@ -16,7 +16,9 @@ namespace {
 class WindowedRaster {
  public:
   WindowedRaster(const cv::Mat& image, const IpmLine* line, double half, int jitter)
-      : cols_(image.cols), jitter_(jitter), lo_(image.rows), hi_(image.rows), start_(image.rows) {
+      : cols_(image.cols), jitter_(jitter), rows_(image.rows) {
+    prefix_.reserve(static_cast<size_t>(image.rows) * (line ? static_cast<size_t>(2 * half + 3)
+                                                            : static_cast<size_t>(image.cols + 1)));
     for (int y = 0; y < image.rows; ++y) {
       int lo = 0, hi = image.cols - 1;
       if (line) {
@@ -24,9 +26,7 @@ class WindowedRaster {
         lo = std::max(lo, static_cast<int>(std::ceil(c - half)));
         hi = std::min(hi, static_cast<int>(std::floor(c + half)));
       }
-      lo_[y] = lo;
-      hi_[y] = hi;
-      start_[y] = prefix_.size();
+      rows_[y] = {lo, hi, prefix_.size()};
       const float* row = image.ptr<float>(y);
       double acc = 0;
       prefix_.push_back(0);
@@ -34,23 +34,27 @@ class WindowedRaster {
     }
   }
 
-  int rows() const { return static_cast<int>(lo_.size()); }
+  int rows() const { return static_cast<int>(rows_.size()); }
   int cols() const { return cols_; }
 
   // Sum of the window's pixels in columns x - jitter .. x + jitter of row y.
   double Sum(int x, int y) const {
-    const int a = std::max(lo_[y], x - jitter_);
-    const int b = std::min(hi_[y], x + jitter_);
+    const Row& r = rows_[y];
+    const int a = std::max(r.lo, x - jitter_);
+    const int b = std::min(r.hi, x + jitter_);
     if (a > b) return 0.0;
-    const double* p = prefix_.data() + start_[y];
-    return p[b - lo_[y] + 1] - p[a - lo_[y]];
+    const double* p = prefix_.data() + r.start;
+    return p[b - r.lo + 1] - p[a - r.lo];
   }
 
  private:
+  struct Row {
+    int lo, hi;    // the window's columns in this row
+    size_t start;  // its prefix sums in prefix_
+  };
   int cols_;
   int jitter_;
-  std::vector<int> lo_, hi_;
-  std::vector<size_t> start_;
+  std::vector<Row> rows_;
   std::vector<double> prefix_;
 };
 

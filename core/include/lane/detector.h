@@ -105,19 +105,40 @@ struct Detection {
   std::optional<Intermediates> debug;
 };
 
+// What the detector reads of a frame: rows [top, bottom) (every column) and
+// which pixels. The detector never reads outside these rows, so a decoder
+// that produces only them (lane/decode's DecodeImageRegion) gives exactly the
+// lanes of a whole frame with the same pixels there.
+struct FrameNeeds {
+  enum class Pixels {
+    kBgr,  // all three channels: the colour check, or a channel computed from
+           // them (grey is the BT.601 grey of the decoded colour, as for a
+           // whole frame: a JPEG's own luma differs from it by rounding,
+           // enough to change RANSAC's draws)
+    kRed,  // the red channel alone (channel red, colour check off)
+  };
+  int top = 0;
+  int bottom = 0;
+  Pixels pixels = Pixels::kBgr;
+};
+
 // Immutable after Create; Detect is const and safe to call from many threads.
 class Detector {
  public:
   static absl::StatusOr<Detector> Create(const CameraModel& camera, const IpmOptions& ipm,
                                          const DetectorOptions& options);
 
-  // `frame` must be CV_8UC3 (BGR) or CV_8UC1 of the camera's size.
-  // INVALID_ARGUMENT otherwise.
+  // `frame` must be CV_8UC3 (BGR) or CV_8UC1 (the detector's channel, or grey)
+  // of the camera's size; only rows Needs().top .. Needs().bottom - 1 are
+  // read, the others may hold anything. INVALID_ARGUMENT otherwise.
   absl::StatusOr<Detection> Detect(const cv::Mat& frame) const;
 
   const IpmMapping& ipm() const { return ipm_; }
   const DetectorOptions& options() const { return options_; }
   const FilterKernels& kernels() const { return kernels_; }
+  // The rows and pixels this detector reads of a frame (from its calibration
+  // and options, computed once).
+  const FrameNeeds& Needs() const { return needs_; }
   // Bytes this detector holds between frames (its precomputed mapping and
   // kernels); each Detect call allocates its working images on top.
   size_t MemoryBytes() const;
@@ -145,10 +166,12 @@ class Detector {
 
   Detector(IpmMapping ipm, DetectorOptions options, FilterKernels kernels)
       : ipm_(std::move(ipm)), options_(std::move(options)), kernels_(std::move(kernels)) {}
+  FrameNeeds ComputeNeeds() const;
 
   IpmMapping ipm_;
   DetectorOptions options_;
   FilterKernels kernels_;
+  FrameNeeds needs_;
 };
 
 }  // namespace lane

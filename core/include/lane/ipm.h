@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <utility>
 #include <vector>
 
 #include "absl/status/statusor.h"
@@ -129,6 +130,9 @@ class IpmMapping {
   const cv::Mat& valid_mask() const { return valid_; }
   // Its complement.
   const cv::Mat& invalid_mask() const { return invalid_; }
+
+  // The image rows the top view reads, first to last (inclusive).
+  std::pair<int, int> ImageRows() const;
 
   // Bytes held by the precomputed mapping (grows with the top view's size).
   size_t MemoryBytes() const;

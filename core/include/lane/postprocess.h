@@ -143,14 +143,27 @@ inline constexpr int kGrayOfBgr = -2;
 inline int GrayOfBgr(const uint8_t* p) {
   return (p[0] * 1868 + p[1] * 9617 + p[2] * 4899 + 8192) >> 14;
 }
+//
+// Only rows [top(), bottom()) are read (row_begin/row_end; the whole image
+// by default): the detector sets them to the rows it needs of a frame
+// (Detector::Needs), so that a frame decoded only there reads exactly as a
+// whole one. Points in other rows count as outside the image.
 struct ChannelView {
   ChannelView(const cv::Mat& m, int c = 0, int c2 = -1)  // NOLINT: implicit
       : image(m), channel(c), channel2(c2) {}
   cv::Mat image;
   int channel = 0;
   int channel2 = -1;
+  int row_begin = 0;
+  int row_end = -1;  // -1: the image's height
   int cols() const { return image.cols; }
   int rows() const { return image.rows; }
+  int top() const { return row_begin; }
+  int bottom() const { return row_end < 0 ? image.rows : row_end; }
+  // Whether (x, y) lies inside the image and the rows read.
+  bool Inside(double x, double y) const {
+    return x >= 0 && y >= top() && x <= image.cols - 1 && y <= bottom() - 1;
+  }
   float At(int x, int y) const {
     if (image.depth() == CV_32F) return image.ptr<float>(y)[x];
     const uint8_t* p = image.ptr<uint8_t>(y) + x * image.channels();
@@ -163,12 +176,15 @@ struct ChannelView {
 };
 
 namespace internal {
+// Bilinear sample of channel `channel` of `m` at (x, y) (inside the image and
+// rows top..bottom - 1), reading only those rows.
 template <typename T>
-inline float BilinearT(const cv::Mat& m, int cn, int channel, double x, double y) {
+inline float BilinearT(const cv::Mat& m, int cn, int channel, double x, double y, int top,
+                       int bottom) {
   const int x0 = std::min(static_cast<int>(x), std::max(0, m.cols - 2));
-  const int y0 = std::min(static_cast<int>(y), std::max(0, m.rows - 2));
+  const int y0 = std::min(static_cast<int>(y), std::max(top, bottom - 2));
   const int dx = m.cols > 1 ? cn : 0;
-  const size_t dy = m.rows > 1 ? m.step[0] : 0;
+  const size_t dy = bottom - top > 1 ? m.step[0] : 0;
   const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
   const uint8_t* p = m.data + y0 * m.step[0] + (x0 * cn + channel) * sizeof(T);
   const T* p00 = reinterpret_cast<const T*>(p);
@@ -181,18 +197,18 @@ inline float BilinearT(const cv::Mat& m, int cn, int channel, double x, double y
 }  // namespace internal
 
 inline float ChannelView::Bilinear(double x, double y) const {
-  if (!(x >= 0 && y >= 0 && x <= image.cols - 1 && y <= image.rows - 1)) return 0.f;
+  if (!Inside(x, y)) return 0.f;
   if (channel2 != -1) {
     const int x0 = std::min(static_cast<int>(x), std::max(0, image.cols - 2));
-    const int y0 = std::min(static_cast<int>(y), std::max(0, image.rows - 2));
-    const int x1 = std::min(x0 + 1, image.cols - 1), y1 = std::min(y0 + 1, image.rows - 1);
+    const int y0 = std::min(static_cast<int>(y), std::max(top(), bottom() - 2));
+    const int x1 = std::min(x0 + 1, image.cols - 1), y1 = std::min(y0 + 1, bottom() - 1);
     const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
     return (1 - fy) * ((1 - fx) * At(x0, y0) + fx * At(x1, y0)) +
            fy * ((1 - fx) * At(x0, y1) + fx * At(x1, y1));
   }
   if (image.depth() == CV_32F)
-    return internal::BilinearT<float>(image, image.channels(), channel, x, y);
-  return internal::BilinearT<uint8_t>(image, image.channels(), channel, x, y);
+    return internal::BilinearT<float>(image, image.channels(), channel, x, y, top(), bottom());
+  return internal::BilinearT<uint8_t>(image, image.channels(), channel, x, y, top(), bottom());
 }
 
 // Samples of one channel along the segment center +- half * normal, one per
