@@ -248,7 +248,14 @@ void IpmMapping::BuildTaps() {
         {i, (q.y - tap_row0_) * tap_cols_ + q.x - tap_col0_, {q.w[0], q.w[1], q.w[2], q.w[3]}});
   }
   cv::bitwise_not(valid_, invalid_);
-  if (options_.interpolation == Interpolation::kArea) BuildSegments();
+  if (options_.interpolation == Interpolation::kArea) {
+    BuildSegments();
+    // Area sampling reads the sub-rows alone: the quads only marked validity
+    // (valid_), and a session need not hold them (0.44 MiB for the CULane
+    // view).
+    quads_.clear();
+    quads_.shrink_to_fit();
+  }
 }
 
 void IpmMapping::BuildSegments() {
