@@ -44,32 +44,7 @@ std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
     if (!InImage(q, image)) return std::nullopt;  // the profile leaves the image
     raw[i + h] = image.Bilinear(q.x(), q.y());
   }
-  const int k = std::max(1, static_cast<int>(std::ceil(2.5 * sigma)));
-  thread_local std::vector<double> kernel;  // the Gaussian's taps -k..k
-  thread_local double kernel_sigma = -1;
-  thread_local double kernel_sum = 0;  // of all taps, summed in order
-  if (sigma != kernel_sigma) {
-    kernel.resize(2 * k + 1);
-    kernel_sum = 0;
-    for (int j = -k; j <= k; ++j) {
-      kernel[j + k] = std::exp(-0.5 * j * j / (sigma * sigma));
-      kernel_sum += kernel[j + k];
-    }
-    kernel_sigma = sigma;
-  }
-  const int len = static_cast<int>(raw.size());
-  smooth.resize(len);
-  for (int i = 0; i < len; ++i) {
-    const int j0 = std::max(-k, -i), j1 = std::min(k, len - 1 - i);
-    double acc = 0;
-    for (int j = j0; j <= j1; ++j) acc += kernel[j + k] * raw[i + j];
-    double ws = kernel_sum;  // the whole kernel, except near the ends
-    if (j0 != -k || j1 != k) {
-      ws = 0;
-      for (int j = j0; j <= j1; ++j) ws += kernel[j + k];
-    }
-    smooth[i] = acc / ws;
-  }
+  SmoothProfile(raw, sigma, smooth);
   // Best bar within +-half of the centre.
   const int s = static_cast<int>(std::lround(side));
   std::optional<Bar> best;

@@ -81,39 +81,65 @@ std::vector<float> SampleProfile(const ChannelView& image, const Eigen::Vector2d
   return out;
 }
 
+namespace {
+
+// The Gaussian's taps -h..h for one sigma (h = 2.5 sigma, at least 1) and
+// their sum in order, kept per thread for the last sigma asked: a spline's
+// profiles mostly share one.
+struct GaussianTaps {
+  std::vector<double> w;
+  double sum = 0;
+  double sigma = -1;
+  int h = 0;
+};
+
+const GaussianTaps& TapsFor(double sigma) {
+  thread_local GaussianTaps taps;
+  if (sigma != taps.sigma) {
+    taps.h = std::max(1, static_cast<int>(std::ceil(2.5 * sigma)));
+    taps.w.resize(2 * taps.h + 1);
+    taps.sum = 0;
+    for (int j = -taps.h; j <= taps.h; ++j) {
+      taps.w[j + taps.h] = std::exp(-0.5 * j * j / (sigma * sigma));
+      taps.sum += taps.w[j + taps.h];
+    }
+    taps.sigma = sigma;
+  }
+  return taps;
+}
+
+}  // namespace
+
+template <typename T>
+void SmoothProfile(const std::vector<T>& in, double sigma, std::vector<double>& out) {
+  const int n = static_cast<int>(in.size());
+  out.resize(n);
+  const GaussianTaps& taps = TapsFor(sigma);
+  const int h = taps.h;
+  const double* w = taps.w.data();
+  for (int i = 0; i < n; ++i) {
+    const int j0 = std::max(-h, -i), j1 = std::min(h, n - 1 - i);
+    double acc = 0;
+    for (int j = j0; j <= j1; ++j) acc += w[j + h] * in[i + j];
+    double ws = taps.sum;  // the whole kernel, except near the ends
+    if (j0 != -h || j1 != h) {
+      ws = 0;
+      for (int j = j0; j <= j1; ++j) ws += w[j + h];
+    }
+    out[i] = acc / ws;
+  }
+}
+template void SmoothProfile<float>(const std::vector<float>&, double, std::vector<double>&);
+template void SmoothProfile<double>(const std::vector<double>&, double, std::vector<double>&);
+
 std::optional<ProfilePeak> FindProfilePeak(const std::vector<float>& profile, double sigma_px) {
   const int n = static_cast<int>(profile.size());
   if (n < 3) return std::nullopt;
   thread_local std::vector<double> s;
-  s.resize(n);
   if (sigma_px > 0) {
-    const int h = std::max(1, static_cast<int>(std::ceil(2.5 * sigma_px)));
-    // The kernel of the last sigma, kept: a spline's profiles mostly share one.
-    thread_local std::vector<double> kernel;
-    thread_local double kernel_sigma = -1;
-    thread_local double kernel_sum = 0;  // of all taps, summed in order
-    if (sigma_px != kernel_sigma) {
-      kernel.resize(2 * h + 1);
-      kernel_sum = 0;
-      for (int j = -h; j <= h; ++j) {
-        kernel[j + h] = std::exp(-0.5 * j * j / (sigma_px * sigma_px));
-        kernel_sum += kernel[j + h];
-      }
-      kernel_sigma = sigma_px;
-    }
-    for (int i = 0; i < n; ++i) {
-      const int j0 = std::max(-h, -i), j1 = std::min(h, n - 1 - i);
-      double acc = 0;
-      for (int j = j0; j <= j1; ++j) acc += kernel[j + h] * profile[i + j];
-      double ws = kernel_sum;  // the whole kernel, except near the ends
-      if (j0 != -h || j1 != h) {
-        ws = 0;
-        for (int j = j0; j <= j1; ++j) ws += kernel[j + h];
-      }
-      s[i] = acc / ws;
-    }
+    SmoothProfile(profile, sigma_px, s);
   } else {
-    for (int i = 0; i < n; ++i) s[i] = profile[i];
+    s.assign(profile.begin(), profile.end());
   }
   const int best = static_cast<int>(std::max_element(s.begin(), s.end()) - s.begin());
   // Contrast over the profile's mean: a marking covers a few of its samples,

@@ -18,6 +18,7 @@
 #include "lane/eval/evaluate.h"
 #include "lane/eval/report.h"
 #include "lane/eval/seeds.h"
+#include "shared_data.h"
 
 namespace lane::eval {
 namespace {
@@ -27,25 +28,13 @@ namespace fs = std::filesystem;
 constexpr double kF1Tolerance = 0.02;
 constexpr double kRateTolerance = 0.01;
 
-// ../shared/data beside the source tree, else $LANE_DATA_DIR; "" if neither
-// holds the clip.
-std::string FindClip(const std::string& clip) {
-  std::vector<fs::path> roots = {fs::path(LANE_SOURCE_DIR) / ".." / "shared" / "data"};
-  if (const char* env = std::getenv("LANE_DATA_DIR"); env != nullptr && *env != '\0') {
-    roots.emplace_back(env);
-  }
-  for (const fs::path& root : roots) {
-    std::error_code ec;
-    if (fs::is_directory(root / clip, ec)) return (root / clip).lexically_normal().string();
-  }
-  return "";
-}
+using lane::testing::FindSharedClip;
 
 // Evaluates `config` (configs/...) on `clip` over the baseline's seeds and
 // checks the means against tests/testdata/<clip>.baseline.json.
 void CheckAgainstBaseline(const std::string& clip, const std::string& config_name,
                           DatasetFormat format) {
-  const std::string folder = FindClip(clip);
+  const std::string folder = FindSharedClip(clip);
   if (folder.empty()) {
     GTEST_SKIP() << clip << " not found in " << LANE_SOURCE_DIR
                  << "/../shared/data or $LANE_DATA_DIR: skipping the accuracy regression on it";

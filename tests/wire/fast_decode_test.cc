@@ -19,6 +19,7 @@
 #include "lane/detector.h"
 #include "lane/synthetic.h"
 #include "road_frames.h"
+#include "shared_data.h"
 #include "wire/frame_decoder.h"
 
 namespace lane::wire {
@@ -97,18 +98,7 @@ std::vector<std::string> SyntheticJpegs(const CameraModel& camera, int count) {
   return out;
 }
 
-// ../shared/data/<clip> beside the source tree, else $LANE_DATA_DIR/<clip>.
-std::string FindClip(const std::string& clip) {
-  std::vector<fs::path> roots = {fs::path(LANE_SOURCE_DIR) / ".." / "shared" / "data"};
-  if (const char* env = std::getenv("LANE_DATA_DIR"); env != nullptr && *env != '\0') {
-    roots.emplace_back(env);
-  }
-  for (const fs::path& root : roots) {
-    std::error_code ec;
-    if (fs::is_directory(root / clip, ec)) return (root / clip).string();
-  }
-  return "";
-}
+using lane::testing::FindSharedClip;
 
 std::vector<std::string> ReadFiles(const std::string& dir, const std::string& ext) {
   std::vector<std::string> paths;
@@ -195,7 +185,7 @@ TEST(FastDecodeTest, RedAloneGivesTheSameLanes) {
 }
 
 TEST(FastDecodeTest, DevClipGivesTheSameLanes) {
-  const std::string dir = FindClip("culane-driver161-a");
+  const std::string dir = FindSharedClip("culane-driver161-a");
   if (dir.empty()) GTEST_SKIP() << "../shared/data/culane-driver161-a not present: skipped";
   const Config config = ShippedConfig("culane-driver161.json");
   const Detector detector = MakeDetector(config);
@@ -218,7 +208,7 @@ TEST(FastDecodeTest, DevClipGivesTheSameLanes) {
 }
 
 TEST(FastDecodeTest, CordovaPngsGiveTheSameLanes) {
-  const std::string dir = FindClip("caltech-cordova1");
+  const std::string dir = FindSharedClip("caltech-cordova1");
   if (dir.empty()) GTEST_SKIP() << "../shared/data/caltech-cordova1 not present: skipped";
   const Config config = ShippedConfig("caltech.json");
   const Detector detector = MakeDetector(config);

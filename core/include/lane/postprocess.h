@@ -216,6 +216,11 @@ inline float ChannelView::Bilinear(double x, double y) const {
 std::vector<float> SampleProfile(const ChannelView& image, const Eigen::Vector2d& center,
                                  const Eigen::Vector2d& normal, double half);
 
+// `in` smoothed with a Gaussian of `sigma` samples (truncated at 2.5 sigma,
+// renormalised where it passes the ends) into `out`. T: float or double.
+template <typename T>
+void SmoothProfile(const std::vector<T>& in, double sigma, std::vector<double>& out);
+
 // Offset (along the normal, pixels) of the strongest peak of the smoothed
 // profile and its contrast over the profile's mean. nullopt if flat.
 struct ProfilePeak {
