@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
@@ -29,6 +30,46 @@ void BilinearTaps(const Eigen::Vector2d& p, int image_width, int image_height, f
   add(x0 + 1, y0, w * fx * (1 - fy));
   add(x0, y0 + 1, w * (1 - fx) * fy);
   add(x0 + 1, y0 + 1, w * fx * fy);
+}
+
+// p[0] = 0, p[k + 1] = px[0] + ... + px[k] for k < n: exact integers, 16
+// pixels at a time where the CPU has 128-bit vectors (a running sum is a
+// chain of dependent adds, and at 1640x100 pixels a frame it was a third of
+// the area top view's time).
+void RowPrefixSums(const uint8_t* px, int n, int32_t* p) {
+  p[0] = 0;
+  int k = 0;
+  int32_t acc = 0;
+#if CV_SIMD128
+  using namespace cv;  // NOLINT: OpenCV's universal intrinsics (v_*)
+  v_uint32x4 carry = v_setzero_u32();
+  for (; k + 16 <= n; k += 16) {
+    v_uint16x8 lo, hi;
+    v_expand(v_load(px + k), lo, hi);
+    // Prefix sums within each half (at most 16 * 255: no overflow in u16).
+    lo += v_rotate_left<1>(lo);
+    lo += v_rotate_left<2>(lo);
+    lo += v_rotate_left<4>(lo);
+    hi += v_rotate_left<1>(hi);
+    hi += v_rotate_left<2>(hi);
+    hi += v_rotate_left<4>(hi);
+    hi += v_setall_u16(v_extract_n<7>(lo));
+    v_uint32x4 a, b, c, d;
+    v_expand(lo, a, b);
+    v_expand(hi, c, d);
+    a += carry;
+    b += carry;
+    c += carry;
+    d += carry;
+    v_store(reinterpret_cast<unsigned*>(p + k + 1), a);
+    v_store(reinterpret_cast<unsigned*>(p + k + 5), b);
+    v_store(reinterpret_cast<unsigned*>(p + k + 9), c);
+    v_store(reinterpret_cast<unsigned*>(p + k + 13), d);
+    carry = v_broadcast_element<3>(d);
+  }
+  acc = p[k];
+#endif
+  for (; k < n; ++k) p[k + 1] = acc += px[k];
 }
 
 // At most this many sub-samples per axis of one top-view pixel in area
@@ -354,11 +395,7 @@ cv::Mat IpmMapping::ApplySegments(const cv::Mat& image, int channel, int channel
   thread_local std::vector<int32_t> prefix;
   prefix.resize(static_cast<size_t>(rows) * cols);
   for (int v = 0; v < rows; ++v) {
-    const uint8_t* px = band.ptr<uint8_t>(v);
-    int32_t* p = prefix.data() + static_cast<size_t>(v) * cols;
-    int32_t acc = 0;
-    p[0] = 0;
-    for (int k = 0; k + 1 < cols; ++k) p[k + 1] = acc += px[k];
+    RowPrefixSums(band.ptr<uint8_t>(v), cols - 1, prefix.data() + static_cast<size_t>(v) * cols);
   }
   // The box average of one row: prefix difference between the two
   // interpolated prefix positions.

@@ -23,7 +23,6 @@
 namespace lane::eval {
 namespace {
 
-namespace fs = std::filesystem;
 
 constexpr double kF1Tolerance = 0.02;
 constexpr double kRateTolerance = 0.01;
