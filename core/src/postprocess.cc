@@ -113,20 +113,27 @@ const GaussianTaps& TapsFor(double sigma) {
 template <typename T>
 void SmoothProfile(const std::vector<T>& in, double sigma, std::vector<double>& out) {
   const int n = static_cast<int>(in.size());
-  out.resize(n);
   const GaussianTaps& taps = TapsFor(sigma);
   const int h = taps.h;
   const double* w = taps.w.data();
+  // Tap by tap over all samples (the inner loop vectorises); every sample
+  // still sums its taps in the same order, lowest first.
+  out.assign(n, 0.0);
+  double* o = out.data();
+  const T* x = in.data();
+  for (int j = -h; j <= h; ++j) {
+    const double wj = w[j + h];
+    const int i0 = std::max(0, -j), i1 = std::min(n - 1, n - 1 - j);
+    for (int i = i0; i <= i1; ++i) o[i] += wj * x[i + j];
+  }
   for (int i = 0; i < n; ++i) {
     const int j0 = std::max(-h, -i), j1 = std::min(h, n - 1 - i);
-    double acc = 0;
-    for (int j = j0; j <= j1; ++j) acc += w[j + h] * in[i + j];
     double ws = taps.sum;  // the whole kernel, except near the ends
     if (j0 != -h || j1 != h) {
       ws = 0;
       for (int j = j0; j <= j1; ++j) ws += w[j + h];
     }
-    out[i] = acc / ws;
+    o[i] /= ws;
   }
 }
 template void SmoothProfile<float>(const std::vector<float>&, double, std::vector<double>&);

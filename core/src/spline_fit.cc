@@ -74,12 +74,21 @@ double ScoreOnRaster(const Bezier& spline, const WindowedRaster& raster,
   // Raster the curve at dt = 0.01; each pixel counts once, with the jitter
   // columns either side. All control points are inside the image, so the
   // curve (inside their convex hull) is too and coordinates are >= 0.
+  // The pixels first, in a loop without dependencies (it vectorises), then
+  // the sum in order.
+  constexpr int kSteps = 101;
+  const double ax = a.x(), bx = b.x(), cx = c.x(), dx = d.x();
+  const double ay = a.y(), by = b.y(), cy = c.y(), dy = d.y();
+  int xs[kSteps], ys[kSteps];
+  for (int i = 0; i < kSteps; ++i) {
+    const double t = i * 0.01;
+    xs[i] = static_cast<int>(((ax * t + bx) * t + cx) * t + dx + 0.5);
+    ys[i] = static_cast<int>(((ay * t + by) * t + cy) * t + dy + 0.5);
+  }
   double raw = 0;
   int last_x = -1, last_y = -1;
-  for (int i = 0; i <= 100; ++i) {
-    const double t = i * 0.01;
-    const int x = static_cast<int>(((a.x() * t + b.x()) * t + c.x()) * t + d.x() + 0.5);
-    const int y = static_cast<int>(((a.y() * t + b.y()) * t + c.y()) * t + d.y() + 0.5);
+  for (int i = 0; i < kSteps; ++i) {
+    const int x = xs[i], y = ys[i];
     if ((x == last_x && y == last_y) || y >= raster.rows() || x >= raster.cols()) continue;
     last_x = x;
     last_y = y;
