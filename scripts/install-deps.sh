@@ -15,8 +15,9 @@ PACKAGES=(
   libgtest-dev libgmock-dev   # unit and integration tests
   libbenchmark-dev       # benchmarks
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler   # the service
-  prometheus-cpp-dev     # service metrics
-  prometheus             # scraped by the metrics integration test
+  prometheus-cpp-dev     # service metrics (families, text format)
+  libcivetweb-dev        # the metrics port's HTTP server: /metrics, /healthz, /readyz
+  prometheus             # tests: a real scrape; promtool checks the scrape and the alert rules
   libmatio-dev           # Caltech Lanes .ccvl label files (MAT v5)
   clang-format
   clang libclang-rt-14-dev   # fuzz/: libFuzzer targets (scripts/fuzz.sh, a step of the test command)

@@ -41,6 +41,7 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
   const SteadyTime start = std::chrono::steady_clock::now();
   const double queue_wait_ms = MillisecondsBetween(arrival.steady, start);
   metrics.ObserveQueueWait(queue_wait_ms * 1e-3);
+  metrics.ObserveFrameBytes(request.ByteSizeLong());
   response->set_calibration_version(session.version);
   v1::StageTimings* timings = response->mutable_timings();
   timings->set_queue_wait_ms(queue_wait_ms);
@@ -70,6 +71,7 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
         wire::LanesToProto(*detection, response);
         wire::TimingsToProto(detection->timings, timings);
         metrics.ObserveDetectorStages(detection->timings);
+        metrics.ObserveLanes(detection->lanes.size());
         session.frames_processed.fetch_add(1, std::memory_order_relaxed);
       } else {
         status = detection.status();

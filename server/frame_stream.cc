@@ -285,9 +285,7 @@ void FrameStream::FinishLocked(const absl::Status& status) {
   abandoned_.store(true, std::memory_order_release);
   // Only cancellation gets here with frames unanswered; their workers skip.
   while (!slots_.empty()) PopFrontLocked();
-  const grpc::Status grpc_status = wire::ToGrpcStatus(status);
-  deps_.metrics.CountRpc("StreamFrames", grpc_status.error_code());
-  Finish(grpc_status);
+  Finish(wire::ToGrpcStatus(status));
 }
 
 void FrameStream::PopFrontLocked() {

@@ -53,10 +53,24 @@ Metrics::Metrics(prometheus::Registry& registry, const BuildInfo& build)
                     .Help("Camera sessions held by the server.")
                     .Register(registry)
                     .Add({})),
-      rpcs_(prometheus::BuildCounter()
-                .Name("grpc_server_handled_total")
-                .Help("Calls of the lane service completed, by method and status code.")
-                .Register(registry)) {
+      frame_bytes_(
+          prometheus::BuildHistogram()
+              .Name("lanesvc_frame_bytes")
+              .Help("Size of each frame request processed, bytes (encoded or raw).")
+              .Register(registry)
+              .Add({}, prometheus::Histogram::BucketBoundaries{16e3, 64e3, 128e3, 256e3, 512e3, 1e6,
+                                                               2e6, 4e6, 8e6, 16e6, 32e6})),
+      lanes_per_frame_(
+          prometheus::BuildHistogram()
+              .Name("lanesvc_lanes_per_frame")
+              .Help("Lanes found in each frame detected without error.")
+              .Register(registry)
+              .Add({}, prometheus::Histogram::BucketBoundaries{0, 1, 2, 3, 4, 5, 6, 8, 10})),
+      zero_lane_frames_(prometheus::BuildCounter()
+                            .Name("lanesvc_zero_lane_frames_total")
+                            .Help("Frames detected without error in which no lane was found.")
+                            .Register(registry)
+                            .Add({})) {
   auto& stages = prometheus::BuildHistogram()
                      .Name("lanesvc_stage_duration_seconds")
                      .Help("Time spent in each stage of a frame: decode, then the detector's.")
@@ -90,11 +104,6 @@ void Metrics::ObserveDetectorStages(const lane::StageTimings& t) {
   ObserveStage(Stage::kLines, t.lines_ms * 1e-3);
   ObserveStage(Stage::kSplines, t.splines_ms * 1e-3);
   ObserveStage(Stage::kPostprocess, t.postprocess_ms * 1e-3);
-}
-
-void Metrics::CountRpc(const std::string& method, grpc::StatusCode code) {
-  // Family::Add returns the existing counter for known labels.
-  rpcs_.Add({{"grpc_method", method}, {"grpc_code", wire::GrpcCodeName(code)}}).Increment();
 }
 
 }  // namespace lane::server

@@ -6,7 +6,6 @@
 #ifndef LANE_SERVER_METRICS_H_
 #define LANE_SERVER_METRICS_H_
 
-#include <grpcpp/support/status.h>
 #include <prometheus/counter.h>
 #include <prometheus/family.h>
 #include <prometheus/gauge.h>
@@ -65,9 +64,16 @@ class Metrics {
   void FrameAnswered() { inflight_.Decrement(); }
   // lanesvc_sessions_active.
   void SetSessions(double n) { sessions_.Set(n); }
-  // grpc_server_handled_total{grpc_method,grpc_code}: every finished call of
-  // the lane service.
-  void CountRpc(const std::string& method, grpc::StatusCode code);
+  // lanesvc_frame_bytes: the size of each frame request a worker takes up
+  // (encoded or raw; dropped frames are not counted).
+  void ObserveFrameBytes(size_t bytes) { frame_bytes_.Observe(static_cast<double>(bytes)); }
+  // lanesvc_lanes_per_frame and lanesvc_zero_lane_frames_total, for every
+  // frame detected without error: a dirty, misaligned or blinded camera shows
+  // as a shift to zero lanes long before anyone looks at its output.
+  void ObserveLanes(size_t lanes) {
+    lanes_per_frame_.Observe(static_cast<double>(lanes));
+    if (lanes == 0) zero_lane_frames_.Increment();
+  }
 
  private:
   prometheus::Histogram& frame_latency_;
@@ -77,7 +83,9 @@ class Metrics {
   prometheus::Counter& received_;
   prometheus::Gauge& inflight_;
   prometheus::Gauge& sessions_;
-  prometheus::Family<prometheus::Counter>& rpcs_;
+  prometheus::Histogram& frame_bytes_;
+  prometheus::Histogram& lanes_per_frame_;
+  prometheus::Counter& zero_lane_frames_;
 };
 
 }  // namespace lane::server

@@ -15,7 +15,6 @@
 #include <utility>
 
 #include "absl/status/status.h"
-#include "metrics.h"
 #include "wire/status_map.h"
 
 namespace lane::server {
@@ -32,21 +31,19 @@ absl::Status SerializeMessage(const google::protobuf::Message& message, grpc::By
 template <class Request, class Response>
 class UnaryCall final : public grpc::ServerUnaryReactor {
  public:
-  UnaryCall(grpc::CallbackServerContext* context, grpc::ByteBuffer* out, const char* method,
-            Metrics& metrics)
-      : context_(context), out_(out), method_(method), metrics_(metrics) {}
+  UnaryCall(grpc::CallbackServerContext* context, grpc::ByteBuffer* out)
+      : context_(context), out_(out) {}
 
   grpc::CallbackServerContext& context() { return *context_; }
   const Request& request() const { return request_; }
   Request* mutable_request() { return &request_; }
   Response* response() { return &response_; }
 
-  // Serializes the response (when OK), finishes the call and counts it.
+  // Serializes the response (when OK) and finishes the call (counted by
+  // GrpcMetrics' interceptor).
   void Reply(absl::Status status) {
     if (status.ok()) status = SerializeMessage(response_, out_);
-    const grpc::Status grpc_status = wire::ToGrpcStatus(status);
-    metrics_.CountRpc(method_, grpc_status.error_code());
-    Finish(grpc_status);
+    Finish(wire::ToGrpcStatus(status));
   }
 
   void OnDone() override { delete this; }
@@ -54,8 +51,6 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
  private:
   grpc::CallbackServerContext* const context_;
   grpc::ByteBuffer* const out_;
-  const char* const method_;
-  Metrics& metrics_;
   Request request_;
   Response response_;
 };
@@ -66,8 +61,8 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
 template <class Request, class Response, class Handler>
 grpc::ServerUnaryReactor* StartUnary(grpc::CallbackServerContext* context,
                                      const grpc::ByteBuffer* in, grpc::ByteBuffer* out,
-                                     const char* method, Metrics& metrics, Handler&& handler) {
-  auto* call = new UnaryCall<Request, Response>(context, out, method, metrics);
+                                     Handler&& handler) {
+  auto* call = new UnaryCall<Request, Response>(context, out);
   grpc::ByteBuffer bytes(*in);  // shares the slices: no copy of the payload
   if (absl::Status parsed = ParseMessage(bytes, call->mutable_request()); !parsed.ok()) {
     call->Reply(parsed);

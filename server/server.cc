@@ -13,6 +13,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "lane/config.h"
+#include "process_metrics.h"
 
 #ifndef LANE_VERSION
 #define LANE_VERSION "0.0.0"
@@ -101,6 +102,7 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
   std::unique_ptr<LaneServer> server(new LaneServer(options));
   server->registry_ = registry ? std::move(registry) : std::make_shared<prometheus::Registry>();
   server->metrics_ = std::make_unique<Metrics>(*server->registry_, options.build);
+  server->grpc_metrics_ = std::make_unique<GrpcMetrics>(*server->registry_);
 
   SessionRegistry::Options registry_options;
   registry_options.max_sessions = options.max_sessions;
@@ -136,6 +138,9 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
   grpc::ServerBuilder builder;
   builder.AddListeningPort(options.address, *credentials, &server->port_);
   builder.RegisterService(server->service_.get());
+  std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> interceptors;
+  interceptors.push_back(server->grpc_metrics_->InterceptorFactory());
+  builder.experimental().SetInterceptorCreators(std::move(interceptors));
   builder.SetMaxReceiveMessageSize(options.max_receive_message_bytes);
   // gRPC sets SO_REUSEPORT by default: a second server on a busy port would
   // then start and the kernel would split connections between the two. With
@@ -160,15 +165,15 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
   server->server_->GetHealthCheckService()->SetServingStatus(false);
 
   if (!options.metrics_address.empty()) {
-    try {
-      server->exposer_ = std::make_unique<prometheus::Exposer>(options.metrics_address, 2);
-      server->exposer_->RegisterCollectable(server->registry_);
-      const std::vector<int> ports = server->exposer_->GetListeningPorts();
-      server->metrics_port_ = ports.empty() ? -1 : ports.front();
-    } catch (const std::exception& e) {
+    absl::StatusOr<std::unique_ptr<HttpEndpoint>> http = HttpEndpoint::Start(
+        options.metrics_address, 2, {server->registry_, std::make_shared<ProcessMetrics>()},
+        [s = server.get()] { return s->ready_.load(std::memory_order_acquire); });
+    if (!http.ok()) {
       return absl::UnavailableError(
-          absl::StrCat("cannot serve metrics on ", options.metrics_address, ": ", e.what()));
+          absl::StrCat("cannot serve metrics: ", http.status().message()));
     }
+    server->http_ = std::move(*http);
+    server->metrics_port_ = server->http_->port();
   }
 
   if (default_config.ok() && !options.default_config_path.empty()) {
@@ -187,6 +192,7 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
 
   server->service_->SetServing();
   server->server_->GetHealthCheckService()->SetServingStatus(true);
+  server->ready_.store(true, std::memory_order_release);
   return server;
 }
 
@@ -210,7 +216,8 @@ void LaneServer::BeginDrain() {
     draining_ = true;
     drain_deadline_ = absl::Now() + options_.shutdown_deadline;
   }
-  // 1. Health NOT_SERVING.
+  // 1. Health NOT_SERVING, /readyz 503.
+  ready_.store(false, std::memory_order_release);
   if (server_ != nullptr) server_->GetHealthCheckService()->SetServingStatus(false);
   // 2. New calls and streams are refused; open streams stop reading.
   if (service_ != nullptr) service_->StartDrain();
@@ -240,7 +247,7 @@ void LaneServer::Drain() {
   }
   cv_.notify_all();
   if (sweeper_.joinable()) sweeper_.join();
-  exposer_.reset();
+  http_.reset();
   {
     std::lock_guard<std::mutex> lock(mu_);
     drained_ = true;

@@ -5,9 +5,9 @@
 #define LANE_SERVER_SERVER_H_
 
 #include <grpcpp/grpcpp.h>
-#include <prometheus/exposer.h>
 #include <prometheus/registry.h>
 
+#include <atomic>
 #include <condition_variable>
 #include <cstdint>
 #include <memory>
@@ -18,6 +18,8 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
+#include "grpc_metrics.h"
+#include "http_endpoint.h"
 #include "lane_service.h"
 #include "metrics.h"
 #include "session_registry.h"
@@ -28,8 +30,8 @@ namespace lane::server {
 struct ServerOptions {
   // gRPC listening address; port 0 picks a free port (see LaneServer::port).
   std::string address = "0.0.0.0:50051";
-  // Prometheus /metrics listening address; empty = no endpoint. Port 0 picks
-  // a free port (see LaneServer::metrics_port).
+  // HTTP listening address of /metrics (Prometheus), /healthz and /readyz;
+  // empty = none. Port 0 picks a free port (see LaneServer::metrics_port).
   std::string metrics_address = "0.0.0.0:9464";
   // Worker threads for decoding and detection; 0 = one per core.
   int workers = 0;
@@ -81,9 +83,9 @@ struct ServerOptions {
 
 class LaneServer {
  public:
-  // Builds and starts everything. Health is NOT_SERVING (and the lane service
-  // answers UNAVAILABLE) until the default session exists and the metrics
-  // endpoint listens; then SERVING.
+  // Builds and starts everything. Health is NOT_SERVING, /readyz 503 (and
+  // the lane service answers UNAVAILABLE) until the default session exists
+  // and the metrics endpoint listens; then SERVING and 200.
   static absl::StatusOr<std::unique_ptr<LaneServer>> Start(
       const ServerOptions& options, std::shared_ptr<prometheus::Registry> registry);
 
@@ -93,7 +95,8 @@ class LaneServer {
   LaneServer(const LaneServer&) = delete;
   LaneServer& operator=(const LaneServer&) = delete;
 
-  // The first steps of the drain, without waiting: health NOT_SERVING; new
+  // The first steps of the drain, without waiting: health NOT_SERVING and
+  // /readyz 503; new
   // calls and streams refused with UNAVAILABLE; open streams stop reading,
   // answer every frame they have received and end with UNAVAILABLE. Starts
   // the shutdown deadline. Idempotent.
@@ -122,13 +125,15 @@ class LaneServer {
   const ServerOptions options_;
   std::shared_ptr<prometheus::Registry> registry_;
   std::unique_ptr<Metrics> metrics_;
+  std::unique_ptr<GrpcMetrics> grpc_metrics_;  // outlives server_ (its interceptors)
   std::unique_ptr<SessionRegistry> sessions_;
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<LaneServiceImpl> service_;
   std::unique_ptr<grpc::Server> server_;
-  std::unique_ptr<prometheus::Exposer> exposer_;
+  std::unique_ptr<HttpEndpoint> http_;
   int port_ = 0;
   int metrics_port_ = -1;
+  std::atomic<bool> ready_{false};  // /readyz: serving and not draining
 
   std::thread sweeper_;
   std::mutex mu_;

@@ -94,8 +94,9 @@ check(DEFAULT_METRICS_PORT == 9464, "server/main.cc: --metrics_address default p
 check(DEFAULT_DEADLINE is not None, "server/main.cc: cannot read --shutdown_deadline's default")
 SERVER_FLAGS = set(re.findall(r"ABSL_FLAG\([^,]+,\s*([a-z_]+),", main_cc))
 
-metrics_cc = read("server/metrics.cc")
+metrics_cc = read("server/metrics.cc") + read("server/grpc_metrics.cc")
 METRICS = set(re.findall(r'\.Name\("([a-z_]+)"\)', metrics_cc))
+METRICS |= set(re.findall(r'Family\("(process_[a-z_]+)"', read("server/process_metrics.cc")))
 check({"lanesvc_frame_latency_seconds", "lanesvc_frames_total", "lanesvc_stage_duration_seconds",
        "lanesvc_sessions_active", "lanesvc_inflight_frames", "grpc_server_handled_total"}
       <= METRICS, "server/metrics.cc lacks a metric the dashboard needs: %s" % sorted(METRICS))
@@ -233,6 +234,16 @@ for name in re.findall(r"\b((?:lanesvc|grpc_server)_[a-z_]+)", joined):
     base = re.sub(r"_(bucket|sum|count)$", "", name)
     check(base in METRICS, "dashboard: %s is not a metric of server/metrics.cc" % name)
 
+# ---- Alert rules (promtool checks them in ctest deploy_alert_rules) ----------------
+alerts_text = read("deploy/prometheus/alerts.yml")
+alert_rules = [r for g in yaml.safe_load(alerts_text)["groups"] for r in g["rules"]]
+check(len(alert_rules) >= 8, "alerts.yml: only %d rules" % len(alert_rules))
+for r in alert_rules:
+    for name in re.findall(r"\b((?:lanesvc|grpc_server|process)_[a-z_]+)", r["expr"]):
+        base = re.sub(r"_(bucket|sum|count)$", "", name)
+        check(base in METRICS, "alerts.yml %s: %s is not a metric of lane-server" % (r["alert"], name))
+check("alerts.yml" in json.dumps(prom), "prometheus.yml does not load alerts.yml")
+
 # ---- Kubernetes ---------------------------------------------------------------------
 k8s_files = sorted(glob.glob(os.path.join(DEPLOY, "k8s", "**", "*.y*ml"), recursive=True))
 check(k8s_files, "no manifests in deploy/k8s")
@@ -341,6 +352,20 @@ for s in headless:
     g = sports.get("grpc", {})
     check(g.get("port") == k_grpc and g.get("targetPort") in ("grpc", k_grpc),
           "Service %s: grpc port %s -> %s" % (s["metadata"]["name"], g.get("port"), g.get("targetPort")))
+
+monitors = [o for f, o in by_kind.get("ServiceMonitor", [])]
+check(monitors, "k8s: no ServiceMonitor for the Prometheus Operator")
+for mon in monitors:
+    sel = mon["spec"]["selector"]["matchLabels"]
+    matched = [s for s in services_k8s if all(s["metadata"].get("labels", {}).get(k) == v
+                                              for k, v in sel.items())]
+    check(matched, "ServiceMonitor %s selects no Service" % mon["metadata"]["name"])
+    for s in matched:
+        names = {p["name"] for p in s["spec"]["ports"]}
+        for e in mon["spec"]["endpoints"]:
+            check(e.get("port") in names and e.get("path", "/metrics") == "/metrics",
+                  "ServiceMonitor %s: endpoint %s is not the Service's metrics port"
+                  % (mon["metadata"]["name"], e))
 
 dep_name = dep["metadata"]["name"]
 hpas = [o for f, o in by_kind.get("HorizontalPodAutoscaler", [])]

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "grpc_metrics.h"
 #include "test_util.h"
 
 namespace lane::server {
@@ -21,11 +22,10 @@ TEST(MetricsTest, FamiliesOnTheInjectedRegistry) {
     EXPECT_EQ(names.count(name), 1u) << name;
   }
   EXPECT_EQ(MetricValue(registry, "lanesvc_build_info", {{"version", "1.2.3"}}), 1);
-  // grpc_server_handled_total has a series per method and code seen.
-  metrics.CountRpc("Detect", grpc::StatusCode::OK);
-  names.clear();
-  for (const prometheus::MetricFamily& f : registry.Collect()) names.insert(f.name);
-  EXPECT_EQ(names.count("grpc_server_handled_total"), 1u);
+  for (const char* name :
+       {"lanesvc_frame_bytes", "lanesvc_lanes_per_frame", "lanesvc_zero_lane_frames_total"}) {
+    EXPECT_EQ(names.count(name), 1u) << name;
+  }
   // Every stage and result exists from the start (at 0).
   for (const char* stage :
        {"decode", "ipm", "filter", "threshold", "lines", "splines", "postprocess"}) {
@@ -61,8 +61,10 @@ TEST(MetricsTest, Records) {
   metrics.FrameReceived();
   metrics.FrameAnswered();
   metrics.SetSessions(3);
-  metrics.CountRpc("Detect", grpc::StatusCode::INVALID_ARGUMENT);
-  metrics.CountRpc("Detect", grpc::StatusCode::INVALID_ARGUMENT);
+  metrics.ObserveLanes(0);
+  metrics.ObserveLanes(3);
+  metrics.ObserveLanes(0);
+  metrics.ObserveFrameBytes(900'000);
   EXPECT_EQ(MetricValue(registry, "lanesvc_frame_latency_seconds"), 2);
   EXPECT_EQ(MetricValue(registry, "lanesvc_stage_duration_seconds", {{"stage", "ipm"}}), 1);
   EXPECT_EQ(MetricValue(registry, "lanesvc_frames_total", {{"result", "dropped"}}), 1);
@@ -70,9 +72,56 @@ TEST(MetricsTest, Records) {
   EXPECT_EQ(MetricValue(registry, "lanesvc_frames_received_total"), 2);
   EXPECT_EQ(MetricValue(registry, "lanesvc_inflight_frames"), 1);
   EXPECT_EQ(MetricValue(registry, "lanesvc_sessions_active"), 3);
+  EXPECT_EQ(MetricValue(registry, "lanesvc_lanes_per_frame"), 3);
+  EXPECT_EQ(MetricValue(registry, "lanesvc_zero_lane_frames_total"), 2);
+  EXPECT_EQ(MetricValue(registry, "lanesvc_frame_bytes"), 1);
+}
+
+TEST(GrpcMetricsTest, MethodLabelsFromTheFullName) {
+  prometheus::Registry registry;
+  GrpcMetrics metrics(registry);
+  using Type = grpc::experimental::ServerRpcInfo::Type;
+  GrpcMetrics::Method& detect = metrics.ForMethod("/lane.v1.LaneService/Detect", Type::UNARY);
+  EXPECT_EQ(&detect, &metrics.ForMethod("/lane.v1.LaneService/Detect", Type::UNARY));
+  detect.started->Increment();
+  metrics.CountHandled(detect, grpc::StatusCode::INVALID_ARGUMENT);
+  metrics.CountHandled(detect, grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(MetricValue(registry, "grpc_server_started_total",
+                        {{"grpc_service", "lane.v1.LaneService"},
+                         {"grpc_method", "Detect"},
+                         {"grpc_type", "unary"}}),
+            1);
   EXPECT_EQ(MetricValue(registry, "grpc_server_handled_total",
-                        {{"grpc_method", "Detect"}, {"grpc_code", "INVALID_ARGUMENT"}}),
+                        {{"grpc_service", "lane.v1.LaneService"},
+                         {"grpc_method", "Detect"},
+                         {"grpc_type", "unary"},
+                         {"grpc_code", "INVALID_ARGUMENT"}}),
             2);
+  GrpcMetrics::Method& stream =
+      metrics.ForMethod("/lane.v1.LaneService/StreamFrames", Type::BIDI_STREAMING);
+  stream.received->Increment();
+  EXPECT_EQ(MetricValue(registry, "grpc_server_msg_received_total",
+                        {{"grpc_method", "StreamFrames"}, {"grpc_type", "bidi_stream"}}),
+            1);
+}
+
+TEST(GrpcMetricsTest, ClientChosenMethodNamesAreBounded) {
+  prometheus::Registry registry;
+  GrpcMetrics metrics(registry);
+  using Type = grpc::experimental::ServerRpcInfo::Type;
+  for (int i = 0; i < 1000; ++i) {
+    metrics.ForMethod(("/x.Y/M" + std::to_string(i)).c_str(), Type::UNARY).started->Increment();
+  }
+  metrics.ForMethod(nullptr, Type::UNARY).started->Increment();
+  size_t series = 0;
+  for (const prometheus::MetricFamily& f : registry.Collect()) {
+    if (f.name == "grpc_server_started_total") series = f.metric.size();
+  }
+  EXPECT_LE(series, 65u);
+  EXPECT_EQ(MetricValue(registry, "grpc_server_started_total"), 1001);
+  EXPECT_GE(MetricValue(registry, "grpc_server_started_total",
+                        {{"grpc_service", "unknown"}, {"grpc_method", "unknown"}}),
+            1000 - 64);
 }
 
 }  // namespace

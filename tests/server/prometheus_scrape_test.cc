@@ -27,42 +27,11 @@ namespace {
 
 constexpr char kPrometheus[] = "/usr/bin/prometheus";
 
-// GET http://127.0.0.1:port/path with HTTP/1.0 (the server closes the
-// connection after the response). The body of a 200 response, or nullopt.
+// The body of a 200 response to GET path, or nullopt.
 std::optional<std::string> HttpGet(int port, const std::string& path) {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  if (fd < 0) return std::nullopt;
-  timeval timeout{5, 0};
-  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof(timeout));
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_port = htons(static_cast<uint16_t>(port));
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) != 0) {
-    close(fd);
-    return std::nullopt;
-  }
-  const std::string request = "GET " + path + " HTTP/1.0\r\nHost: 127.0.0.1\r\n\r\n";
-  if (send(fd, request.data(), request.size(), MSG_NOSIGNAL) !=
-      static_cast<ssize_t>(request.size())) {
-    close(fd);
-    return std::nullopt;
-  }
-  std::string reply;
-  char buffer[4096];
-  for (;;) {
-    const ssize_t n = recv(fd, buffer, sizeof(buffer), 0);
-    if (n <= 0) break;
-    reply.append(buffer, static_cast<size_t>(n));
-  }
-  close(fd);
-  const size_t header_end = reply.find("\r\n\r\n");
-  const bool ok_status =
-      reply.compare(0, 12, "HTTP/1.0 200") == 0 || reply.compare(0, 12, "HTTP/1.1 200") == 0;
-  if (header_end == std::string::npos || !ok_status) {
-    return std::nullopt;
-  }
-  return reply.substr(header_end + 4);
+  HttpResponse response = HttpFetch(port, path);
+  if (response.status != 200) return std::nullopt;
+  return std::move(response.body);
 }
 
 // A loopback port nobody listens on right now.

@@ -1,7 +1,11 @@
 #include "test_util.h"
 
+#include <arpa/inet.h>
 #include <grpcpp/generic/generic_stub.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <future>
 #include <thread>
@@ -192,6 +196,43 @@ bool ReflectionListsLaneService(const std::shared_ptr<grpc::Channel>& channel) {
   while (cq.Next(&tag, &drained_ok)) {
   }
   return ok && BufferToString(response).find("lane.v1.LaneService") != std::string::npos;
+}
+
+HttpResponse HttpFetch(int port, const std::string& path, const std::string& method) {
+  HttpResponse response;
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) return response;
+  timeval timeout{5, 0};
+  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof(timeout));
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<uint16_t>(port));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) != 0) {
+    close(fd);
+    return response;
+  }
+  const std::string request = method + " " + path + " HTTP/1.0\r\nHost: 127.0.0.1\r\n\r\n";
+  if (send(fd, request.data(), request.size(), MSG_NOSIGNAL) !=
+      static_cast<ssize_t>(request.size())) {
+    close(fd);
+    return response;
+  }
+  std::string reply;
+  char buffer[4096];
+  for (;;) {
+    const ssize_t n = recv(fd, buffer, sizeof(buffer), 0);
+    if (n <= 0) break;
+    reply.append(buffer, static_cast<size_t>(n));
+  }
+  close(fd);
+  const size_t header_end = reply.find("\r\n\r\n");
+  if (header_end == std::string::npos || reply.compare(0, 5, "HTTP/") != 0) return response;
+  const size_t space = reply.find(' ');
+  response.status = std::atoi(reply.c_str() + space + 1);
+  response.headers = reply.substr(0, header_end);
+  response.body = reply.substr(header_end + 4);
+  return response;
 }
 
 }  // namespace lane::server::testing

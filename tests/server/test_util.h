@@ -80,6 +80,15 @@ int HealthStatus(const std::shared_ptr<grpc::Channel>& channel);
 // its services; true if lane.v1.LaneService is among them.
 bool ReflectionListsLaneService(const std::shared_ptr<grpc::Channel>& channel);
 
+// One HTTP/1.0 request to 127.0.0.1:port (the server closes the connection
+// after the response). status 0 when no response came.
+struct HttpResponse {
+  int status = 0;
+  std::string headers;
+  std::string body;
+};
+HttpResponse HttpFetch(int port, const std::string& path, const std::string& method = "GET");
+
 // Polls `condition` every 10 ms until it holds or `timeout_s` passes.
 template <typename F>
 bool PollUntil(F condition, double timeout_s = 30.0) {

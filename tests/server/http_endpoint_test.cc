@@ -1,0 +1,160 @@
+// The HTTP side of a real server on loopback: /healthz, /readyz through a
+// drain, and /metrics with the go-grpc-prometheus, process and domain
+// families (and `promtool check metrics` on the scrape, when installed).
+#include <gtest/gtest.h>
+#include <stdio.h>
+#include <sys/wait.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "test_util.h"
+
+namespace lane::server::testing {
+namespace {
+
+// The value of the first sample line starting with `prefix` ("name{...} v"),
+// or NaN.
+double SampleValue(const std::string& text, const std::string& prefix) {
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind(prefix, 0) != 0) continue;
+    const size_t space = line.rfind(' ');
+    return std::strtod(line.c_str() + space + 1, nullptr);
+  }
+  return std::nan("");
+}
+
+ServerOptions WithMetrics() {
+  ServerOptions options = TestServer::DefaultOptions();
+  options.metrics_address = "127.0.0.1:0";
+  return options;
+}
+
+TEST(HttpEndpointTest, HealthAndReadinessFollowTheServer) {
+  TestServer server(WithMetrics());
+  ASSERT_FALSE(HasFailure());
+  const int port = server.server().metrics_port();
+  ASSERT_GT(port, 0);
+
+  HttpResponse healthz = HttpFetch(port, "/healthz");
+  EXPECT_EQ(healthz.status, 200);
+  EXPECT_EQ(healthz.body, "ok\n");
+  HttpResponse readyz = HttpFetch(port, "/readyz");
+  EXPECT_EQ(readyz.status, 200);
+  EXPECT_EQ(readyz.body, "ready\n");
+  EXPECT_EQ(HttpFetch(port, "/readyz", "HEAD").status, 200);
+  EXPECT_TRUE(HttpFetch(port, "/readyz", "HEAD").body.empty());
+  EXPECT_EQ(HttpFetch(port, "/nothing-here").status, 404);
+  EXPECT_EQ(HttpFetch(port, "/metrics", "POST").status, 405);
+
+  // Draining: not ready (out of rotation), still alive, still scraped.
+  server.server().BeginDrain();
+  readyz = HttpFetch(port, "/readyz");
+  EXPECT_EQ(readyz.status, 503);
+  EXPECT_EQ(readyz.body, "not ready\n");
+  EXPECT_EQ(HttpFetch(port, "/healthz").status, 200);
+  EXPECT_EQ(HttpFetch(port, "/metrics").status, 200);
+  EXPECT_EQ(HealthStatus(server.channel()), 2);  // gRPC health agrees
+}
+
+TEST(HttpEndpointTest, MetricsHaveTheStandardFamilies) {
+  TestServer server(WithMetrics());
+  ASSERT_FALSE(HasFailure());
+  const int port = server.server().metrics_port();
+  ASSERT_GT(port, 0);
+
+  const lane::CameraModel camera = ScaledCamera(0.5);
+  server.CreateSession("cam", SessionConfigFor(camera));
+  const std::string jpeg = EncodeJpeg(RoadFrame(camera, kLineOffsets, 4));
+  constexpr int kFrames = 6;
+  std::vector<v1::FrameRequest> requests;
+  for (int i = 0; i < kFrames; ++i) requests.push_back(JpegRequest("cam", i, jpeg));
+  StreamResult result = RunStream(server.stub(), requests);
+  ASSERT_TRUE(result.status.ok());
+  ASSERT_EQ(result.responses.size(), static_cast<size_t>(kFrames));
+  {
+    grpc::ClientContext context;
+    v1::GetSessionRequest get;
+    get.set_camera_id("nobody");
+    v1::Session session;
+    EXPECT_EQ(server.stub().GetSession(&context, get, &session).error_code(),
+              grpc::StatusCode::NOT_FOUND);
+  }
+  EXPECT_EQ(HealthStatus(server.channel()), 1);
+
+  const HttpResponse scrape = HttpFetch(port, "/metrics");
+  ASSERT_EQ(scrape.status, 200);
+  EXPECT_NE(scrape.headers.find("text/plain; version=0.0.4"), std::string::npos);
+  const std::string& text = scrape.body;
+
+  // go-grpc-prometheus families, labels sorted by name.
+  const std::string stream =
+      "{grpc_method=\"StreamFrames\",grpc_service=\"lane.v1.LaneService\","
+      "grpc_type=\"bidi_stream\"}";
+  EXPECT_EQ(SampleValue(text, "grpc_server_started_total" + stream), 1) << text;
+  EXPECT_EQ(SampleValue(text, "grpc_server_msg_received_total" + stream), kFrames);
+  EXPECT_EQ(SampleValue(text, "grpc_server_msg_sent_total" + stream), kFrames);
+  EXPECT_EQ(SampleValue(text, "grpc_server_handling_seconds_count" + stream), 1);
+  EXPECT_EQ(SampleValue(text,
+                        "grpc_server_handled_total{grpc_code=\"OK\",grpc_method=\"StreamFrames\","
+                        "grpc_service=\"lane.v1.LaneService\",grpc_type=\"bidi_stream\"}"),
+            1);
+  EXPECT_EQ(SampleValue(text,
+                        "grpc_server_handled_total{grpc_code=\"NOT_FOUND\",grpc_method="
+                        "\"GetSession\",grpc_service=\"lane.v1.LaneService\",grpc_type=\"unary\"}"),
+            1);
+  // Health checks are calls like any other.
+  EXPECT_GE(SampleValue(text,
+                        "grpc_server_handled_total{grpc_code=\"OK\",grpc_method=\"Check\","
+                        "grpc_service=\"grpc.health.v1.Health\",grpc_type=\"unary\"}"),
+            1);
+
+  // Process metrics.
+  EXPECT_GT(SampleValue(text, "process_resident_memory_bytes "), 1e6);
+  EXPECT_GT(SampleValue(text, "process_virtual_memory_bytes "), 1e6);
+  EXPECT_GT(SampleValue(text, "process_cpu_seconds_total "), 0);
+  EXPECT_GE(SampleValue(text, "process_open_fds "), 3);
+  EXPECT_GT(SampleValue(text, "process_max_fds "), 0);
+  const double started = SampleValue(text, "process_start_time_seconds ");
+  const double now = static_cast<double>(std::time(nullptr));
+  EXPECT_LE(started, now + 1);
+  EXPECT_GT(started, now - 24 * 3600);
+
+  // Domain signals.
+  EXPECT_EQ(SampleValue(text, "lanesvc_lanes_per_frame_count "), kFrames);
+  EXPECT_EQ(SampleValue(text, "lanesvc_frame_bytes_count "), kFrames);
+  double bytes = 0;
+  for (const v1::FrameRequest& request : requests) bytes += request.ByteSizeLong();
+  EXPECT_EQ(SampleValue(text, "lanesvc_frame_bytes_sum "), bytes);
+  EXPECT_FALSE(std::isnan(SampleValue(text, "lanesvc_zero_lane_frames_total ")));
+  // No unit-less microsecond metrics of the old exposer.
+  EXPECT_EQ(text.find("exposer_"), std::string::npos);
+
+  // promtool lints the exposition (names, units, help, types).
+  constexpr char kPromtool[] = "/usr/bin/promtool";
+  if (!std::filesystem::exists(kPromtool)) {
+    GTEST_SKIP() << kPromtool << " is not installed (Debian package prometheus)";
+  }
+  const std::filesystem::path file =
+      std::filesystem::temp_directory_path() / ("lane-metrics-" + std::to_string(port) + ".txt");
+  std::ofstream(file) << text;
+  const std::string command =
+      std::string(kPromtool) + " check metrics < " + file.string() + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string output;
+  char buffer[512];
+  while (fgets(buffer, sizeof(buffer), pipe) != nullptr) output += buffer;
+  const int status = pclose(pipe);
+  std::filesystem::remove(file);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "promtool:\n" << output;
+}
+
+}  // namespace
+}  // namespace lane::server::testing
