@@ -1,14 +1,18 @@
 // `lane-client stream`: a camera's recorded frames through the service, the
 // lanes out as JSON Lines (docs/client.md), surviving server restarts.
+#include <condition_variable>
 #include <cstdio>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
@@ -115,10 +119,77 @@ Streamer::Source MakeSource(FrameSource* frames, const std::string& camera_id) {
   };
 }
 
+// Draws overlays on a thread of its own, so that drawing and writing PNGs
+// does not hold up reading the answers: the latency of a frame is measured
+// when its answer is read, and a reader busy drawing would add its drawing
+// time to the frames behind it. Up to kMaxQueued frames wait; past that the
+// reader waits for the drawer (and the latencies show it).
+class OverlayDrawer {
+ public:
+  explicit OverlayDrawer(OverlayWriter* writer) : writer_(writer) {
+    thread_ = std::thread([this] { Loop(); });
+  }
+  ~OverlayDrawer() { Finish(); }
+
+  void Submit(const StreamItem& item, const v1::FrameResponse& response,
+              const std::optional<v1::Session>& session) {
+    std::unique_lock<std::mutex> lock(mu_);
+    space_.wait(lock, [this] { return jobs_.size() < kMaxQueued; });
+    jobs_.push_back(Job{item, response, session});
+    ready_.notify_one();
+  }
+  // Draws what is queued and stops. True if every overlay was written.
+  bool Finish() {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      done_ = true;
+    }
+    ready_.notify_one();
+    if (thread_.joinable()) thread_.join();
+    return !failed_;
+  }
+
+ private:
+  static constexpr size_t kMaxQueued = 64;
+  struct Job {
+    StreamItem item;
+    v1::FrameResponse response;
+    std::optional<v1::Session> session;
+  };
+
+  void Loop() {
+    for (;;) {
+      Job job;
+      {
+        std::unique_lock<std::mutex> lock(mu_);
+        ready_.wait(lock, [this] { return done_ || !jobs_.empty(); });
+        if (jobs_.empty()) return;
+        job = std::move(jobs_.front());
+        jobs_.pop_front();
+      }
+      space_.notify_one();
+      const std::string error = writer_->Write(job.item, job.response, job.session);
+      if (!error.empty()) {
+        failed_ = true;
+        Note("stream", absl::StrCat(job.item.name, ": ", error));
+      }
+    }
+  }
+
+  OverlayWriter* const writer_;
+  std::mutex mu_;
+  std::condition_variable ready_;
+  std::condition_variable space_;
+  std::deque<Job> jobs_;  // guarded by mu_
+  bool done_ = false;     // guarded by mu_
+  bool failed_ = false;   // the drawer thread's until joined
+  std::thread thread_;
+};
+
 // Where the answers go: the results, the overlays, the counts.
 class StreamSink {
  public:
-  StreamSink(std::ostream& out, const std::string& camera_id, OverlayWriter* overlays,
+  StreamSink(std::ostream& out, const std::string& camera_id, OverlayDrawer* overlays,
              const Streamer& streamer)
       : out_(out), camera_id_(camera_id), overlays_(overlays), streamer_(streamer) {}
 
@@ -131,13 +202,7 @@ class StreamSink {
       out_ << ResponseJsonLine(item.name, *response, latency_ms, item.attempts) << '\n';
       if (response->status().code() == v1::FRAME_CODE_OK) {
         ++ok_;
-        if (overlays_ != nullptr) {
-          const std::string error = overlays_->Write(item, *response, streamer_.session());
-          if (!error.empty()) {
-            overlay_failed_ = true;
-            Note("stream", absl::StrCat(item.name, ": ", error));
-          }
-        }
+        if (overlays_ != nullptr) overlays_->Submit(item, *response, streamer_.session());
       } else {
         ++failed_;
         Note("stream", absl::StrCat(item.name, ": ", FrameCodeName(response->status().code()), ": ",
@@ -149,16 +214,14 @@ class StreamSink {
 
   uint64_t ok() const { return ok_; }
   uint64_t failed() const { return failed_; }
-  bool overlay_failed() const { return overlay_failed_; }
 
  private:
   std::ostream& out_;
   const std::string camera_id_;
-  OverlayWriter* const overlays_;
+  OverlayDrawer* const overlays_;
   const Streamer& streamer_;
   uint64_t ok_ = 0;
   uint64_t failed_ = 0;
-  bool overlay_failed_ = false;
 };
 
 int RunStream(const CLI::App& app, const StreamFlags& flags) {
@@ -185,14 +248,16 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
     return Failure("stream", absl::StrCat("cannot write ", *flags.output));
   }
   std::ostream& out = file.is_open() ? static_cast<std::ostream&>(file) : std::cout;
-  std::unique_ptr<OverlayWriter> overlays;
+  std::unique_ptr<OverlayWriter> overlay_writer;
+  std::unique_ptr<OverlayDrawer> overlays;
   if (const auto& overlay = flags.overlay) {
     std::error_code ec;
     std::filesystem::create_directories(*overlay, ec);
     if (ec || !std::filesystem::is_directory(*overlay)) {
       return Failure("stream", absl::StrCat("cannot create overlay folder ", *overlay));
     }
-    overlays = std::make_unique<OverlayWriter>(*overlay);
+    overlay_writer = std::make_unique<OverlayWriter>(*overlay);
+    overlays = std::make_unique<OverlayDrawer>(overlay_writer.get());
   }
 
   FrameSource frames(flags.inputs, flags.raw);
@@ -203,13 +268,14 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
       streamer.Run(MakeSource(&frames, options.camera_id),
                    [&sink](const StreamItem& item, const v1::FrameResponse* response,
                            double latency_ms) { sink(item, response, latency_ms); });
+  const bool overlays_ok = overlays == nullptr || overlays->Finish();
   const StreamerStats& stats = streamer.stats();
   Note("stream",
        absl::StrCat(stats.frames, " frames: ", sink.ok(), " ok, ", sink.failed(), " failed; ",
                     stats.connections, " connection(s), ", stats.resent, " frame(s) resent"));
   if (!status.ok()) return Failure("stream", std::string(status.message()));
   if (!out) return Failure("stream", "error writing the results");
-  return sink.failed() > 0 || sink.overlay_failed() ? kExitFailure : kExitOk;
+  return sink.failed() > 0 || !overlays_ok ? kExitFailure : kExitOk;
 }
 
 }  // namespace
