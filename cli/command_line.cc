@@ -275,4 +275,18 @@ CLI::Validator NonNegativeNumber() {
       "", "NonNegativeNumber");
 }
 
+void AddReadFlags(CLI::App* app, ReadFlags* flags) {
+  app->add_option("--fps", flags->fps,
+                  "pace the frames at R per second, like a camera (0 = as fast as they go)")
+      ->type_name("R")
+      ->check(CLI::Range(0.0, 1000.0));
+  app->add_flag("--realtime", flags->realtime,
+                "pace each video at its own frame rate (image files: --fps, else 30/s); live "
+                "sources are never paced");
+  app->add_option("--max-frames", flags->max_frames,
+                  "stop after N frames (0 = all; a live source runs until it ends)")
+      ->type_name("N")
+      ->check(CLI::Range(0LL, 1LL << 40));
+}
+
 }  // namespace lane_tools

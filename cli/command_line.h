@@ -104,6 +104,15 @@ CLI::Validator Between(int64_t min, int64_t max);
 // A check: a finite number >= 0.
 CLI::Validator NonNegativeNumber();
 
+// --fps R, --realtime and --max-frames N of `lane detect` and `lane-client
+// stream` (cli/pacer.h, cli/video_input.h).
+struct ReadFlags {
+  double fps = 0;
+  bool realtime = false;
+  long long max_frames = 0;
+};
+void AddReadFlags(CLI::App* app, ReadFlags* flags);
+
 }  // namespace lane_tools
 
 #endif  // LANE_CLI_COMMAND_LINE_H_

@@ -36,14 +36,10 @@ std::string PathNote(const std::string& path, const std::string& name) {
 
 }  // namespace
 
-std::unique_ptr<cv::VideoCapture> OpenVideoQuietly(const std::string& path) {
-  auto video = std::make_unique<cv::VideoCapture>();
-  // OpenCV logs each backend's failure at length; the caller's message says it.
-  const auto level = cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
-  const bool opened = video->open(path) && video->isOpened();
-  cv::utils::logging::setLogLevel(level);
-  if (!opened) video.reset();
-  return video;
+std::string VideoFrameName(const std::string& video_name, int index) {
+  char digits[32];
+  std::snprintf(digits, sizeof(digits), "%06d", index);
+  return absl::StrCat(video_name, "#", digits);
 }
 
 bool OpenOutputFile(const std::string& path, std::ofstream* file) {
@@ -107,7 +103,8 @@ std::string UniqueStem(const std::string& stem, std::set<std::string>& used) {
   return candidate;
 }
 
-FrameReader::FrameReader(const std::vector<std::string>& inputs) : entries_(ExpandInputs(inputs)) {}
+FrameReader::FrameReader(const std::vector<std::string>& inputs, ReadOptions options)
+    : entries_(ExpandInputs(inputs)), options_(options) {}
 
 FrameReader::~FrameReader() = default;
 
@@ -115,6 +112,11 @@ namespace {
 
 void ExpandInto(const std::string& path, const std::string& name, bool top_level, int depth,
                 std::vector<InputEntry>& entries) {
+  if (const std::optional<LiveSource> live = ClassifyLiveSource(path)) {
+    // Reported as given (a URL's or a pipeline's "file name" means nothing).
+    entries.push_back({InputEntry::kVideo, path, name, "", live->api, true});
+    return;
+  }
   // Given directly, a file is reported by its file name; inside a list, by
   // the list's line.
   const std::string file_name = fs::path(path).filename().string();
@@ -226,6 +228,15 @@ void FrameReader::ReadImage(const InputEntry& entry, InputFrame* frame) const {
 }
 
 bool FrameReader::Next(InputFrame* frame) {
+  if (options_.max_frames > 0 && handed_out_ >= options_.max_frames) return false;
+  double source_fps = 0;
+  if (!NextUnpaced(frame, &source_fps)) return false;
+  ++handed_out_;
+  if (frame->error.empty()) options_.pacer.Wait(source_fps);
+  return true;
+}
+
+bool FrameReader::NextUnpaced(InputFrame* frame, double* source_fps) {
   while (next_ < entries_.size()) {
     const InputEntry& entry = entries_[next_];
     *frame = InputFrame();
@@ -241,34 +252,31 @@ bool FrameReader::Next(InputFrame* frame) {
         ++next_;
         return true;
       case InputEntry::kVideo: {
+        const char* what = entry.live ? "cannot open live source" : "cannot open video";
         if (!video_) {
-          video_ = OpenVideoQuietly(entry.path);
-          video_frame_ = 0;
+          video_ = VideoInput::Open(entry.path, entry.api);
           if (!video_) {
-            frame->error = absl::StrCat("cannot open video", PathNote(entry.path, entry.name));
+            frame->error = absl::StrCat(what, PathNote(entry.path, entry.name));
             ++next_;
             return true;
           }
         }
         const auto start = std::chrono::steady_clock::now();
-        cv::Mat image;
-        const bool ok = video_->read(image) && !image.empty();
-        if (ok) {
+        const int index = video_->frames_read();
+        if (video_->Read(&frame->bgr)) {
           frame->decode_ms = MillisecondsSince(start);
-          char index[32];
-          std::snprintf(index, sizeof(index), "%06d", video_frame_);
-          frame->name = absl::StrCat(entry.name, "#", index);
-          frame->stem = absl::StrCat(MakeStem(entry.name), "_", index);
-          frame->bgr = image;
-          ++video_frame_;
+          frame->name = VideoFrameName(entry.name, index);
+          frame->stem = MakeStem(frame->name);
+          *source_fps = entry.live ? 0 : video_->fps();
           return true;
         }
-        const bool empty_video = video_frame_ == 0;
+        const bool empty_video = index == 0;
         video_.reset();
         ++next_;
         if (empty_video) {
-          frame->error = absl::StrCat("no frame could be decoded from video",
-                                      PathNote(entry.path, entry.name));
+          frame->error =
+              absl::StrCat("no frame could be decoded from ", entry.live ? "live source" : "video",
+                           PathNote(entry.path, entry.name));
           return true;
         }
         continue;  // the video is done

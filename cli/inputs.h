@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "cli/pacer.h"
+#include "cli/video_input.h"
 #include "lane/detector.h"
 
 namespace lane_tools {
@@ -31,12 +33,26 @@ struct InputFrame {
   double decode_ms = 0;
 };
 
+// What a reader's Next hands out: limits and pacing shared by `lane detect`
+// and `lane-client stream`.
+struct ReadOptions {
+  // Frames handed out at most (errors included); 0 = all. Live sources run
+  // until they end, so this is how a run on one stops.
+  long long max_frames = 0;
+  // --fps / --realtime (cli/pacer.h).
+  Pacer pacer;
+};
+
 // One input after expansion: an image file, a video, or an error to report.
 struct InputEntry {
   enum Kind { kImage, kVideo, kError } kind = kImage;
   std::string path;   // to open
   std::string name;   // to report (see InputFrame::name)
   std::string error;  // kError: why
+  // kVideo: the VideoCapture backend, and whether it is a live source
+  // (cli/video_input.h), which is not paced.
+  int api = cv::CAP_ANY;
+  bool live = false;
 };
 
 // Expands the INPUT arguments, following the rules of FrameReader below,
@@ -59,13 +75,15 @@ std::string UniqueStem(const std::string& stem, std::set<std::string>& used);
 //    against the list's folder; blank lines and lines starting with '#' are
 //    skipped; entries may themselves be images, videos, directories or lists;
 //  * .mp4/.avi/.mkv/.mov: a video, read frame by frame with cv::VideoCapture;
+//  * a URL, /dev/videoN or a GStreamer pipeline: a live source
+//    (cli/video_input.h), never looked up as a file;
 //  * anything else: an image file decoded with cv::imread.
 // A missing path, an unreadable list or video, or an undecodable image
 // becomes an InputFrame with `error` set, so the caller reports it and goes
 // on. Frames are decoded one at a time.
 class FrameReader {
  public:
-  explicit FrameReader(const std::vector<std::string>& inputs);
+  explicit FrameReader(const std::vector<std::string>& inputs, ReadOptions options = {});
   ~FrameReader();
 
   // Fills `frame` with the next frame; false when all inputs are done.
@@ -82,18 +100,20 @@ class FrameReader {
   // to and it is a JPEG or PNG of the camera's size, else with cv::imread.
   void ReadImage(const InputEntry& entry, InputFrame* frame) const;
 
+  // The next frame, before the limit and pacing.
+  bool NextUnpaced(InputFrame* frame, double* source_fps);
+
   std::vector<InputEntry> entries_;
+  ReadOptions options_;
+  long long handed_out_ = 0;
   std::optional<lane::FrameNeeds> needs_;
   int width_ = 0, height_ = 0;
   size_t next_ = 0;
-  // The video being read, and its next frame index.
-  std::unique_ptr<cv::VideoCapture> video_;
-  int video_frame_ = 0;
+  std::unique_ptr<VideoInput> video_;  // the video being read
 };
 
-// Opens a video with OpenCV's backend chatter silenced (our caller reports the
-// failure itself); nullptr when it cannot be opened.
-std::unique_ptr<cv::VideoCapture> OpenVideoQuietly(const std::string& path);
+// A video frame's name and stem: "drive.mp4#000012", "drive_000012".
+std::string VideoFrameName(const std::string& video_name, int index);
 
 // Opens `path` for writing results (truncating), creating its folder first,
 // as the overlay folders are. False when it cannot be opened.

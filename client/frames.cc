@@ -43,8 +43,9 @@ bool IsJpegOrPng(const std::string& bytes) {
   return bytes.size() >= 8 && std::equal(kPng, kPng + 8, p);
 }
 
-FrameSource::FrameSource(const std::vector<std::string>& inputs, bool raw)
-    : raw_(raw), entries_(lane_tools::ExpandInputs(inputs)) {}
+FrameSource::FrameSource(const std::vector<std::string>& inputs, bool raw,
+                         lane_tools::ReadOptions options)
+    : raw_(raw), entries_(lane_tools::ExpandInputs(inputs)), options_(options) {}
 
 FrameSource::~FrameSource() = default;
 
@@ -74,6 +75,15 @@ void FrameSource::ReadImage(const lane_tools::InputEntry& entry, ClientFrame* fr
 }
 
 bool FrameSource::Next(ClientFrame* frame) {
+  if (options_.max_frames > 0 && handed_out_ >= options_.max_frames) return false;
+  double source_fps = 0;
+  if (!NextUnpaced(frame, &source_fps)) return false;
+  ++handed_out_;
+  if (frame->error.empty()) options_.pacer.Wait(source_fps);
+  return true;
+}
+
+bool FrameSource::NextUnpaced(ClientFrame* frame, double* source_fps) {
   while (next_ < entries_.size()) {
     const lane_tools::InputEntry& entry = entries_[next_];
     *frame = ClientFrame();
@@ -89,30 +99,27 @@ bool FrameSource::Next(ClientFrame* frame) {
         ++next_;
         return true;
       case lane_tools::InputEntry::kVideo: {
+        const char* what = entry.live ? "live source" : "video";
         if (!video_) {
-          video_ = lane_tools::OpenVideoQuietly(entry.path);
-          video_frame_ = 0;
+          video_ = lane_tools::VideoInput::Open(entry.path, entry.api);
           if (!video_) {
-            frame->error = absl::StrCat("cannot open video", Where(entry.path, entry.name));
+            frame->error = absl::StrCat("cannot open ", what, Where(entry.path, entry.name));
             ++next_;
             return true;
           }
         }
-        cv::Mat image;
-        if (video_->read(image) && !image.empty()) {
-          const std::string index = absl::StrFormat("%06d", video_frame_++);
-          frame->name = absl::StrCat(entry.name, "#", index);
+        const int index = video_->frames_read();
+        if (video_->Read(&frame->bgr)) {
+          frame->name = lane_tools::VideoFrameName(entry.name, index);
           frame->stem = MakeStem(frame->name);
-          if (image.channels() == 1) cv::cvtColor(image, image, cv::COLOR_GRAY2BGR);
-          frame->bgr = image;
+          *source_fps = entry.live ? 0 : video_->fps();
           return true;
         }
-        const bool empty = video_frame_ == 0;
         video_.reset();
         ++next_;
-        if (empty) {
+        if (index == 0) {
           frame->error =
-              absl::StrCat("no frame could be decoded from video", Where(entry.path, entry.name));
+              absl::StrCat("no frame could be decoded from ", what, Where(entry.path, entry.name));
           return true;
         }
         continue;

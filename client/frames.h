@@ -39,9 +39,13 @@ class FrameSource {
   //  * a .txt file: a list, one path a line, relative to the list's folder;
   //    blank lines and '#' comments skipped; entries may be any input;
   //  * .mp4/.avi/.mkv/.mov: a video, read frame by frame;
+  //  * a URL, /dev/videoN or a GStreamer pipeline: a live source
+  //    (cli/video_input.h);
   //  * anything else: an image file.
-  // `raw`: decode image files here and send pixels.
-  FrameSource(const std::vector<std::string>& inputs, bool raw);
+  // `raw`: decode image files here and send pixels. `options`: a frame limit
+  // and pacing (--max-frames, --fps, --realtime).
+  FrameSource(const std::vector<std::string>& inputs, bool raw,
+              lane_tools::ReadOptions options = {});
   ~FrameSource();
   FrameSource(const FrameSource&) = delete;
   FrameSource& operator=(const FrameSource&) = delete;
@@ -52,12 +56,14 @@ class FrameSource {
 
  private:
   void ReadImage(const lane_tools::InputEntry& entry, ClientFrame* frame) const;
+  bool NextUnpaced(ClientFrame* frame, double* source_fps);
 
   const bool raw_;
   std::vector<lane_tools::InputEntry> entries_;
+  lane_tools::ReadOptions options_;
+  long long handed_out_ = 0;
   size_t next_ = 0;
-  std::unique_ptr<cv::VideoCapture> video_;
-  int video_frame_ = 0;
+  std::unique_ptr<lane_tools::VideoInput> video_;
 };
 
 // "drive.mp4#000012" -> "drive_000012", "a/b.jpg" -> "a_b".

@@ -61,6 +61,7 @@ struct StreamFlags {
   size_t window = StreamerOptions().window;
   std::optional<absl::Duration> retry_timeout;
   std::optional<absl::Duration> stall_timeout;
+  lane_tools::ReadFlags read;
   std::vector<std::string> inputs;
 };
 
@@ -260,7 +261,10 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
     overlays = std::make_unique<OverlayDrawer>(overlay_writer.get());
   }
 
-  FrameSource frames(flags.inputs, flags.raw);
+  lane_tools::ReadOptions read;
+  read.max_frames = flags.read.max_frames;
+  read.pacer = lane_tools::Pacer(flags.read.fps, flags.read.realtime);
+  FrameSource frames(flags.inputs, flags.raw, read);
   Streamer streamer(MakeChannel(targets->front()), options,
                     [](const std::string& message) { Note("stream", message); });
   StreamSink sink(out, options.camera_id, overlays.get(), streamer);
@@ -306,7 +310,10 @@ Command AddStreamCommand(CLI::App& client) {
   lane_tools::AddDuration(app, "--stall-timeout", &flags->stall_timeout,
                           "reconnect when frames are in flight and nothing comes back for D",
                           "30s");
-  app->add_option("INPUT", flags->inputs, "image files, directories, list files or videos");
+  lane_tools::AddReadFlags(app, &flags->read);
+  app->add_option("INPUT", flags->inputs,
+                  "image files, directories, list files, videos, or live sources (rtsp:// or "
+                  "http:// URLs, /dev/videoN, GStreamer pipelines)");
   return {app, [app, flags] { return RunStream(*app, *flags); }};
 }
 

@@ -46,6 +46,7 @@ struct DetectFlags {
   std::optional<std::string> output;
   std::optional<std::string> overlay;
   bool full_decode = false;
+  ReadFlags read;
   std::vector<std::string> inputs;
 };
 
@@ -188,7 +189,10 @@ int RunDetect(const DetectFlags& flags) {
   }
 
   DetectRun run(*detector, config, out, flags.overlay.value_or(""));
-  FrameReader reader(flags.inputs);
+  ReadOptions read;
+  read.max_frames = flags.read.max_frames;
+  read.pacer = Pacer(flags.read.fps, flags.read.realtime);
+  FrameReader reader(flags.inputs, read);
   // JPEG frames are decoded only in the rows and channel the detector
   // reads (the same lanes), unless asked not to; overlays draw on the whole
   // frame.
@@ -229,7 +233,10 @@ Command AddDetectCommand(CLI::App& lane) {
   app->add_flag("--full-decode", flags->full_decode,
                 "decode whole frames with OpenCV (by default JPEG frames are decoded only in "
                 "the rows and channel the detector reads, which gives the same lanes)");
-  app->add_option("INPUT", flags->inputs, "image files, directories, list files or videos")
+  AddReadFlags(app, &flags->read);
+  app->add_option("INPUT", flags->inputs,
+                  "image files, directories, list files, videos, or live sources (rtsp:// or "
+                  "http:// URLs, /dev/videoN, GStreamer pipelines)")
       ->required();
   return {app, [flags] { return RunDetect(*flags); }};
 }
