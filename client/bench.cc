@@ -206,7 +206,7 @@ class LoadRun {
     result.open_loop = spec_.open_loop;
     result.target_fps = spec_.open_loop ? spec_.fps * spec_.cameras : 0;
     std::vector<double> latency;
-    std::vector<double> server;
+    std::vector<double> server, queue, decode, detect;
     std::vector<float> ok_at_s;
     std::vector<float> error_at_s;
     Clock::time_point last_ok = run_.measure_start;
@@ -222,6 +222,9 @@ class LoadRun {
       for (const auto& [code, n] : s.errors) result.errors[code] += n;
       latency.insert(latency.end(), s.latency_ms.begin(), s.latency_ms.end());
       server.insert(server.end(), s.server_ms.begin(), s.server_ms.end());
+      queue.insert(queue.end(), s.queue_ms.begin(), s.queue_ms.end());
+      decode.insert(decode.end(), s.decode_ms.begin(), s.decode_ms.end());
+      detect.insert(detect.end(), s.detect_ms.begin(), s.detect_ms.end());
       ok_at_s.insert(ok_at_s.end(), s.ok_at_s.begin(), s.ok_at_s.end());
       error_at_s.insert(error_at_s.end(), s.error_at_s.begin(), s.error_at_s.end());
       if (s.ok > 0) last_ok = std::max(last_ok, s.last_ok);
@@ -240,8 +243,12 @@ class LoadRun {
       result.timeline = Timeline(latency, ok_at_s, error_at_s,
                                  absl::ToDoubleSeconds(spec_.timeline_interval), result.measured_s);
     }
+    result.latency_histogram = Histogram(latency);
     result.latency_ms = Summarize(latency);
     result.server_ms = Summarize(server);
+    result.queue_ms = Summarize(queue);
+    result.decode_ms = Summarize(decode);
+    result.detect_ms = Summarize(detect);
     return result;
   }
 

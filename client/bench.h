@@ -49,8 +49,20 @@ absl::StatusOr<std::vector<BenchFrame>> LoadBenchFrames(const std::vector<std::s
 
 struct LatencySummary {
   uint64_t count = 0;
-  double p50 = 0, p90 = 0, p99 = 0, p999 = 0, max = 0, mean = 0;  // milliseconds
+  double min = 0, p50 = 0, p90 = 0, p95 = 0, p99 = 0, p999 = 0, max = 0, mean = 0;  // ms
 };
+
+// Counts of latencies in log-spaced bins: kHistogramBins bins from
+// kHistogramMinMs to kHistogramMaxMs, plus one below and one above.
+inline constexpr int kHistogramBins = 48;
+inline constexpr double kHistogramMinMs = 0.1;
+inline constexpr double kHistogramMaxMs = 10000;
+struct LatencyHistogram {
+  std::vector<uint64_t> counts;  // kHistogramBins + 2 once filled
+  // Lower edge of bin i (1..kHistogramBins), ms.
+  static double Edge(int i);
+};
+LatencyHistogram Histogram(const std::vector<double>& values);
 // Nearest-rank percentiles of `values` (sorted in place).
 LatencySummary Summarize(std::vector<double>& values);
 
@@ -116,6 +128,10 @@ struct LoadResult {
   std::map<std::string, uint64_t> errors;  // by code: frame codes and gRPC codes
   LatencySummary latency_ms;               // client: due/sent -> response received (OK frames)
   LatencySummary server_ms;                // server: received -> response ready (OK frames)
+  LatencySummary queue_ms;                 // ... of which waiting for a worker
+  LatencySummary decode_ms;                // ... decoding
+  LatencySummary detect_ms;                // ... detecting
+  LatencyHistogram latency_histogram;      // of latency_ms
   double max_send_lag_ms = 0;              // open loop: the latest a frame was handed to gRPC
   uint64_t stream_failures = 0;
   std::map<std::string, uint64_t> ok_by_target;

@@ -104,6 +104,9 @@ void CameraStream::OnReadDone(bool ok) {
       stats.server_ms.push_back(static_cast<double>(response.server_send_time_unix_ns() -
                                                     response.server_receive_time_unix_ns()) *
                                 1e-6);
+      stats.queue_ms.push_back(response.timings().queue_wait_ms());
+      stats.decode_ms.push_back(response.timings().decode_ms());
+      stats.detect_ms.push_back(response.timings().detect_ms());
       stats.ok_at_s.push_back(camera_->run().SinceMeasureStart(now));
       stats.last_ok = now;
       ++stats.interval_ok;

@@ -61,6 +61,10 @@ struct CameraStats {
   std::map<std::string, uint64_t> errors;
   std::vector<double> latency_ms;
   std::vector<double> server_ms;
+  // The server's split of server_ms (FrameResponse.timings).
+  std::vector<double> queue_ms;
+  std::vector<double> decode_ms;
+  std::vector<double> detect_ms;
   // For the timeline: when each latency_ms entry, and each error, arrived,
   // in seconds since the start of the measured window.
   std::vector<float> ok_at_s;

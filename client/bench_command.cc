@@ -67,6 +67,7 @@ struct BenchFlags {
   bool json = false;
   bool csv = false;
   std::optional<std::string> output;
+  std::optional<std::string> html;
   std::optional<double> slo_p99_ms;
 };
 
@@ -125,7 +126,10 @@ LoadSpec MakeLoadSpec(const BenchFlags& flags, const std::vector<std::string>& t
   spec.warmup = flags.warmup.value_or(absl::Seconds(2));
   spec.duration = flags.duration.value_or(absl::Seconds(10));
   spec.drain_timeout = flags.drain_timeout.value_or(absl::Seconds(10));
-  spec.timeline_interval = flags.timeline.value_or(absl::ZeroDuration());
+  // The HTML page and the warnings want a timeline; it is printed only
+  // with --timeline.
+  spec.timeline_interval = flags.timeline.value_or(
+      absl::Milliseconds(500) * std::max<int64_t>(1, absl::ToInt64Seconds(spec.duration) / 60));
   spec.frames = frames;
   return spec;
 }
@@ -144,6 +148,16 @@ Report MakeReport(const BenchFlags& flags, const LoadSpec& spec,
   report.duration_s = absl::ToDoubleSeconds(spec.duration);
   report.frames = DescribeFrames(*spec.frames, flags.inputs.empty() ? "synthetic" : "inputs");
   report.slo_p99_ms = flags.slo_p99_ms;
+  report.show_timeline = flags.timeline.has_value();
+  report.meta = LocalMetadata();
+  // The server's version, best effort: the report says "unknown" without it.
+  const auto stub = v1::LaneService::NewStub(spec.channels.front());
+  grpc::ClientContext context;
+  SetDeadline(&context, absl::Seconds(5));
+  v1::ServerInfo info;
+  if (stub->GetServerInfo(&context, v1::GetServerInfoRequest(), &info).ok()) {
+    report.meta.server_version = absl::StrCat(info.version(), " (", info.build(), ")");
+  }
   return report;
 }
 
@@ -197,6 +211,11 @@ int WriteReport(const BenchFlags& flags, const Report& report) {
   const std::string text = flags.json  ? JsonReport(report)
                            : flags.csv ? CsvReport(report)
                                        : TextReport(report);
+  if (flags.html) {
+    std::ofstream file(*flags.html, std::ios::binary | std::ios::trunc);
+    file << HtmlReport(report);
+    if (!file) return Failure("bench", absl::StrCat("cannot write ", *flags.html));
+  }
   if (flags.output) {
     std::ofstream file(*flags.output, std::ios::binary | std::ios::trunc);
     file << text;
@@ -340,6 +359,11 @@ void AddReportOptions(CLI::App* app, BenchFlags* flags) {
   app->add_flag("--csv", flags->csv, "report as CSV instead of text")->excludes(json)->group(group);
   lane_tools::AddOptional(app, "--output", &flags->output,
                           "write the report to FILE instead of stdout")
+      ->type_name("FILE")
+      ->group(group);
+  lane_tools::AddOptional(app, "--html", &flags->html,
+                          "also write the report as one self-contained HTML page (latency over "
+                          "time and histogram as inline SVG)")
       ->type_name("FILE")
       ->group(group);
   lane_tools::AddOptional(app, "--slo-p99-ms", &flags->slo_p99_ms,

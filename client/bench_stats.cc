@@ -17,8 +17,10 @@ LatencySummary Summarize(std::vector<double>& values) {
     const size_t index = static_cast<size_t>(std::max(1.0, r)) - 1;
     return values[std::min(index, values.size() - 1)];
   };
+  s.min = values.front();
   s.p50 = rank(50);
   s.p90 = rank(90);
+  s.p95 = rank(95);
   s.p99 = rank(99);
   s.p999 = rank(99.9);
   s.max = values.back();
@@ -26,6 +28,28 @@ LatencySummary Summarize(std::vector<double>& values) {
   for (double v : values) sum += v;
   s.mean = sum / static_cast<double>(values.size());
   return s;
+}
+
+double LatencyHistogram::Edge(int i) {
+  return kHistogramMinMs *
+         std::pow(kHistogramMaxMs / kHistogramMinMs, static_cast<double>(i - 1) / kHistogramBins);
+}
+
+LatencyHistogram Histogram(const std::vector<double>& values) {
+  LatencyHistogram h;
+  h.counts.assign(kHistogramBins + 2, 0);
+  const double span = std::log(kHistogramMaxMs / kHistogramMinMs);
+  for (double v : values) {
+    int bin = 0;
+    if (v >= kHistogramMaxMs) {
+      bin = kHistogramBins + 1;
+    } else if (v >= kHistogramMinMs) {
+      bin = 1 + static_cast<int>(std::log(v / kHistogramMinMs) / span * kHistogramBins);
+      bin = std::min(bin, kHistogramBins);
+    }
+    ++h.counts[static_cast<size_t>(bin)];
+  }
+  return h;
 }
 
 std::vector<TimelinePoint> Timeline(const std::vector<double>& latency_ms,

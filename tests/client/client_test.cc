@@ -9,15 +9,20 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_split.h"
 #include "bench.h"
+#include "bench_report.h"
 #include "commands.h"
 #include "common.h"
 #include "frames.h"
@@ -352,8 +357,10 @@ void ExpectConsistentRun(const Json& run) {
   EXPECT_EQ(run["frames_scheduled"].get<uint64_t>(), sent + run["unsent"].get<uint64_t>());
   const Json& latency = run["latency_ms"];
   EXPECT_EQ(latency["count"].get<uint64_t>(), ok);
+  EXPECT_LE(latency["min"].get<double>(), latency["p50"].get<double>());
   EXPECT_LE(latency["p50"].get<double>(), latency["p90"].get<double>());
-  EXPECT_LE(latency["p90"].get<double>(), latency["p99"].get<double>());
+  EXPECT_LE(latency["p90"].get<double>(), latency["p95"].get<double>());
+  EXPECT_LE(latency["p95"].get<double>(), latency["p99"].get<double>());
   EXPECT_LE(latency["p99"].get<double>(), latency["p999"].get<double>());
   EXPECT_LE(latency["p999"].get<double>(), latency["max"].get<double>());
   EXPECT_GT(run["achieved_fps"].get<double>(), 0);
@@ -363,10 +370,27 @@ TEST_F(ClientTest, BenchClosedLoopJsonReport) {
   auto server = StartServer("127.0.0.1:0");
   ASSERT_NE(server, nullptr);
   TempDir out;
-  const int code =
-      RunCommand({"bench", "--target", Target(*server), "--cameras", "2", "--window", "2",
-                  "--warmup", "300ms", "--duration", "1.5s", "--synthetic", "6", "--inprocess",
-                  "--json", "--slo-p99-ms", "10000", "--output", out / "report.json"});
+  const int code = RunCommand({"bench",
+                               "--target",
+                               Target(*server),
+                               "--cameras",
+                               "2",
+                               "--window",
+                               "2",
+                               "--warmup",
+                               "300ms",
+                               "--duration",
+                               "1.5s",
+                               "--synthetic",
+                               "6",
+                               "--inprocess",
+                               "--json",
+                               "--slo-p99-ms",
+                               "10000",
+                               "--output",
+                               out / "report.json",
+                               "--html",
+                               out / "report.html"});
   EXPECT_EQ(code, kExitOk);
   const Json report = ReadJson(out / "report.json");
   EXPECT_EQ(report["schema"], 1);
@@ -385,6 +409,34 @@ TEST_F(ClientTest, BenchClosedLoopJsonReport) {
   EXPECT_EQ(run["errors_total"], 0);
   ExpectConsistentRun(run);
   EXPECT_GT(run["server_ms"]["p50"].get<double>(), 0);
+  // The server's split: every OK frame's queue, decode and detect times, each
+  // below its whole server time.
+  for (const char* part : {"server_queue_ms", "server_decode_ms", "server_detect_ms"}) {
+    EXPECT_EQ(run[part]["count"], run["frames_ok"]) << part;
+    EXPECT_LE(run[part]["p50"].get<double>(), run["server_ms"]["max"].get<double>()) << part;
+  }
+  EXPECT_GT(run["server_detect_ms"]["p50"].get<double>(), 0);
+  EXPECT_TRUE(run["warnings"].is_array());
+  EXPECT_TRUE(run.find("timeline") == run.end());  // computed, printed only with --timeline
+  EXPECT_NE(report["meta"]["server_version"].get<std::string>().find(
+                lane::server::CurrentBuildInfo().version),
+            std::string::npos);
+  EXPECT_NE(report["meta"]["command_line"].get<std::string>().find("client_test"),
+            std::string::npos);
+  EXPECT_FALSE(report["meta"]["date_utc"].get<std::string>().empty());
+  // The HTML page: self-contained, with both charts and the run's figures.
+  std::ifstream html_file(out / "report.html");
+  const std::string html((std::istreambuf_iterator<char>(html_file)),
+                         std::istreambuf_iterator<char>());
+  EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
+  EXPECT_NE(html.find("aria-label=\"latency over time\""), std::string::npos);
+  EXPECT_NE(html.find("aria-label=\"latency histogram\""), std::string::npos);
+  EXPECT_NE(html.find("<polyline"), std::string::npos);
+  EXPECT_NE(html.find(absl::StrFormat("<td>%.2f</td>", run["latency_ms"]["p95"].get<double>())),
+            std::string::npos);
+  EXPECT_EQ(html.find(" src="), std::string::npos);
+  EXPECT_EQ(html.find(" href="), std::string::npos);
+  EXPECT_NE(html.find("</html>"), std::string::npos);
   EXPECT_EQ(report["inprocess"]["workers"], 2);  // the server's, from GetServerInfo
   EXPECT_GT(report["inprocess"]["fps"].get<double>(), 0);
   EXPECT_GT(run["service_vs_inprocess"].get<double>(), 0);
@@ -429,6 +481,63 @@ TEST_F(ClientTest, BenchOpenLoopSweepCsvAndSloBreach) {
   std::getline(csv, row);
   EXPECT_EQ(header.rfind("mode,cameras,", 0), 0u) << header;
   EXPECT_EQ(row.rfind("closed,1,", 0), 0u) << row;
+  // The CSV has the JSON's run fields, flattened: latency_ms.p95 is
+  // latency_p95_ms, server_decode_ms.p50 is server_decode_p50_ms.
+  const std::vector<std::string> columns = absl::StrSplit(header, ',');
+  const std::set<std::string> column_set(columns.begin(), columns.end());
+  const Json& json_run = report["runs"][0];
+  for (const auto& [key, value] : json_run.items()) {
+    if (key == "timeline") continue;
+    if (value.is_object() && value.contains("p50")) {
+      const std::string prefix = key.substr(0, key.size() - 3);  // drop "_ms"
+      for (const auto& [field, unused] : value.items()) {
+        const std::string column =
+            field == "count" ? prefix + "_count" : prefix + "_" + field + "_ms";
+        EXPECT_EQ(column_set.count(column), 1u) << column;
+      }
+    } else {
+      EXPECT_EQ(column_set.count(key), 1u) << key;
+    }
+  }
+}
+
+// Warnings: a ratio over 100 %, a timeline whose intervals disagree, too few
+// frames for the tail; none for a steady run.
+TEST(BenchReportTest, WarningsSayWhyFiguresMayNotBeTrusted) {
+  Report report;
+  LoadResult run;
+  run.achieved_fps = 500;
+  run.latency_ms.count = 5000;
+  for (int i = 0; i < 6; ++i) {
+    TimelinePoint p;
+    p.start_s = i * 0.5;
+    p.end_s = p.start_s + 0.5;
+    p.ok = 250;
+    p.latency_ms.count = 250;
+    p.latency_ms.p50 = 4;
+    run.timeline.push_back(p);
+  }
+  EXPECT_TRUE(Warnings(report, run).empty());
+  InprocessResult inprocess;
+  inprocess.fps = 400;
+  report.inprocess = inprocess;
+  ASSERT_EQ(Warnings(report, run).size(), 1u);
+  EXPECT_NE(Warnings(report, run)[0].find("over 100 %"), std::string::npos);
+  report.inprocess->fps = 1000;
+  run.timeline[2].ok = 100;
+  run.timeline[3].latency_ms.p50 = 20;
+  const std::vector<std::string> moved = Warnings(report, run);
+  ASSERT_EQ(moved.size(), 2u);
+  EXPECT_NE(moved[0].find("throughput moved"), std::string::npos);
+  EXPECT_NE(moved[1].find("median latency moved"), std::string::npos);
+  // The last interval also holds the drain: it does not count.
+  run.timeline[2].ok = 250;
+  run.timeline[3].latency_ms.p50 = 4;
+  run.timeline.back().ok = 3;
+  EXPECT_TRUE(Warnings(report, run).empty());
+  run.latency_ms.count = 200;
+  ASSERT_EQ(Warnings(report, run).size(), 1u);
+  EXPECT_NE(Warnings(report, run)[0].find("200 frames measured"), std::string::npos);
 }
 
 // A comma list of targets: camera i goes to target i mod 2.
