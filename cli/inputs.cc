@@ -227,6 +227,14 @@ void FrameReader::ReadImage(const InputEntry& entry, InputFrame* frame) const {
   }
 }
 
+long long FrameReader::KnownFrameCount() const {
+  for (const InputEntry& entry : entries_) {
+    if (entry.kind == InputEntry::kVideo) return 0;
+  }
+  const long long n = static_cast<long long>(entries_.size());
+  return options_.max_frames > 0 ? std::min(n, options_.max_frames) : n;
+}
+
 bool FrameReader::Next(InputFrame* frame) {
   if (options_.max_frames > 0 && handed_out_ >= options_.max_frames) return false;
   double source_fps = 0;

@@ -88,6 +88,10 @@ class FrameReader {
 
   // Fills `frame` with the next frame; false when all inputs are done.
   bool Next(InputFrame* frame);
+  // How many frames Next will hand out, when that is known without reading
+  // (image files and errors only, within --max-frames); 0 with a video or a
+  // live source.
+  long long KnownFrameCount() const;
 
   // From now on, JPEG files of width x height are decoded only where `needs`
   // (a detector's) says, through lane/decode: the rows it reads and, where it

@@ -21,16 +21,23 @@ ProgressBar::ProgressBar(bool enabled) : active_(enabled && isatty(fileno(stderr
 ProgressBar::~ProgressBar() { Clear(); }
 
 void ProgressBar::Update(int done, int total, const std::string& label) {
-  if (!active_ || total <= 0) return;
+  if (!active_) return;
   const auto now = std::chrono::steady_clock::now();
-  if (drawn_ && done < total && now - last_ < kMinInterval) return;
+  if (drawn_ && (total <= 0 || done < total) && now - last_ < kMinInterval) return;
   last_ = now;
+  const std::string shown_label =
+      label.size() > kMaxLabel ? "..." + label.substr(label.size() - kMaxLabel + 3) : label;
+  if (total <= 0) {
+    std::fprintf(stderr, "\r%d frames  %s\033[K", done, shown_label.c_str());
+    std::fflush(stderr);
+    drawn_ = true;
+    return;
+  }
   const int filled = std::clamp(done * kBarWidth / total, 0, kBarWidth);
   std::string bar(kBarWidth, ' ');
   std::fill(bar.begin(), bar.begin() + filled, '=');
   if (filled < kBarWidth && done > 0) bar[filled] = '>';
-  const std::string shown =
-      label.size() > kMaxLabel ? "..." + label.substr(label.size() - kMaxLabel + 3) : label;
+  const std::string& shown = shown_label;
   // \r back to the line's start, \033[K erase the rest of the old line.
   std::fprintf(stderr, "\r[%s] %*d/%d  %s\033[K", bar.c_str(),
                static_cast<int>(std::to_string(total).size()), done, total, shown.c_str());

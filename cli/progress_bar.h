@@ -16,7 +16,8 @@ class ProgressBar {
 
   bool active() const { return active_; }
   // "[=========>          ]  30/60  label", redrawn at most every 100 ms
-  // and always for the last frame.
+  // and always for the last frame. With total <= 0 (a video or a live
+  // source: the count is not known) a counter: "30 frames  label".
   void Update(int done, int total, const std::string& label);
   // Erases the bar so later messages start on a clean line.
   void Clear();

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
@@ -17,6 +18,7 @@
 #include "cli/cli_config.h"
 #include "cli/inputs.h"
 #include "cli/overlay.h"
+#include "cli/progress_bar.h"
 #include "cli/results_json.h"
 #include "commands.h"
 #include "lane/config.h"
@@ -46,6 +48,8 @@ struct DetectFlags {
   std::optional<std::string> output;
   std::optional<std::string> overlay;
   bool full_decode = false;
+  bool quiet = false;
+  bool no_progress = false;
   ReadFlags read;
   std::vector<std::string> inputs;
 };
@@ -73,6 +77,7 @@ absl::StatusOr<lane::Detector> MakeDetector(const DetectFlags& flags, lane::Conf
                         absl::StrCat("cannot build the detector: ", detector.status().message()));
   }
   const lane::IpmMapping& ipm = detector->ipm();
+  if (flags.quiet) return detector;
   std::fprintf(stderr,
                "lane detect: top view %dx%d px covering x %.2f..%.2f m, y %.2f..%.2f m ahead: "
                "%.4f m/px across, %.4f m/px along; filter sigmas %.2f x %.2f px\n",
@@ -97,8 +102,9 @@ std::string MakeOverlayDir(const std::string& dir) {
 class DetectRun {
  public:
   DetectRun(const lane::Detector& detector, const lane::Config& config, std::ostream& out,
-            std::filesystem::path overlay_dir)
-      : detector_(detector),
+            std::filesystem::path overlay_dir, bool quiet)
+      : quiet_(quiet),
+        detector_(detector),
         mode_(detector.options().mode),
         expected_width_(config.camera.image_width),
         expected_height_(config.camera.image_height),
@@ -125,6 +131,7 @@ class DetectRun {
     }
     if (!error.empty()) {
       ++failures_;
+      if (on_message_) on_message_();
       std::fprintf(stderr, "lane detect: %s: %s\n", frame.name.c_str(), error.c_str());
       out_ << ErrorJsonLine(frame.name, frame.bgr.cols, frame.bgr.rows, mode_, error) << '\n';
       out_.flush();
@@ -141,23 +148,31 @@ class DetectRun {
                                                 frame.bgr, *detection, detector_, frame.name);
       if (!message.empty()) {
         overlay_failed_ = true;
+        if (on_message_) on_message_();
         std::fprintf(stderr, "lane detect: %s: %s\n", frame.name.c_str(), message.c_str());
       }
     }
   }
 
-  // The summary line on stderr and the exit status.
+  // Called before a message is printed (the progress bar clears its line).
+  void OnMessage(std::function<void()> f) { on_message_ = std::move(f); }
+
+  // The summary line on stderr (not with --quiet) and the exit status.
   int Finish() const {
     const int ok_frames = frames_ - failures_;
-    std::fprintf(stderr,
-                 "lane detect: %d frames, %d failed, %.2f lanes/frame, median total %.2f ms\n",
-                 frames_, failures_, ok_frames > 0 ? double(total_lanes_) / ok_frames : 0.0,
-                 Median(total_ms_));
+    if (!quiet_) {
+      std::fprintf(stderr,
+                   "lane detect: %d frames, %d failed, %.2f lanes/frame, median total %.2f ms\n",
+                   frames_, failures_, ok_frames > 0 ? double(total_lanes_) / ok_frames : 0.0,
+                   Median(total_ms_));
+    }
     if (frames_ == 0) return Failure("detect", "the inputs contain no frames");
     return failures_ > 0 || overlay_failed_ ? kExitFailure : kExitOk;
   }
 
  private:
+  const bool quiet_;
+  std::function<void()> on_message_;
   const lane::Detector& detector_;
   const lane::Mode mode_;
   const int expected_width_;
@@ -188,7 +203,7 @@ int RunDetect(const DetectFlags& flags) {
     }
   }
 
-  DetectRun run(*detector, config, out, flags.overlay.value_or(""));
+  DetectRun run(*detector, config, out, flags.overlay.value_or(""), flags.quiet);
   ReadOptions read;
   read.max_frames = flags.read.max_frames;
   read.pacer = Pacer(flags.read.fps, flags.read.realtime);
@@ -199,8 +214,18 @@ int RunDetect(const DetectFlags& flags) {
   if (!flags.full_decode && !flags.overlay) {
     reader.DecodeOnly(detector->Needs(), config.camera.image_width, config.camera.image_height);
   }
+  // A bar when the frame count is known (files), else a counter; only on a
+  // terminal, never with --quiet or --no-progress.
+  ProgressBar progress(!flags.quiet && !flags.no_progress);
+  run.OnMessage([&progress] { progress.Clear(); });
+  const int total = static_cast<int>(std::min<long long>(reader.KnownFrameCount(), 1 << 30));
+  int done = 0;
   InputFrame frame;
-  while (reader.Next(&frame)) run.Process(frame);
+  while (reader.Next(&frame)) {
+    run.Process(frame);
+    progress.Update(++done, total, frame.name);
+  }
+  progress.Clear();
   if (!out) {
     return Failure("detect", flags.output ? absl::StrCat("error writing ", *flags.output)
                                           : std::string("error writing the results to stdout"));
@@ -234,6 +259,10 @@ Command AddDetectCommand(CLI::App& lane) {
                 "decode whole frames with OpenCV (by default JPEG frames are decoded only in "
                 "the rows and channel the detector reads, which gives the same lanes)");
   AddReadFlags(app, &flags->read);
+  app->add_flag("--quiet,-q", flags->quiet,
+                "print only errors on stderr: no top-view line, progress or summary");
+  app->add_flag("--no-progress", flags->no_progress,
+                "no progress bar (it is drawn only when stderr is a terminal)");
   app->add_option("INPUT", flags->inputs,
                   "image files, directories, list files, videos, or live sources (rtsp:// or "
                   "http:// URLs, /dev/videoN, GStreamer pipelines)")
