@@ -74,6 +74,14 @@ void FrameSource::ReadImage(const lane_tools::InputEntry& entry, ClientFrame* fr
   frame->bgr = decoded;
 }
 
+long long FrameSource::KnownFrameCount() const {
+  for (const lane_tools::InputEntry& entry : entries_) {
+    if (entry.kind == lane_tools::InputEntry::kVideo) return 0;
+  }
+  const long long n = static_cast<long long>(entries_.size());
+  return options_.max_frames > 0 ? std::min(n, options_.max_frames) : n;
+}
+
 bool FrameSource::Next(ClientFrame* frame) {
   if (options_.max_frames > 0 && handed_out_ >= options_.max_frames) return false;
   double source_fps = 0;

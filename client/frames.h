@@ -53,6 +53,9 @@ class FrameSource {
   // The next frame; false when every input is done. Reads one file (or one
   // video frame) per call.
   bool Next(ClientFrame* frame);
+  // How many frames Next will hand out when that is known without reading
+  // (files only, within --max-frames); 0 with a video or a live source.
+  long long KnownFrameCount() const;
 
  private:
   void ReadImage(const lane_tools::InputEntry& entry, ClientFrame* frame) const;

@@ -19,6 +19,7 @@
 #include "absl/time/clock.h"
 #include "cli/inputs.h"
 #include "cli/overlay.h"
+#include "cli/progress_bar.h"
 #include "commands.h"
 #include "common.h"
 #include "frames.h"
@@ -62,6 +63,8 @@ struct StreamFlags {
   std::optional<absl::Duration> retry_timeout;
   std::optional<absl::Duration> stall_timeout;
   lane_tools::ReadFlags read;
+  bool quiet = false;
+  bool no_progress = false;
   std::vector<std::string> inputs;
 };
 
@@ -191,12 +194,18 @@ class OverlayDrawer {
 class StreamSink {
  public:
   StreamSink(std::ostream& out, const std::string& camera_id, OverlayDrawer* overlays,
-             const Streamer& streamer)
-      : out_(out), camera_id_(camera_id), overlays_(overlays), streamer_(streamer) {}
+             const Streamer& streamer, lane_tools::ProgressBar& progress, int total)
+      : out_(out),
+        camera_id_(camera_id),
+        overlays_(overlays),
+        streamer_(streamer),
+        progress_(progress),
+        total_(total) {}
 
   void operator()(const StreamItem& item, const v1::FrameResponse* response, double latency_ms) {
     if (response == nullptr) {
       ++failed_;
+      progress_.Clear();
       Note("stream", absl::StrCat(item.name, ": ", item.local_error));
       out_ << ClientErrorJsonLine(item.name, camera_id_, item.frame_id, item.local_error) << '\n';
     } else {
@@ -206,11 +215,13 @@ class StreamSink {
         if (overlays_ != nullptr) overlays_->Submit(item, *response, streamer_.session());
       } else {
         ++failed_;
+        progress_.Clear();
         Note("stream", absl::StrCat(item.name, ": ", FrameCodeName(response->status().code()), ": ",
                                     response->status().message()));
       }
     }
     out_.flush();
+    progress_.Update(++answered_, total_, item.name);
   }
 
   uint64_t ok() const { return ok_; }
@@ -221,6 +232,9 @@ class StreamSink {
   const std::string camera_id_;
   OverlayDrawer* const overlays_;
   const Streamer& streamer_;
+  lane_tools::ProgressBar& progress_;
+  const int total_;
+  int answered_ = 0;
   uint64_t ok_ = 0;
   uint64_t failed_ = 0;
 };
@@ -267,16 +281,23 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
   FrameSource frames(flags.inputs, flags.raw, read);
   Streamer streamer(MakeChannel(targets->front()), options,
                     [](const std::string& message) { Note("stream", message); });
-  StreamSink sink(out, options.camera_id, overlays.get(), streamer);
+  // A bar when the frame count is known (files), else a counter; only on a
+  // terminal, never with --quiet or --no-progress.
+  lane_tools::ProgressBar progress(!flags.quiet && !flags.no_progress);
+  const int total = static_cast<int>(std::min<long long>(frames.KnownFrameCount(), 1 << 30));
+  StreamSink sink(out, options.camera_id, overlays.get(), streamer, progress, total);
   const absl::Status status =
       streamer.Run(MakeSource(&frames, options.camera_id),
                    [&sink](const StreamItem& item, const v1::FrameResponse* response,
                            double latency_ms) { sink(item, response, latency_ms); });
   const bool overlays_ok = overlays == nullptr || overlays->Finish();
+  progress.Clear();
   const StreamerStats& stats = streamer.stats();
-  Note("stream",
-       absl::StrCat(stats.frames, " frames: ", sink.ok(), " ok, ", sink.failed(), " failed; ",
-                    stats.connections, " connection(s), ", stats.resent, " frame(s) resent"));
+  if (!flags.quiet) {
+    Note("stream",
+         absl::StrCat(stats.frames, " frames: ", sink.ok(), " ok, ", sink.failed(), " failed; ",
+                      stats.connections, " connection(s), ", stats.resent, " frame(s) resent"));
+  }
   if (!status.ok()) return Failure("stream", std::string(status.message()));
   if (!out) return Failure("stream", "error writing the results");
   return sink.failed() > 0 || !overlays_ok ? kExitFailure : kExitOk;
@@ -311,6 +332,9 @@ Command AddStreamCommand(CLI::App& client) {
                           "reconnect when frames are in flight and nothing comes back for D",
                           "30s");
   lane_tools::AddReadFlags(app, &flags->read);
+  app->add_flag("--quiet,-q", flags->quiet, "print only errors on stderr: no progress or summary");
+  app->add_flag("--no-progress", flags->no_progress,
+                "no progress bar (it is drawn only when stderr is a terminal)");
   app->add_option("INPUT", flags->inputs,
                   "image files, directories, list files, videos, or live sources (rtsp:// or "
                   "http:// URLs, /dev/videoN, GStreamer pipelines)");
