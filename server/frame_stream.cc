@@ -38,7 +38,11 @@ struct FrameStream::Slot {
 };
 
 FrameStream::FrameStream(StreamDeps deps)
-    : deps_(std::move(deps)), max_inflight_(deps_.sessions.options().default_max_inflight_frames) {}
+    : deps_(std::move(deps)),
+      call_metrics_(deps_.metrics.grpc(),
+                    deps_.metrics.grpc().ForMethod("/lane.v1.LaneService/StreamFrames",
+                                                   GrpcMetrics::Type::kBidiStream)),
+      max_inflight_(deps_.sessions.options().default_max_inflight_frames) {}
 
 FrameStream::~FrameStream() = default;
 
@@ -72,6 +76,7 @@ void FrameStream::OnReadDone(bool ok) {
     return;
   }
   if (phase_ == Phase::kFinished || phase_ == Phase::kCancelled) return;  // read as it ended
+  call_metrics_.Received();
   ReceiveLocked();
   MaybeWriteLocked();
   MaybeReadLocked();
@@ -209,6 +214,7 @@ void FrameStream::OnDone() {
   // in this code: nothing the reactions wrote is read or freed before they
   // have let go of the stream.
   { std::lock_guard<std::mutex> lock(mu_); }
+  call_metrics_.Handled(grpc::StatusCode::CANCELLED);  // only if nothing was counted
   if (deps_.on_done) deps_.on_done(this);
   Unref();
 }
@@ -265,6 +271,7 @@ void FrameStream::MaybeWriteLocked() {
       return;
     }
     writing_ = true;
+    call_metrics_.Sent();
     StartWrite(&front.wire);
   }
 }
@@ -285,7 +292,9 @@ void FrameStream::FinishLocked(const absl::Status& status) {
   abandoned_.store(true, std::memory_order_release);
   // Only cancellation gets here with frames unanswered; their workers skip.
   while (!slots_.empty()) PopFrontLocked();
-  Finish(wire::ToGrpcStatus(status));
+  const grpc::Status grpc_status = wire::ToGrpcStatus(status);
+  call_metrics_.Handled(grpc_status.error_code());
+  Finish(grpc_status);
 }
 
 void FrameStream::PopFrontLocked() {

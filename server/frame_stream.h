@@ -105,6 +105,9 @@ class FrameStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc:
   void Unref();
 
   StreamDeps deps_;
+  // grpc_server_* of this call: a frame read is a message received, a
+  // response written a message sent.
+  GrpcMetrics::Call call_metrics_;
   // One for gRPC (released in OnDone) and one per task on the pool.
   std::atomic<int> refs_{1};
   // Set when the answers are no longer wanted (cancelled or finished):

@@ -1,6 +1,5 @@
 #include "grpc_metrics.h"
 
-#include <atomic>
 #include <chrono>
 #include <string_view>
 
@@ -9,74 +8,21 @@
 namespace lane::server {
 namespace {
 
-using grpc::experimental::InterceptionHookPoints;
-using grpc::experimental::ServerRpcInfo;
-
 constexpr size_t kMaxMethods = 64;
 
-const char* TypeLabel(ServerRpcInfo::Type type) {
+const char* TypeLabel(GrpcMetrics::Type type) {
   switch (type) {
-    case ServerRpcInfo::Type::UNARY:
+    case GrpcMetrics::Type::kUnary:
       return "unary";
-    case ServerRpcInfo::Type::CLIENT_STREAMING:
+    case GrpcMetrics::Type::kClientStream:
       return "client_stream";
-    case ServerRpcInfo::Type::SERVER_STREAMING:
+    case GrpcMetrics::Type::kServerStream:
       return "server_stream";
-    case ServerRpcInfo::Type::BIDI_STREAMING:
+    case GrpcMetrics::Type::kBidiStream:
       return "bidi_stream";
   }
   return "unknown";
 }
-
-// One call: started when created, handled when its status is sent (or, if
-// none is, when gRPC destroys it at the end of the call).
-class CallInterceptor final : public grpc::experimental::Interceptor {
- public:
-  CallInterceptor(GrpcMetrics& metrics, GrpcMetrics::Method& method)
-      : metrics_(metrics), method_(method), start_(std::chrono::steady_clock::now()) {
-    method_.started->Increment();
-  }
-  ~CallInterceptor() override { Handled(grpc::StatusCode::CANCELLED); }
-
-  void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
-    // A failed read (the client's half-close) has no message.
-    if (methods->QueryInterceptionHookPoint(InterceptionHookPoints::POST_RECV_MESSAGE) &&
-        methods->GetRecvMessage() != nullptr) {
-      method_.received->Increment();
-    }
-    if (methods->QueryInterceptionHookPoint(InterceptionHookPoints::PRE_SEND_MESSAGE)) {
-      method_.sent->Increment();
-    }
-    if (methods->QueryInterceptionHookPoint(InterceptionHookPoints::PRE_SEND_STATUS)) {
-      Handled(methods->GetSendStatus().error_code());
-    }
-    methods->Proceed();
-  }
-
- private:
-  void Handled(grpc::StatusCode code) {
-    if (handled_.exchange(true)) return;
-    metrics_.CountHandled(method_, code);
-    method_.handling->Observe(
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
-  }
-
-  GrpcMetrics& metrics_;
-  GrpcMetrics::Method& method_;
-  const std::chrono::steady_clock::time_point start_;
-  std::atomic<bool> handled_{false};
-};
-
-class Factory final : public grpc::experimental::ServerInterceptorFactoryInterface {
- public:
-  explicit Factory(GrpcMetrics& metrics) : metrics_(metrics) {}
-  grpc::experimental::Interceptor* CreateServerInterceptor(ServerRpcInfo* info) override {
-    return new CallInterceptor(metrics_, metrics_.ForMethod(info->method(), info->type()));
-  }
-
- private:
-  GrpcMetrics& metrics_;
-};
 
 }  // namespace
 
@@ -108,7 +54,19 @@ GrpcMetrics::GrpcMetrics(prometheus::Registry& registry)
                           "application-level handled by the server.")
                     .Register(registry)) {}
 
-GrpcMetrics::Method& GrpcMetrics::ForMethod(const char* full_method, ServerRpcInfo::Type type) {
+GrpcMetrics::Call::Call(GrpcMetrics& metrics, Method& method)
+    : metrics_(metrics), method_(method), start_(std::chrono::steady_clock::now()) {
+  method_.started->Increment();
+}
+
+void GrpcMetrics::Call::Handled(grpc::StatusCode code) {
+  if (handled_.exchange(true)) return;
+  metrics_.CountHandled(method_, code);
+  method_.handling->Observe(
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
+}
+
+GrpcMetrics::Method& GrpcMetrics::ForMethod(const char* full_method, Type type) {
   // "/package.Service/Method"; anything else (an unknown method) is kept whole
   // as the method under service "unknown".
   const std::string_view name = full_method != nullptr ? full_method : "";
@@ -143,11 +101,6 @@ void GrpcMetrics::CountHandled(const Method& method, grpc::StatusCode code) {
   prometheus::Labels labels = method.labels;
   labels.emplace("grpc_code", wire::GrpcCodeName(code));
   handled_.Add(labels).Increment();  // Family::Add is thread-safe
-}
-
-std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>
-GrpcMetrics::InterceptorFactory() {
-  return std::make_unique<Factory>(*this);
 }
 
 }  // namespace lane::server

@@ -7,20 +7,25 @@
 //   grpc_server_msg_sent_total{grpc_service,grpc_method,grpc_type}
 //   grpc_server_handling_seconds{grpc_service,grpc_method,grpc_type} (histogram)
 //
-// They are counted by a server interceptor, so every service the server hosts
-// is covered the same way (the lane service, health, reflection) and no
-// handler counts its own calls. A call is "handled" when its status is sent;
-// a call that ends without one (the client went away first) is counted as
-// CANCELLED. grpc_type is unary, client_stream, server_stream or bidi_stream.
+// They count the calls of lane.v1.LaneService: each call object of the
+// service (raw_call.h's UnaryCall, FrameStream) holds a GrpcMetrics::Call
+// and reports its messages and its status to it. Health checks and
+// reflection are not counted. (A server interceptor would count those too,
+// but gRPC hands its interceptor state between threads inside the
+// uninstrumented libgrpc++, which ThreadSanitizer reports as races; the
+// service's own objects are already proved race-free.) grpc_type is unary or
+// bidi_stream.
 #ifndef LANE_SERVER_GRPC_METRICS_H_
 #define LANE_SERVER_GRPC_METRICS_H_
 
-#include <grpcpp/support/server_interceptor.h>
+#include <grpcpp/support/status.h>
 #include <prometheus/counter.h>
 #include <prometheus/family.h>
 #include <prometheus/histogram.h>
 #include <prometheus/registry.h>
 
+#include <atomic>
+#include <chrono>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -45,14 +50,30 @@ class GrpcMetrics {
 
   explicit GrpcMetrics(prometheus::Registry& registry);
 
-  // The series of a full method name ("/lane.v1.LaneService/Detect") and
-  // call type; created on first use, then shared.
-  Method& ForMethod(const char* full_method, grpc::experimental::ServerRpcInfo::Type type);
-  void CountHandled(const Method& method, grpc::StatusCode code);
+  enum class Type { kUnary, kClientStream, kServerStream, kBidiStream };
 
-  // For grpc::ServerBuilder::experimental().SetInterceptorCreators. The
-  // factory refers to this object, which must outlive the server.
-  std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface> InterceptorFactory();
+  // One call: started when made; messages counted as they go; handled once,
+  // with its status code and its handling time. Thread-safe.
+  class Call {
+   public:
+    Call(GrpcMetrics& metrics, Method& method);
+    void Received() { method_.received->Increment(); }
+    void Sent() { method_.sent->Increment(); }
+    // The first call counts; later ones are ignored.
+    void Handled(grpc::StatusCode code);
+
+   private:
+    GrpcMetrics& metrics_;
+    Method& method_;
+    const std::chrono::steady_clock::time_point start_;
+    std::atomic<bool> handled_{false};
+  };
+
+  // The series of a full method name ("/lane.v1.LaneService/Detect") and
+  // call type; created on first use, then shared. Past 64 names, the rest
+  // share one "unknown" series.
+  Method& ForMethod(const char* full_method, Type type);
+  void CountHandled(const Method& method, grpc::StatusCode code);
 
  private:
   prometheus::Family<prometheus::Counter>& started_;

@@ -99,7 +99,7 @@ grpc::ServerUnaryReactor* LaneServiceImpl::CreateSession(grpc::CallbackServerCon
                                                          grpc::ByteBuffer* out) {
   using Call = UnaryCall<v1::CreateSessionRequest, v1::CreateSessionResponse>;
   return StartUnary<v1::CreateSessionRequest, v1::CreateSessionResponse>(
-      context, in, out, [this](Call* call) {
+      context, in, out, "/lane.v1.LaneService/CreateSession", metrics_, [this](Call* call) {
         if (absl::Status s = Admission(call->context()); !s.ok()) return call->Reply(s);
         // Building a detector is CPU work: on the pool.
         const bool queued = pool_.TrySubmit([this, call] {
@@ -120,16 +120,17 @@ grpc::ServerUnaryReactor* LaneServiceImpl::GetSession(grpc::CallbackServerContex
                                                       const grpc::ByteBuffer* in,
                                                       grpc::ByteBuffer* out) {
   using Call = UnaryCall<v1::GetSessionRequest, v1::Session>;
-  return StartUnary<v1::GetSessionRequest, v1::Session>(context, in, out, [this](Call* call) {
-    absl::Status status = Admission(call->context());
-    if (status.ok()) status = SessionRegistry::ValidateCameraId(call->request().camera_id());
-    if (status.ok()) {
-      absl::StatusOr<SessionRegistry::Entry> entry = sessions_.Get(call->request().camera_id());
-      if (entry.ok()) SessionToProto(*entry->session, entry->last_used, call->response());
-      status = entry.status();
-    }
-    call->Reply(status);
-  });
+  return StartUnary<v1::GetSessionRequest, v1::Session>(
+      context, in, out, "/lane.v1.LaneService/GetSession", metrics_, [this](Call* call) {
+        absl::Status status = Admission(call->context());
+        if (status.ok()) status = SessionRegistry::ValidateCameraId(call->request().camera_id());
+        if (status.ok()) {
+          absl::StatusOr<SessionRegistry::Entry> entry = sessions_.Get(call->request().camera_id());
+          if (entry.ok()) SessionToProto(*entry->session, entry->last_used, call->response());
+          status = entry.status();
+        }
+        call->Reply(status);
+      });
 }
 
 grpc::ServerUnaryReactor* LaneServiceImpl::ListSessions(grpc::CallbackServerContext* context,
@@ -137,7 +138,7 @@ grpc::ServerUnaryReactor* LaneServiceImpl::ListSessions(grpc::CallbackServerCont
                                                         grpc::ByteBuffer* out) {
   using Call = UnaryCall<v1::ListSessionsRequest, v1::ListSessionsResponse>;
   return StartUnary<v1::ListSessionsRequest, v1::ListSessionsResponse>(
-      context, in, out, [this](Call* call) {
+      context, in, out, "/lane.v1.LaneService/ListSessions", metrics_, [this](Call* call) {
         absl::Status status = Admission(call->context());
         if (status.ok()) {
           for (const SessionRegistry::Entry& entry : sessions_.List()) {
@@ -153,7 +154,7 @@ grpc::ServerUnaryReactor* LaneServiceImpl::DeleteSession(grpc::CallbackServerCon
                                                          grpc::ByteBuffer* out) {
   using Call = UnaryCall<v1::DeleteSessionRequest, v1::DeleteSessionResponse>;
   return StartUnary<v1::DeleteSessionRequest, v1::DeleteSessionResponse>(
-      context, in, out, [this](Call* call) {
+      context, in, out, "/lane.v1.LaneService/DeleteSession", metrics_, [this](Call* call) {
         absl::Status status = Admission(call->context());
         if (status.ok()) status = SessionRegistry::ValidateCameraId(call->request().camera_id());
         if (status.ok()) status = sessions_.Delete(call->request().camera_id());
@@ -184,62 +185,64 @@ grpc::ServerUnaryReactor* LaneServiceImpl::Detect(grpc::CallbackServerContext* c
                                                   const grpc::ByteBuffer* in,
                                                   grpc::ByteBuffer* out) {
   using Call = UnaryCall<v1::FrameRequest, v1::FrameResponse>;
-  return StartUnary<v1::FrameRequest, v1::FrameResponse>(context, in, out, [this](Call* call) {
-    if (absl::Status s = Admission(call->context()); !s.ok()) return call->Reply(s);
-    const std::string& camera_id = call->request().camera_id();
-    if (camera_id.empty()) return call->Reply(wire::InvalidRequest("frame without camera_id"));
-    if (absl::Status s = SessionRegistry::ValidateCameraId(camera_id); !s.ok()) {
-      return call->Reply(s);
-    }
-    std::shared_ptr<const Session> session;
-    if (!call->request().has_session_config()) {
-      session = sessions_.Find(camera_id);
-      if (session == nullptr) return call->Reply(wire::NoSessionForFrame(camera_id));
-    }
-    const Arrival arrival = Arrival::Now();
-    metrics_.FrameReceived();
-    const bool queued =
-        pool_.TrySubmit([this, call, arrival, session = std::move(session)]() mutable {
-          const v1::FrameRequest& request = call->request();
-          v1::FrameResponse* response = call->response();
-          absl::Status status;
-          if (session == nullptr) {  // the request carries its session config
-            absl::StatusOr<SessionRegistry::CreateResult> created =
-                CreateSessionFromProto(sessions_, request.camera_id(), request.session_config(),
-                                       request.replace_session());
-            if (created.ok()) {
-              session = std::move(created->session);
-            } else {
-              status = created.status();
-            }
-          }
-          if (session != nullptr) {
-            StartResponse(request, request.camera_id(), arrival, response);
-            status =
-                ProcessFrame(request, *session, options_.frame_limits, arrival, metrics_, response);
-            response->set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
-          }
+  return StartUnary<v1::FrameRequest, v1::FrameResponse>(
+      context, in, out, "/lane.v1.LaneService/Detect", metrics_, [this](Call* call) {
+        if (absl::Status s = Admission(call->context()); !s.ok()) return call->Reply(s);
+        const std::string& camera_id = call->request().camera_id();
+        if (camera_id.empty()) return call->Reply(wire::InvalidRequest("frame without camera_id"));
+        if (absl::Status s = SessionRegistry::ValidateCameraId(camera_id); !s.ok()) {
+          return call->Reply(s);
+        }
+        std::shared_ptr<const Session> session;
+        if (!call->request().has_session_config()) {
+          session = sessions_.Find(camera_id);
+          if (session == nullptr) return call->Reply(wire::NoSessionForFrame(camera_id));
+        }
+        const Arrival arrival = Arrival::Now();
+        metrics_.FrameReceived();
+        const bool queued =
+            pool_.TrySubmit([this, call, arrival, session = std::move(session)]() mutable {
+              const v1::FrameRequest& request = call->request();
+              v1::FrameResponse* response = call->response();
+              absl::Status status;
+              if (session == nullptr) {  // the request carries its session config
+                absl::StatusOr<SessionRegistry::CreateResult> created =
+                    CreateSessionFromProto(sessions_, request.camera_id(), request.session_config(),
+                                           request.replace_session());
+                if (created.ok()) {
+                  session = std::move(created->session);
+                } else {
+                  status = created.status();
+                }
+              }
+              if (session != nullptr) {
+                StartResponse(request, request.camera_id(), arrival, response);
+                status = ProcessFrame(request, *session, options_.frame_limits, arrival, metrics_,
+                                      response);
+                response->set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
+              }
+              metrics_.FrameAnswered();
+              call->Reply(status);
+            });
+        if (!queued) {
           metrics_.FrameAnswered();
-          call->Reply(status);
-        });
-    if (!queued) {
-      metrics_.FrameAnswered();
-      call->Reply(wire::WorkerQueueFull());
-    }
-  });
+          call->Reply(wire::WorkerQueueFull());
+        }
+      });
 }
 
 grpc::ServerUnaryReactor* LaneServiceImpl::GetServerInfo(grpc::CallbackServerContext* context,
                                                          const grpc::ByteBuffer* in,
                                                          grpc::ByteBuffer* out) {
   using Call = UnaryCall<v1::GetServerInfoRequest, v1::ServerInfo>;
-  return StartUnary<v1::GetServerInfoRequest, v1::ServerInfo>(context, in, out, [this](Call* call) {
-    if (absl::Status s = CheckBearerToken(call->context(), options_.auth_tokens); !s.ok()) {
-      return call->Reply(s);
-    }
-    FillServerInfo(call->response());
-    call->Reply(absl::OkStatus());
-  });
+  return StartUnary<v1::GetServerInfoRequest, v1::ServerInfo>(
+      context, in, out, "/lane.v1.LaneService/GetServerInfo", metrics_, [this](Call* call) {
+        if (absl::Status s = CheckBearerToken(call->context(), options_.auth_tokens); !s.ok()) {
+          return call->Reply(s);
+        }
+        FillServerInfo(call->response());
+        call->Reply(absl::OkStatus());
+      });
 }
 
 void LaneServiceImpl::FillServerInfo(v1::ServerInfo* response) const {

@@ -1,8 +1,9 @@
 // lane-server: the lane-marker detection service. See docs/service.md.
 //
 //   lane-server --default_config=configs/synthetic.json
-#include <pthread.h>
+#include <grpc/support/log.h>
 #include <malloc.h>
+#include <pthread.h>
 #include <signal.h>
 
 #include <algorithm>
@@ -10,6 +11,8 @@
 #include <cstdlib>
 #include <iostream>
 #include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <string>
 #include <thread>
@@ -21,6 +24,8 @@
 #include "absl/flags/usage.h"
 #include "absl/flags/usage_config.h"
 #include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "absl/time/clock.h"
 #include "absl/time/time.h"
 #include "auth.h"
 #include "server.h"
@@ -84,6 +89,86 @@ ABSL_FLAG(int, malloc_keep_mib, 64,
           "for every frame, and the page faults cost more than the detection (raw throughput "
           "x2-3). 0 keeps glibc's defaults.");
 
+ABSL_FLAG(std::string, log_format, "text",
+          "How the server logs to stderr: text (one line per event, for people) or json (one "
+          "JSON object per line with ts, level, logger, msg and the event's fields, for log "
+          "pipelines).");
+
+namespace {
+
+// The server's log: a few events (start, signals, stop, fatal errors) on
+// stderr, as text or as JSON lines. Fields are (name, value) pairs; a value
+// is a string or a number.
+class Log {
+ public:
+  using Field = std::pair<std::string, nlohmann::json>;
+  explicit Log(bool json) : json_(json) {}
+
+  void Info(const std::string& text, const std::string& msg, std::vector<Field> fields = {}) {
+    Write("info", text, msg, std::move(fields));
+  }
+  // gRPC core's own log lines (json only: in text format gRPC prints its own).
+  void Grpc(const char* level, const std::string& msg, std::vector<Field> fields) {
+    Write(level, msg, msg, std::move(fields), "grpc");
+  }
+  void Error(const std::string& text, const std::string& msg, std::vector<Field> fields = {}) {
+    Write("error", text, msg, std::move(fields));
+  }
+
+ private:
+  // `text` is the line in text format; `msg` and `fields` the JSON event.
+  void Write(const char* level, const std::string& text, const std::string& msg,
+             std::vector<Field> fields, const char* logger = "lane-server") {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (!json_) {
+      std::cerr << text << std::endl;
+      return;
+    }
+    nlohmann::ordered_json event;
+    event["ts"] = absl::FormatTime("%Y-%m-%dT%H:%M:%E3SZ", absl::Now(), absl::UTCTimeZone());
+    event["level"] = level;
+    event["logger"] = logger;
+    event["msg"] = msg;
+    for (auto& [name, value] : fields) event[name] = std::move(value);
+    // Invalid UTF-8 (a path) is replaced, never a throw.
+    std::cerr << event.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << std::endl;
+  }
+
+  const bool json_;
+  std::mutex mu_;
+};
+
+// "--max-inflight-frames=8" -> "--max_inflight_frames=8": lane and
+// lane-client spell flags with dashes, absl with underscores; the server takes
+// both, so one spelling works on all three binaries. Only the name before '='
+// changes; values are left alone, and so is everything after "--".
+std::vector<std::string> NormalizeFlagNames(int argc, char** argv) {
+  std::vector<std::string> args(argv, argv + argc);
+  for (size_t i = 1; i < args.size(); ++i) {
+    std::string& arg = args[i];
+    if (arg == "--") break;
+    if (arg.size() < 3 || arg[0] != '-') continue;
+    const size_t start = arg[1] == '-' ? 2 : 1;
+    const size_t end = std::min(arg.find('='), arg.size());
+    for (size_t k = start; k < end; ++k) {
+      if (arg[k] == '-') arg[k] = '_';
+    }
+  }
+  return args;
+}
+
+Log* grpc_log_target = nullptr;  // set once before gRPC starts
+
+void GrpcLogToJson(gpr_log_func_args* args) {
+  const char* level = args->severity == GPR_LOG_SEVERITY_ERROR  ? "error"
+                      : args->severity == GPR_LOG_SEVERITY_INFO ? "info"
+                                                                : "debug";
+  grpc_log_target->Grpc(level, args->message != nullptr ? args->message : "",
+                        {{"file", args->file != nullptr ? args->file : ""}, {"line", args->line}});
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   // --help lists the flags of this file (the default filter expects a file
   // named after the program).
@@ -104,7 +189,20 @@ int main(int argc, char** argv) {
   absl::SetFlagsUsageConfig(usage);
   // absl prints the program's name before this.
   absl::SetProgramUsageMessage("lane-marker detection over gRPC. See docs/service.md.");
-  absl::ParseCommandLine(argc, argv);
+  std::vector<std::string> normalized = NormalizeFlagNames(argc, argv);
+  std::vector<char*> normalized_argv;
+  for (std::string& arg : normalized) normalized_argv.push_back(arg.data());
+  absl::ParseCommandLine(static_cast<int>(normalized_argv.size()), normalized_argv.data());
+  const std::string log_format = absl::GetFlag(FLAGS_log_format);
+  if (log_format != "text" && log_format != "json") {
+    std::cerr << "lane-server: --log_format must be text or json, got '" << log_format << "'\n";
+    return 2;
+  }
+  Log log(log_format == "json");
+  if (log_format == "json") {
+    grpc_log_target = &log;
+    gpr_set_log_function(GrpcLogToJson);
+  }
 
   // SIGTERM and SIGINT are taken by a thread of ours (sigwait), so block them
   // before any other thread exists: every thread inherits the mask.
@@ -156,7 +254,8 @@ int main(int argc, char** argv) {
   if (const std::string path = absl::GetFlag(FLAGS_auth_tokens_file); !path.empty()) {
     absl::StatusOr<std::vector<std::string>> tokens = lane::server::ReadTokenFile(path);
     if (!tokens.ok()) {
-      std::cerr << "lane-server: --auth_tokens_file: " << tokens.status().message() << "\n";
+      const std::string message = absl::StrCat("--auth_tokens_file: ", tokens.status().message());
+      log.Error("lane-server: " + message, message);
       return 1;
     }
     options.auth_tokens = *std::move(tokens);
@@ -172,36 +271,55 @@ int main(int argc, char** argv) {
   absl::StatusOr<std::unique_ptr<lane::server::LaneServer>> started =
       lane::server::LaneServer::Start(options, registry);
   if (!started.ok()) {
-    std::cerr << "lane-server: " << started.status() << "\n";
+    const std::string message(started.status().message());
+    log.Error(absl::StrCat("lane-server: ", started.status().ToString()), message,
+              {{"code", absl::StatusCodeToString(started.status().code())}});
     return 1;
   }
   lane::server::LaneServer& server = **started;
-  std::cerr << "lane-server " << options.build.version << ": gRPC on port " << server.port();
-  if (server.metrics_port() >= 0) std::cerr << ", metrics on port " << server.metrics_port();
+  std::string text =
+      absl::StrCat("lane-server ", options.build.version, ": gRPC on port ", server.port());
+  std::vector<Log::Field> fields = {{"version", options.build.version},
+                                    {"git_revision", options.build.git_revision},
+                                    {"grpc_port", server.port()}};
+  if (server.metrics_port() >= 0) {
+    absl::StrAppend(&text, ", metrics on port ", server.metrics_port());
+    fields.emplace_back("metrics_port", server.metrics_port());
+  }
   if (!options.default_config_path.empty()) {
-    std::cerr << ", session '" << options.default_camera_id << "' from "
-              << options.default_config_path;
+    absl::StrAppend(&text, ", session '", options.default_camera_id, "' from ",
+                    options.default_config_path);
+    fields.emplace_back("default_session", options.default_camera_id);
+    fields.emplace_back("default_config", options.default_config_path);
   }
+  const char* tls = options.tls_cert_path.empty()        ? "off"
+                    : options.tls_client_ca_path.empty() ? "tls"
+                                                         : "mutual_tls";
   if (!options.tls_cert_path.empty()) {
-    std::cerr << (options.tls_client_ca_path.empty() ? ", TLS" : ", mutual TLS");
+    absl::StrAppend(&text, options.tls_client_ca_path.empty() ? ", TLS" : ", mutual TLS");
   }
+  fields.emplace_back("tls", tls);
   if (!options.auth_tokens.empty()) {
-    std::cerr << ", " << options.auth_tokens.size() << " Bearer token(s)";
+    absl::StrAppend(&text, ", ", options.auth_tokens.size(), " Bearer token(s)");
   }
-  std::cerr << std::endl;
+  fields.emplace_back("bearer_tokens", options.auth_tokens.size());
+  fields.emplace_back("workers", options.workers);
+  log.Info(text, "started", std::move(fields));
 
   // First signal: drain. Second signal: exit at once.
-  std::thread([&server, signals] {
+  std::thread([&server, &log, signals] {
     int signal = 0;
     sigwait(&signals, &signal);
-    std::cerr << "lane-server: signal " << signal << ", draining" << std::endl;
+    log.Info(absl::StrCat("lane-server: signal ", signal, ", draining"), "draining",
+             {{"signal", signal}});
     std::thread([&server] { server.Drain(); }).detach();
     sigwait(&signals, &signal);
-    std::cerr << "lane-server: second signal, exiting now" << std::endl;
+    log.Info("lane-server: second signal, exiting now", "exiting without draining",
+             {{"signal", signal}});
     std::_Exit(1);
   }).detach();
 
   server.Wait();
-  std::cerr << "lane-server: stopped" << std::endl;
+  log.Info("lane-server: stopped", "stopped");
   return 0;
 }

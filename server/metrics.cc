@@ -70,7 +70,8 @@ Metrics::Metrics(prometheus::Registry& registry, const BuildInfo& build)
                             .Name("lanesvc_zero_lane_frames_total")
                             .Help("Frames detected without error in which no lane was found.")
                             .Register(registry)
-                            .Add({})) {
+                            .Add({})),
+      grpc_(registry) {
   auto& stages = prometheus::BuildHistogram()
                      .Name("lanesvc_stage_duration_seconds")
                      .Help("Time spent in each stage of a frame: decode, then the detector's.")

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "grpc_metrics.h"
 #include "lane/detector.h"
 #include "wire/status_map.h"
 
@@ -64,6 +65,8 @@ class Metrics {
   void FrameAnswered() { inflight_.Decrement(); }
   // lanesvc_sessions_active.
   void SetSessions(double n) { sessions_.Set(n); }
+  // The grpc_server_* families of the lane service's calls.
+  GrpcMetrics& grpc() { return grpc_; }
   // lanesvc_frame_bytes: the size of each frame request a worker takes up
   // (encoded or raw; dropped frames are not counted).
   void ObserveFrameBytes(size_t bytes) { frame_bytes_.Observe(static_cast<double>(bytes)); }
@@ -86,6 +89,7 @@ class Metrics {
   prometheus::Histogram& frame_bytes_;
   prometheus::Histogram& lanes_per_frame_;
   prometheus::Counter& zero_lane_frames_;
+  GrpcMetrics grpc_;
 };
 
 }  // namespace lane::server

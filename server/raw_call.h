@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "absl/status/status.h"
+#include "metrics.h"
 #include "wire/status_map.h"
 
 namespace lane::server {
@@ -31,19 +32,25 @@ absl::Status SerializeMessage(const google::protobuf::Message& message, grpc::By
 template <class Request, class Response>
 class UnaryCall final : public grpc::ServerUnaryReactor {
  public:
-  UnaryCall(grpc::CallbackServerContext* context, grpc::ByteBuffer* out)
-      : context_(context), out_(out) {}
+  // The request has arrived with the call: counted as received.
+  UnaryCall(grpc::CallbackServerContext* context, grpc::ByteBuffer* out, GrpcMetrics& metrics,
+            GrpcMetrics::Method& method)
+      : context_(context), out_(out), call_metrics_(metrics, method) {
+    call_metrics_.Received();
+  }
 
   grpc::CallbackServerContext& context() { return *context_; }
   const Request& request() const { return request_; }
   Request* mutable_request() { return &request_; }
   Response* response() { return &response_; }
 
-  // Serializes the response (when OK) and finishes the call (counted by
-  // GrpcMetrics' interceptor).
+  // Serializes the response (when OK), finishes the call and counts it.
   void Reply(absl::Status status) {
     if (status.ok()) status = SerializeMessage(response_, out_);
-    Finish(wire::ToGrpcStatus(status));
+    const grpc::Status grpc_status = wire::ToGrpcStatus(status);
+    if (grpc_status.ok()) call_metrics_.Sent();
+    call_metrics_.Handled(grpc_status.error_code());
+    Finish(grpc_status);
   }
 
   void OnDone() override { delete this; }
@@ -51,6 +58,7 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
  private:
   grpc::CallbackServerContext* const context_;
   grpc::ByteBuffer* const out_;
+  GrpcMetrics::Call call_metrics_;
   Request request_;
   Response response_;
 };
@@ -61,8 +69,10 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
 template <class Request, class Response, class Handler>
 grpc::ServerUnaryReactor* StartUnary(grpc::CallbackServerContext* context,
                                      const grpc::ByteBuffer* in, grpc::ByteBuffer* out,
-                                     Handler&& handler) {
-  auto* call = new UnaryCall<Request, Response>(context, out);
+                                     const char* method, Metrics& metrics, Handler&& handler) {
+  GrpcMetrics& grpc_metrics = metrics.grpc();
+  auto* call = new UnaryCall<Request, Response>(
+      context, out, grpc_metrics, grpc_metrics.ForMethod(method, GrpcMetrics::Type::kUnary));
   grpc::ByteBuffer bytes(*in);  // shares the slices: no copy of the payload
   if (absl::Status parsed = ParseMessage(bytes, call->mutable_request()); !parsed.ok()) {
     call->Reply(parsed);

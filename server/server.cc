@@ -102,7 +102,6 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
   std::unique_ptr<LaneServer> server(new LaneServer(options));
   server->registry_ = registry ? std::move(registry) : std::make_shared<prometheus::Registry>();
   server->metrics_ = std::make_unique<Metrics>(*server->registry_, options.build);
-  server->grpc_metrics_ = std::make_unique<GrpcMetrics>(*server->registry_);
 
   SessionRegistry::Options registry_options;
   registry_options.max_sessions = options.max_sessions;
@@ -138,9 +137,6 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
   grpc::ServerBuilder builder;
   builder.AddListeningPort(options.address, *credentials, &server->port_);
   builder.RegisterService(server->service_.get());
-  std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> interceptors;
-  interceptors.push_back(server->grpc_metrics_->InterceptorFactory());
-  builder.experimental().SetInterceptorCreators(std::move(interceptors));
   builder.SetMaxReceiveMessageSize(options.max_receive_message_bytes);
   // gRPC sets SO_REUSEPORT by default: a second server on a busy port would
   // then start and the kernel would split connections between the two. With

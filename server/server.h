@@ -18,7 +18,6 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
-#include "grpc_metrics.h"
 #include "http_endpoint.h"
 #include "lane_service.h"
 #include "metrics.h"
@@ -125,7 +124,6 @@ class LaneServer {
   const ServerOptions options_;
   std::shared_ptr<prometheus::Registry> registry_;
   std::unique_ptr<Metrics> metrics_;
-  std::unique_ptr<GrpcMetrics> grpc_metrics_;  // outlives server_ (its interceptors)
   std::unique_ptr<SessionRegistry> sessions_;
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<LaneServiceImpl> service_;

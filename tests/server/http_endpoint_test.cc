@@ -109,11 +109,16 @@ TEST(HttpEndpointTest, MetricsHaveTheStandardFamilies) {
                         "grpc_server_handled_total{grpc_code=\"NOT_FOUND\",grpc_method="
                         "\"GetSession\",grpc_service=\"lane.v1.LaneService\",grpc_type=\"unary\"}"),
             1);
-  // Health checks are calls like any other.
-  EXPECT_GE(SampleValue(text,
-                        "grpc_server_handled_total{grpc_code=\"OK\",grpc_method=\"Check\","
-                        "grpc_service=\"grpc.health.v1.Health\",grpc_type=\"unary\"}"),
+  // The lane service's calls only: health checks are not counted.
+  EXPECT_EQ(text.find("grpc.health.v1.Health"), std::string::npos);
+  EXPECT_EQ(SampleValue(text,
+                        "grpc_server_msg_received_total{grpc_method=\"GetSession\","
+                        "grpc_service=\"lane.v1.LaneService\",grpc_type=\"unary\"}"),
             1);
+  EXPECT_EQ(SampleValue(text,
+                        "grpc_server_msg_sent_total{grpc_method=\"GetSession\","
+                        "grpc_service=\"lane.v1.LaneService\",grpc_type=\"unary\"}"),
+            0);
 
   // Process metrics.
   EXPECT_GT(SampleValue(text, "process_resident_memory_bytes "), 1e6);

@@ -80,11 +80,15 @@ TEST(MetricsTest, Records) {
 TEST(GrpcMetricsTest, MethodLabelsFromTheFullName) {
   prometheus::Registry registry;
   GrpcMetrics metrics(registry);
-  using Type = grpc::experimental::ServerRpcInfo::Type;
-  GrpcMetrics::Method& detect = metrics.ForMethod("/lane.v1.LaneService/Detect", Type::UNARY);
-  EXPECT_EQ(&detect, &metrics.ForMethod("/lane.v1.LaneService/Detect", Type::UNARY));
-  detect.started->Increment();
-  metrics.CountHandled(detect, grpc::StatusCode::INVALID_ARGUMENT);
+  using Type = GrpcMetrics::Type;
+  GrpcMetrics::Method& detect = metrics.ForMethod("/lane.v1.LaneService/Detect", Type::kUnary);
+  EXPECT_EQ(&detect, &metrics.ForMethod("/lane.v1.LaneService/Detect", Type::kUnary));
+  {
+    GrpcMetrics::Call call(metrics, detect);  // started
+    call.Received();
+    call.Handled(grpc::StatusCode::INVALID_ARGUMENT);
+    call.Handled(grpc::StatusCode::OK);  // ignored: a call is handled once
+  }
   metrics.CountHandled(detect, grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_EQ(MetricValue(registry, "grpc_server_started_total",
                         {{"grpc_service", "lane.v1.LaneService"},
@@ -97,8 +101,12 @@ TEST(GrpcMetricsTest, MethodLabelsFromTheFullName) {
                          {"grpc_type", "unary"},
                          {"grpc_code", "INVALID_ARGUMENT"}}),
             2);
+  EXPECT_EQ(MetricValue(registry, "grpc_server_handled_total", {{"grpc_code", "OK"}}), 0);
+  EXPECT_EQ(MetricValue(registry, "grpc_server_handling_seconds", {{"grpc_method", "Detect"}}), 1);
+  EXPECT_EQ(MetricValue(registry, "grpc_server_msg_received_total", {{"grpc_method", "Detect"}}),
+            1);
   GrpcMetrics::Method& stream =
-      metrics.ForMethod("/lane.v1.LaneService/StreamFrames", Type::BIDI_STREAMING);
+      metrics.ForMethod("/lane.v1.LaneService/StreamFrames", Type::kBidiStream);
   stream.received->Increment();
   EXPECT_EQ(MetricValue(registry, "grpc_server_msg_received_total",
                         {{"grpc_method", "StreamFrames"}, {"grpc_type", "bidi_stream"}}),
@@ -108,11 +116,11 @@ TEST(GrpcMetricsTest, MethodLabelsFromTheFullName) {
 TEST(GrpcMetricsTest, ClientChosenMethodNamesAreBounded) {
   prometheus::Registry registry;
   GrpcMetrics metrics(registry);
-  using Type = grpc::experimental::ServerRpcInfo::Type;
+  using Type = GrpcMetrics::Type;
   for (int i = 0; i < 1000; ++i) {
-    metrics.ForMethod(("/x.Y/M" + std::to_string(i)).c_str(), Type::UNARY).started->Increment();
+    metrics.ForMethod(("/x.Y/M" + std::to_string(i)).c_str(), Type::kUnary).started->Increment();
   }
-  metrics.ForMethod(nullptr, Type::UNARY).started->Increment();
+  metrics.ForMethod(nullptr, Type::kUnary).started->Increment();
   size_t series = 0;
   for (const prometheus::MetricFamily& f : registry.Collect()) {
     if (f.name == "grpc_server_started_total") series = f.metric.size();
