@@ -239,6 +239,7 @@ bool FrameReader::Next(InputFrame* frame) {
   if (options_.max_frames > 0 && handed_out_ >= options_.max_frames) return false;
   double source_fps = 0;
   if (!NextUnpaced(frame, &source_fps)) return false;
+  frame->source_fps = source_fps;
   ++handed_out_;
   if (frame->error.empty()) options_.pacer.Wait(source_fps);
   return true;

@@ -31,6 +31,7 @@ struct InputFrame {
   cv::Mat bgr;
   std::string error;  // why the frame could not be read, or empty
   double decode_ms = 0;
+  double source_fps = 0;  // a video file's frame rate, when it says; else 0
 };
 
 // What a reader's Next hands out: limits and pacing shared by `lane detect`

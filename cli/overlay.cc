@@ -94,7 +94,8 @@ cv::Point DrawCaption(cv::Mat& canvas, const std::string& text, int x, int y,
 }
 
 cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
-                         const lane::Detector& detector, const std::string& frame_name) {
+                         const lane::Detector& detector, const std::string& frame_name,
+                         const std::string& details) {
   cv::Mat canvas = ToBgr(frame);
   if (canvas.empty()) return canvas;
 
@@ -115,17 +116,23 @@ cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
     DrawBezier(canvas, detection.lanes[i].image, LaneColour(static_cast<int>(i)),
                [](const Eigen::Vector2d& p) { return p; });
   }
-  // Caption: the frame's name, then the lanes' scores in their colours.
+  // Caption: the frame's name; the mode, the lane count and the lanes'
+  // scores in their colours; the details.
   const int margin = std::max(2, canvas.cols / 160);
   int y = margin;
   if (!frame_name.empty()) y = DrawCaption(canvas, frame_name, margin, y).y;
-  cv::Point at =
-      DrawCaption(canvas, absl::StrCat(detection.lanes.size(), " lanes, scores:"), margin, y);
+  const char* mode = detector.options().mode == lane::Mode::kTwo ? "2-lanes" : "all lanes";
+  cv::Point at = DrawCaption(canvas,
+                             absl::StrCat(mode, ": ", detection.lanes.size(),
+                                          detection.lanes.size() == 1 ? " lane" : " lanes",
+                                          detection.lanes.empty() ? "" : ", scores:"),
+                             margin, y);
   for (size_t i = 0; i < detection.lanes.size(); ++i) {
     char score[32];
     std::snprintf(score, sizeof(score), "%.1f", detection.lanes[i].score);
     at = DrawCaption(canvas, score, at.x, y, LaneColour(static_cast<int>(i)));
   }
+  if (!details.empty()) DrawCaption(canvas, details, margin, at.y);
   return canvas;
 }
 
@@ -154,11 +161,13 @@ cv::Mat DrawIpmView(const cv::Mat& frame, const lane::Detection& detection,
 
 std::string WriteOverlays(const std::filesystem::path& dir, const std::string& stem,
                           const cv::Mat& frame, const lane::Detection& detection,
-                          const lane::Detector& detector, const std::string& frame_name) {
+                          const lane::Detector& detector, const std::string& frame_name,
+                          const std::string& details) {
   const std::string image_path = (dir / (stem + ".png")).string();
   const std::string ipm_path = (dir / (stem + "_ipm.png")).string();
   try {
-    if (!cv::imwrite(image_path, DrawLanesOnImage(frame, detection, detector, frame_name))) {
+    if (!cv::imwrite(image_path,
+                     DrawLanesOnImage(frame, detection, detector, frame_name, details))) {
       return absl::StrCat("cannot write ", image_path);
     }
     if (!cv::imwrite(ipm_path, DrawIpmView(frame, detection, detector))) {

@@ -18,10 +18,11 @@ cv::Scalar LaneColour(int i);
 // red rectangle, the horizon row as a thin grey dashed line, each lane as a
 // 2 px polyline through 50 samples of its image Bezier with its control
 // points as small circles, and a caption in the top-left corner: the frame's
-// name (when given) and each lane's score, left to right, in the lane's
-// colour.
+// name (when given); the mode, the lane count and each lane's score, left to
+// right, in the lane's colour; then `details` (when given: the latency).
 cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
-                         const lane::Detector& detector, const std::string& frame_name = "");
+                         const lane::Detector& detector, const std::string& frame_name = "",
+                         const std::string& details = "");
 
 // White (or `colour`) text on a black box with its top-left corner at (x, y),
 // scaled to the frame; returns the box's right edge and bottom.
@@ -35,10 +36,12 @@ cv::Mat DrawIpmView(const cv::Mat& frame, const lane::Detection& detection,
                     const lane::Detector& detector, int scale = 4);
 
 // Writes DIR/STEM.png (DrawLanesOnImage) and DIR/STEM_ipm.png
-// (DrawIpmView), captioned with `frame_name`; an error message or "".
+// (DrawIpmView), captioned with `frame_name` and `details`; an error message
+// or "".
 std::string WriteOverlays(const std::filesystem::path& dir, const std::string& stem,
                           const cv::Mat& frame, const lane::Detection& detection,
-                          const lane::Detector& detector, const std::string& frame_name = "");
+                          const lane::Detector& detector, const std::string& frame_name = "",
+                          const std::string& details = "");
 
 }  // namespace lane_tools
 

@@ -16,9 +16,11 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "cli/inputs.h"
 #include "cli/overlay.h"
+#include "cli/overlay_video.h"
 #include "cli/progress_bar.h"
 #include "commands.h"
 #include "common.h"
@@ -59,6 +61,7 @@ struct StreamFlags {
   bool raw = false;
   std::optional<std::string> output;
   std::optional<std::string> overlay;
+  std::optional<std::string> overlay_video;
   size_t window = StreamerOptions().window;
   std::optional<absl::Duration> retry_timeout;
   std::optional<absl::Duration> stall_timeout;
@@ -69,14 +72,16 @@ struct StreamFlags {
 };
 
 // Draws the overlays of one answered frame with a detector built from the
-// session's resolved config (the ROI, the horizon and the top view).
+// session's resolved config (the ROI, the horizon and the top view): PNGs in
+// `dir` (when not empty) and frames of `video` (when not null).
 class OverlayWriter {
  public:
-  explicit OverlayWriter(std::filesystem::path dir) : dir_(std::move(dir)) {}
+  OverlayWriter(std::filesystem::path dir, lane_tools::OverlayVideo* video)
+      : dir_(std::move(dir)), video_(video) {}
 
   // An error message or "".
   std::string Write(const StreamItem& item, const v1::FrameResponse& response,
-                    const std::optional<v1::Session>& session) {
+                    const std::optional<v1::Session>& session, double latency_ms) {
     if (!detector_ || version_ != response.calibration_version()) {
       if (!session) return "no session to draw with";
       absl::StatusOr<lane::Config> config = lane::wire::ConfigFromProto(session->config());
@@ -90,12 +95,25 @@ class OverlayWriter {
     const cv::Mat frame = DecodeRequestImage(*item.request);
     if (frame.empty()) return "cannot decode the frame for the overlay";
     const lane::Detection detection = DetectionFromResponse(response);
+    // The round trip as the client measured it; the server's own time.
+    const std::string details =
+        absl::StrFormat("round trip %.1f ms, server %.1f ms", latency_ms,
+                        static_cast<double>(response.server_send_time_unix_ns() -
+                                            response.server_receive_time_unix_ns()) *
+                            1e-6);
+    if (video_ != nullptr) {
+      const std::string error = video_->Add(
+          lane_tools::DrawLanesOnImage(frame, detection, *detector_, item.name, details));
+      if (!error.empty()) return error;
+    }
+    if (dir_.empty()) return "";
     return lane_tools::WriteOverlays(dir_, lane_tools::UniqueStem(item.stem, used_), frame,
-                                     detection, *detector_, item.name);
+                                     detection, *detector_, item.name, details);
   }
 
  private:
   const std::filesystem::path dir_;
+  lane_tools::OverlayVideo* const video_;
   std::optional<lane::Detector> detector_;
   uint64_t version_ = 0;
   std::set<std::string> used_;
@@ -136,10 +154,10 @@ class OverlayDrawer {
   ~OverlayDrawer() { Finish(); }
 
   void Submit(const StreamItem& item, const v1::FrameResponse& response,
-              const std::optional<v1::Session>& session) {
+              const std::optional<v1::Session>& session, double latency_ms) {
     std::unique_lock<std::mutex> lock(mu_);
     space_.wait(lock, [this] { return jobs_.size() < kMaxQueued; });
-    jobs_.push_back(Job{item, response, session});
+    jobs_.push_back(Job{item, response, session, latency_ms});
     ready_.notify_one();
   }
   // Draws what is queued and stops. True if every overlay was written.
@@ -159,6 +177,7 @@ class OverlayDrawer {
     StreamItem item;
     v1::FrameResponse response;
     std::optional<v1::Session> session;
+    double latency_ms = 0;
   };
 
   void Loop() {
@@ -172,7 +191,7 @@ class OverlayDrawer {
         jobs_.pop_front();
       }
       space_.notify_one();
-      const std::string error = writer_->Write(job.item, job.response, job.session);
+      const std::string error = writer_->Write(job.item, job.response, job.session, job.latency_ms);
       if (!error.empty()) {
         failed_ = true;
         Note("stream", absl::StrCat(job.item.name, ": ", error));
@@ -212,7 +231,9 @@ class StreamSink {
       out_ << ResponseJsonLine(item.name, *response, latency_ms, item.attempts) << '\n';
       if (response->status().code() == v1::FRAME_CODE_OK) {
         ++ok_;
-        if (overlays_ != nullptr) overlays_->Submit(item, *response, streamer_.session());
+        if (overlays_ != nullptr) {
+          overlays_->Submit(item, *response, streamer_.session(), latency_ms);
+        }
       } else {
         ++failed_;
         progress_.Clear();
@@ -263,15 +284,28 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
     return Failure("stream", absl::StrCat("cannot write ", *flags.output));
   }
   std::ostream& out = file.is_open() ? static_cast<std::ostream&>(file) : std::cout;
-  std::unique_ptr<OverlayWriter> overlay_writer;
-  std::unique_ptr<OverlayDrawer> overlays;
+  std::unique_ptr<lane_tools::OverlayVideo> overlay_video;
+  if (flags.overlay_video) {
+    if (const std::string e = lane_tools::OverlayVideo::CheckPath(*flags.overlay_video);
+        !e.empty()) {
+      return lane_tools::UsageError(app, e);
+    }
+    overlay_video = std::make_unique<lane_tools::OverlayVideo>(
+        *flags.overlay_video, flags.read.fps > 0 ? flags.read.fps : 10.0);
+  }
+  std::string overlay_dir;
   if (const auto& overlay = flags.overlay) {
     std::error_code ec;
     std::filesystem::create_directories(*overlay, ec);
     if (ec || !std::filesystem::is_directory(*overlay)) {
       return Failure("stream", absl::StrCat("cannot create overlay folder ", *overlay));
     }
-    overlay_writer = std::make_unique<OverlayWriter>(*overlay);
+    overlay_dir = *overlay;
+  }
+  std::unique_ptr<OverlayWriter> overlay_writer;
+  std::unique_ptr<OverlayDrawer> overlays;
+  if (flags.overlay || flags.overlay_video) {
+    overlay_writer = std::make_unique<OverlayWriter>(overlay_dir, overlay_video.get());
     overlays = std::make_unique<OverlayDrawer>(overlay_writer.get());
   }
 
@@ -290,7 +324,15 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
       streamer.Run(MakeSource(&frames, options.camera_id),
                    [&sink](const StreamItem& item, const v1::FrameResponse* response,
                            double latency_ms) { sink(item, response, latency_ms); });
-  const bool overlays_ok = overlays == nullptr || overlays->Finish();
+  bool overlays_ok = overlays == nullptr || overlays->Finish();
+  if (overlay_video) {
+    if (const std::string e = overlay_video->Close(); !e.empty()) {
+      Note("stream", e);
+      overlays_ok = false;
+    } else if (!flags.quiet) {
+      Note("stream", absl::StrCat(overlay_video->frames(), " frames in ", *flags.overlay_video));
+    }
+  }
   progress.Clear();
   const StreamerStats& stats = streamer.stats();
   if (!flags.quiet) {
@@ -321,6 +363,11 @@ Command AddStreamCommand(CLI::App& client) {
   lane_tools::AddOptional(app, "--overlay", &flags->overlay,
                           "also write DIR/STEM.png and DIR/STEM_ipm.png per frame")
       ->type_name("DIR");
+  lane_tools::AddOptional(app, "--overlay-video", &flags->overlay_video,
+                          "also write the answered frames with their lanes and a caption (round "
+                          "trip and server time) as one video (.mp4/.mov/.mkv/.avi), at --fps "
+                          "(else 10/s)")
+      ->type_name("FILE");
   app->add_option("--window,--inflight", flags->window,
                   "frames sent and not answered, at most (the client's window; the server's "
                   "bound is --max-inflight-frames)")

@@ -15,9 +15,11 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "cli/cli_config.h"
 #include "cli/inputs.h"
 #include "cli/overlay.h"
+#include "cli/overlay_video.h"
 #include "cli/progress_bar.h"
 #include "cli/results_json.h"
 #include "commands.h"
@@ -47,6 +49,7 @@ struct DetectFlags {
   std::optional<uint64_t> seed;
   std::optional<std::string> output;
   std::optional<std::string> overlay;
+  std::optional<std::string> overlay_video;
   bool full_decode = false;
   bool quiet = false;
   bool no_progress = false;
@@ -102,8 +105,11 @@ std::string MakeOverlayDir(const std::string& dir) {
 class DetectRun {
  public:
   DetectRun(const lane::Detector& detector, const lane::Config& config, std::ostream& out,
-            std::filesystem::path overlay_dir, bool quiet)
+            std::filesystem::path overlay_dir, std::optional<std::string> overlay_video,
+            double video_fps, bool quiet)
       : quiet_(quiet),
+        overlay_video_path_(std::move(overlay_video)),
+        video_fps_(video_fps),
         detector_(detector),
         mode_(detector.options().mode),
         expected_width_(config.camera.image_width),
@@ -133,6 +139,14 @@ class DetectRun {
       ++failures_;
       if (on_message_) on_message_();
       std::fprintf(stderr, "lane detect: %s: %s\n", frame.name.c_str(), error.c_str());
+      if (!frame.bgr.empty()) {  // the video keeps its timing: the frame, captioned
+        cv::Mat canvas = frame.bgr.channels() == 3 ? frame.bgr.clone() : cv::Mat();
+        if (!canvas.empty()) {
+          DrawCaption(canvas, frame.name, 4, 4);
+          DrawCaption(canvas, "error: " + error, 4, 4 + canvas.rows / 20, {0, 0, 255});
+          AddToVideo(frame, canvas);
+        }
+      }
       out_ << ErrorJsonLine(frame.name, frame.bgr.cols, frame.bgr.rows, mode_, error) << '\n';
       out_.flush();
       return;
@@ -143,15 +157,36 @@ class DetectRun {
     out_.flush();
     total_lanes_ += static_cast<long>(detection->lanes.size());
     total_ms_.push_back(detection->timings.total_ms);
+    const std::string details = absl::StrFormat("detect %.2f ms, decode %.2f ms",
+                                                detection->timings.total_ms, frame.decode_ms);
+    if (overlay_video_path_) {
+      AddToVideo(frame, DrawLanesOnImage(frame.bgr, *detection, detector_, frame.name, details));
+    }
     if (!overlay_dir_.empty()) {
-      const std::string message = WriteOverlays(overlay_dir_, UniqueStem(frame.stem, used_stems_),
-                                                frame.bgr, *detection, detector_, frame.name);
+      const std::string message =
+          WriteOverlays(overlay_dir_, UniqueStem(frame.stem, used_stems_), frame.bgr, *detection,
+                        detector_, frame.name, details);
       if (!message.empty()) {
         overlay_failed_ = true;
         if (on_message_) on_message_();
         std::fprintf(stderr, "lane detect: %s: %s\n", frame.name.c_str(), message.c_str());
       }
     }
+  }
+
+  // Finishes the overlay video; false (after saying why) if it failed.
+  bool CloseVideo() {
+    if (!video_) return !video_failed_;
+    const std::string error = video_->Close();
+    if (!error.empty()) {
+      std::fprintf(stderr, "lane detect: %s\n", error.c_str());
+      return false;
+    }
+    if (!quiet_) {
+      std::fprintf(stderr, "lane detect: %d frames in %s\n", video_->frames(),
+                   overlay_video_path_->c_str());
+    }
+    return !video_failed_;
   }
 
   // Called before a message is printed (the progress bar clears its line).
@@ -171,7 +206,26 @@ class DetectRun {
   }
 
  private:
+  void AddToVideo(const InputFrame& frame, const cv::Mat& drawn) {
+    if (!overlay_video_path_ || video_failed_) return;
+    if (!video_) {
+      // --fps, else the video's own rate, else 10 frames/s.
+      const double fps = video_fps_ > 0 ? video_fps_ : frame.source_fps > 0 ? frame.source_fps : 10;
+      video_ = std::make_unique<OverlayVideo>(*overlay_video_path_, fps);
+    }
+    const std::string error = video_->Add(drawn);
+    if (!error.empty()) {
+      video_failed_ = true;
+      if (on_message_) on_message_();
+      std::fprintf(stderr, "lane detect: %s\n", error.c_str());
+    }
+  }
+
   const bool quiet_;
+  const std::optional<std::string> overlay_video_path_;
+  const double video_fps_;
+  std::unique_ptr<OverlayVideo> video_;
+  bool video_failed_ = false;
   std::function<void()> on_message_;
   const lane::Detector& detector_;
   const lane::Mode mode_;
@@ -203,7 +257,13 @@ int RunDetect(const DetectFlags& flags) {
     }
   }
 
-  DetectRun run(*detector, config, out, flags.overlay.value_or(""), flags.quiet);
+  if (flags.overlay_video) {
+    if (const std::string e = OverlayVideo::CheckPath(*flags.overlay_video); !e.empty()) {
+      return Failure("detect", e);
+    }
+  }
+  DetectRun run(*detector, config, out, flags.overlay.value_or(""), flags.overlay_video,
+                flags.read.fps, flags.quiet);
   ReadOptions read;
   read.max_frames = flags.read.max_frames;
   read.pacer = Pacer(flags.read.fps, flags.read.realtime);
@@ -211,7 +271,7 @@ int RunDetect(const DetectFlags& flags) {
   // JPEG frames are decoded only in the rows and channel the detector
   // reads (the same lanes), unless asked not to; overlays draw on the whole
   // frame.
-  if (!flags.full_decode && !flags.overlay) {
+  if (!flags.full_decode && !flags.overlay && !flags.overlay_video) {
     reader.DecodeOnly(detector->Needs(), config.camera.image_width, config.camera.image_height);
   }
   // A bar when the frame count is known (files), else a counter; only on a
@@ -226,11 +286,13 @@ int RunDetect(const DetectFlags& flags) {
     progress.Update(++done, total, frame.name);
   }
   progress.Clear();
+  const bool video_ok = run.CloseVideo();
   if (!out) {
     return Failure("detect", flags.output ? absl::StrCat("error writing ", *flags.output)
                                           : std::string("error writing the results to stdout"));
   }
-  return run.Finish();
+  const int status = run.Finish();
+  return video_ok ? status : kExitFailure;
 }
 
 }  // namespace
@@ -255,6 +317,10 @@ Command AddDetectCommand(CLI::App& lane) {
               "also write DIR/STEM.png (lanes on the frame) and DIR/STEM_ipm.png (lanes in the "
               "top view)")
       ->type_name("DIR");
+  AddOptional(app, "--overlay-video", &flags->overlay_video,
+              "also write the frames with their lanes and a caption as one video (.mp4, .mov, "
+              ".mkv: MPEG-4; .avi: Motion JPEG), at --fps or the input video's rate (else 10/s)")
+      ->type_name("FILE");
   app->add_flag("--full-decode", flags->full_decode,
                 "decode whole frames with OpenCV (by default JPEG frames are decoded only in "
                 "the rows and channel the detector reads, which gives the same lanes)");

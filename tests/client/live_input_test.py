@@ -9,6 +9,8 @@
 * a GStreamer pipeline (videotestsrc ... ! appsink), when Debian's
   gstreamer1.0-plugins-base is installed;
 * an unreachable URL: an error line, exit 1, no crash;
+* --overlay-video of lane detect and lane-client stream, read back as video
+  inputs (every frame there, at the camera's size);
 * --fps and --realtime pace a replay (lower bounds on the elapsed time only).
 
 Usage: live_input_test.py LANE LANE_SERVER LANE_CLIENT SOURCE_DIR
@@ -137,10 +139,32 @@ with tempfile.TemporaryDirectory() as tmp:
               "lane-client stream URL: %d answers: %s" % (len(streamed), streamed[:1]))
         check(sum(len(x.get("lanes", [])) for x in streamed) >= 2 * len(jpegs),
               "lane-client stream URL: too few lanes")
+        # --overlay-video from the stream, read back as a video input.
+        avi = os.path.join(tmp, "stream-overlay.avi")
+        r = run([CLIENT, "stream", "--target", "127.0.0.1:%d" % port, "--camera", "files",
+                 "--config", CONFIG, "--overlay-video", avi] + files)
+        back = lines_of(run([LANE, "detect", "--config", CONFIG, avi]).stdout)
+        check(r.returncode == 0 and len(back) == len(files) and
+              all(x.get("width") == 640 and "error" not in x for x in back),
+              "lane-client --overlay-video: exit %d, %d frames read back" % (r.returncode, len(back)))
     finally:
         srv.terminate()
         srv.wait(timeout=30)
     server.shutdown()
+
+    # --- lane detect --overlay-video, read back as a video input; a bad
+    # extension is refused before any work.
+    mp4 = os.path.join(tmp, "overlay.mp4")
+    r = run([LANE, "detect", "--config", CONFIG, "--overlay-video", mp4, "-q"] + files)
+    back = lines_of(run([LANE, "detect", "--config", CONFIG, mp4]).stdout)
+    check(r.returncode == 0 and r.stderr == "" and len(back) == len(files) and
+          back[-1]["frame"] == "overlay.mp4#%06d" % (len(files) - 1) and
+          all(x.get("width") == 640 and "error" not in x for x in back),
+          "lane detect --overlay-video: exit %d (%r), %d frames read back"
+          % (r.returncode, r.stderr[-300:], len(back)))
+    r = run([LANE, "detect", "--config", CONFIG, "--overlay-video", os.path.join(tmp, "x.gif")]
+            + files[:1])
+    check(r.returncode != 0 and "use a .mp4" in r.stderr, "--overlay-video x.gif: %r" % r.stderr)
 
     # --- A URL nobody serves: an error line, exit 1.
     dead = "http://127.0.0.1:%d/none.mjpg" % free_port()
