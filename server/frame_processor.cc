@@ -84,7 +84,9 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
   }
   if (!status.ok()) response->clear_lanes();
   wire::ToFrameStatus(status, response->mutable_status());
-  metrics.CountFrame(wire::ToFrameResult(response->status().code()));
+  const wire::FrameResult result = wire::ToFrameResult(response->status().code());
+  metrics.CountFrame(result);
+  metrics.CountCameraFrame(session.camera_id, result, static_cast<size_t>(response->lanes_size()));
   metrics.ObserveFrameLatency(SecondsSince(arrival.steady));
   return status;
 }

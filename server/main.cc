@@ -89,6 +89,11 @@ ABSL_FLAG(int, malloc_keep_mib, 64,
           "for every frame, and the page faults cost more than the detection (raw throughput "
           "x2-3). 0 keeps glibc's defaults.");
 
+ABSL_FLAG(int, metrics_camera_labels, 0,
+          "Per-camera metrics (lanesvc_camera_frames_total{camera,result}, "
+          "lanesvc_camera_zero_lane_frames_total{camera}) for the first N camera ids seen; later "
+          "ones share camera=\"_other\". 0 = off: camera ids come from clients, and every id is "
+          "a series in Prometheus.");
 ABSL_FLAG(std::string, log_format, "text",
           "How the server logs to stderr: text (one line per event, for people) or json (one "
           "JSON object per line with ts, level, logger, msg and the event's fields, for log "
@@ -250,6 +255,8 @@ int main(int argc, char** argv) {
   options.tls_key_path = absl::GetFlag(FLAGS_tls_key);
   options.tls_client_ca_path = absl::GetFlag(FLAGS_tls_client_ca);
   options.max_concurrent_streams = std::max(0, absl::GetFlag(FLAGS_max_concurrent_streams));
+  options.metrics_camera_labels =
+      static_cast<size_t>(std::clamp(absl::GetFlag(FLAGS_metrics_camera_labels), 0, 10000));
   // Tokens: never a command-line literal (visible in ps), never logged.
   if (const std::string path = absl::GetFlag(FLAGS_auth_tokens_file); !path.empty()) {
     absl::StatusOr<std::vector<std::string>> tokens = lane::server::ReadTokenFile(path);

@@ -27,7 +27,7 @@ prometheus::Histogram::BucketBoundaries Metrics::LatencyBuckets() {
           10e-3, 25e-3,  50e-3,  100e-3, 250e-3, 500e-3, 1.0};
 }
 
-Metrics::Metrics(prometheus::Registry& registry, const BuildInfo& build)
+Metrics::Metrics(prometheus::Registry& registry, const BuildInfo& build, size_t camera_labels)
     : frame_latency_(prometheus::BuildHistogram()
                          .Name("lanesvc_frame_latency_seconds")
                          .Help("Time from receiving a frame to its response being ready.")
@@ -71,7 +71,22 @@ Metrics::Metrics(prometheus::Registry& registry, const BuildInfo& build)
                             .Help("Frames detected without error in which no lane was found.")
                             .Register(registry)
                             .Add({})),
-      grpc_(registry) {
+      grpc_(registry),
+      camera_labels_(camera_labels) {
+  if (camera_labels_ > 0) {
+    camera_frames_ = &prometheus::BuildCounter()
+                          .Name("lanesvc_camera_frames_total")
+                          .Help(
+                              "Frames answered per camera (the first --metrics_camera_labels "
+                              "camera ids; the rest as camera=\"_other\"), by result.")
+                          .Register(registry);
+    camera_zero_lanes_ = &prometheus::BuildCounter()
+                              .Name("lanesvc_camera_zero_lane_frames_total")
+                              .Help(
+                                  "Frames detected without error and without a lane, per "
+                                  "camera (as lanesvc_camera_frames_total).")
+                              .Register(registry);
+  }
   auto& stages = prometheus::BuildHistogram()
                      .Name("lanesvc_stage_duration_seconds")
                      .Help("Time spent in each stage of a frame: decode, then the detector's.")
@@ -105,6 +120,31 @@ void Metrics::ObserveDetectorStages(const lane::StageTimings& t) {
   ObserveStage(Stage::kLines, t.lines_ms * 1e-3);
   ObserveStage(Stage::kSplines, t.splines_ms * 1e-3);
   ObserveStage(Stage::kPostprocess, t.postprocess_ms * 1e-3);
+}
+
+Metrics::CameraSeries& Metrics::CameraSeriesFor(const std::string& camera_id) {
+  std::lock_guard<std::mutex> lock(camera_mu_);
+  auto it = cameras_.find(camera_id);
+  if (it != cameras_.end()) return it->second;
+  // One series set per camera up to the limit, then "_other" (one more).
+  const std::string label = cameras_.size() < camera_labels_ ? camera_id : "_other";
+  it = cameras_.find(label);
+  if (it != cameras_.end()) return it->second;
+  CameraSeries& series = cameras_[label];
+  for (wire::FrameResult r : wire::kAllFrameResults) {
+    series.frames[static_cast<int>(r)] =
+        &camera_frames_->Add({{"camera", label}, {"result", wire::FrameResultLabel(r)}});
+  }
+  series.zero_lanes = &camera_zero_lanes_->Add({{"camera", label}});
+  return series;
+}
+
+void Metrics::CountCameraFrame(const std::string& camera_id, wire::FrameResult result,
+                               size_t lanes) {
+  if (camera_labels_ == 0) return;
+  CameraSeries& series = CameraSeriesFor(camera_id);
+  series.frames[static_cast<int>(result)]->Increment();
+  if (result == wire::FrameResult::kOk && lanes == 0) series.zero_lanes->Increment();
 }
 
 }  // namespace lane::server

@@ -13,6 +13,8 @@
 #include <prometheus/registry.h>
 
 #include <array>
+#include <map>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -41,7 +43,9 @@ class Metrics {
   // 50 us .. 1 s in 1-2.5-5 steps.
   static prometheus::Histogram::BucketBoundaries LatencyBuckets();
 
-  Metrics(prometheus::Registry& registry, const BuildInfo& build);
+  // `camera_labels`: how many camera ids get series of their own in the
+  // per-camera families (0: none, the families do not exist).
+  Metrics(prometheus::Registry& registry, const BuildInfo& build, size_t camera_labels = 0);
 
   // lanesvc_frame_latency_seconds: from receiving a frame to its response
   // being ready (every processed frame, whatever its status; not dropped ones).
@@ -65,6 +69,13 @@ class Metrics {
   void FrameAnswered() { inflight_.Decrement(); }
   // lanesvc_sessions_active.
   void SetSessions(double n) { sessions_.Set(n); }
+  // For frames a worker processed (not dropped ones):
+  // lanesvc_camera_frames_total{camera,result} and
+  // lanesvc_camera_zero_lane_frames_total{camera}, when camera labels are on:
+  // the first `camera_labels` camera ids seen get their own series, later
+  // ones share camera="_other" (camera ids come from clients, so the label
+  // set is bounded). `lanes` counts only for OK frames.
+  void CountCameraFrame(const std::string& camera_id, wire::FrameResult result, size_t lanes);
   // The grpc_server_* families of the lane service's calls.
   GrpcMetrics& grpc() { return grpc_; }
   // lanesvc_frame_bytes: the size of each frame request a worker takes up
@@ -90,6 +101,16 @@ class Metrics {
   prometheus::Histogram& lanes_per_frame_;
   prometheus::Counter& zero_lane_frames_;
   GrpcMetrics grpc_;
+  struct CameraSeries {
+    std::array<prometheus::Counter*, 4> frames{};
+    prometheus::Counter* zero_lanes = nullptr;
+  };
+  CameraSeries& CameraSeriesFor(const std::string& camera_id);  // locks camera_mu_
+  const size_t camera_labels_;
+  prometheus::Family<prometheus::Counter>* camera_frames_ = nullptr;
+  prometheus::Family<prometheus::Counter>* camera_zero_lanes_ = nullptr;
+  std::mutex camera_mu_;
+  std::map<std::string, CameraSeries> cameras_;  // guarded by camera_mu_
 };
 
 }  // namespace lane::server

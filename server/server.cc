@@ -101,7 +101,8 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
 
   std::unique_ptr<LaneServer> server(new LaneServer(options));
   server->registry_ = registry ? std::move(registry) : std::make_shared<prometheus::Registry>();
-  server->metrics_ = std::make_unique<Metrics>(*server->registry_, options.build);
+  server->metrics_ =
+      std::make_unique<Metrics>(*server->registry_, options.build, options.metrics_camera_labels);
 
   SessionRegistry::Options registry_options;
   registry_options.max_sessions = options.max_sessions;

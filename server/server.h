@@ -77,6 +77,9 @@ struct ServerOptions {
   std::vector<std::string> auth_tokens;
   // HTTP/2 streams (calls) open at once per connection; 0 = gRPC's default.
   int max_concurrent_streams = 0;
+  // Camera ids with series of their own in the per-camera metrics; 0 = no
+  // per-camera metrics (see Metrics::CountCameraFrame).
+  size_t metrics_camera_labels = 0;
   BuildInfo build;
 };
 

@@ -138,6 +138,8 @@ TEST(HttpEndpointTest, MetricsHaveTheStandardFamilies) {
   for (const v1::FrameRequest& request : requests) bytes += request.ByteSizeLong();
   EXPECT_EQ(SampleValue(text, "lanesvc_frame_bytes_sum "), bytes);
   EXPECT_FALSE(std::isnan(SampleValue(text, "lanesvc_zero_lane_frames_total ")));
+  // Per-camera series are opt-in.
+  EXPECT_EQ(text.find("lanesvc_camera_"), std::string::npos);
   // No unit-less microsecond metrics of the old exposer.
   EXPECT_EQ(text.find("exposer_"), std::string::npos);
 
@@ -159,6 +161,31 @@ TEST(HttpEndpointTest, MetricsHaveTheStandardFamilies) {
   const int status = pclose(pipe);
   std::filesystem::remove(file);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "promtool:\n" << output;
+}
+
+TEST(HttpEndpointTest, PerCameraSeriesWhenAskedFor) {
+  ServerOptions options = WithMetrics();
+  options.metrics_camera_labels = 1;
+  TestServer server(options);
+  ASSERT_FALSE(HasFailure());
+  const lane::CameraModel camera = ScaledCamera(0.5);
+  server.CreateSession("front", SessionConfigFor(camera));
+  server.CreateSession("rear", SessionConfigFor(camera));
+  const std::string jpeg = EncodeJpeg(RoadFrame(camera, kLineOffsets, 4));
+  for (const char* id : {"front", "rear"}) {
+    std::vector<v1::FrameRequest> requests;
+    for (int i = 0; i < 3; ++i) requests.push_back(JpegRequest(id, i, jpeg));
+    ASSERT_TRUE(RunStream(server.stub(), requests).status.ok());
+  }
+  const HttpResponse scrape = HttpFetch(server.server().metrics_port(), "/metrics");
+  ASSERT_EQ(scrape.status, 200);
+  EXPECT_EQ(SampleValue(scrape.body, "lanesvc_camera_frames_total{camera=\"front\",result=\"ok\"}"),
+            3)
+      << scrape.body;
+  // One label allowed: the second camera is "_other".
+  EXPECT_EQ(
+      SampleValue(scrape.body, "lanesvc_camera_frames_total{camera=\"_other\",result=\"ok\"}"), 3);
+  EXPECT_EQ(scrape.body.find("camera=\"rear\""), std::string::npos);
 }
 
 }  // namespace

@@ -77,6 +77,46 @@ TEST(MetricsTest, Records) {
   EXPECT_EQ(MetricValue(registry, "lanesvc_frame_bytes"), 1);
 }
 
+TEST(MetricsTest, PerCameraSeriesAreOptInAndBounded) {
+  {
+    prometheus::Registry registry;
+    Metrics metrics(registry, {});
+    metrics.CountCameraFrame("cam-a", wire::FrameResult::kOk, 0);
+    for (const prometheus::MetricFamily& f : registry.Collect()) {
+      EXPECT_EQ(f.name.rfind("lanesvc_camera_", 0), std::string::npos) << f.name;
+    }
+  }
+  prometheus::Registry registry;
+  Metrics metrics(registry, {}, 2);
+  metrics.CountCameraFrame("cam-a", wire::FrameResult::kOk, 3);
+  metrics.CountCameraFrame("cam-a", wire::FrameResult::kOk, 0);
+  metrics.CountCameraFrame("cam-b", wire::FrameResult::kInvalid, 0);
+  for (int i = 0; i < 100; ++i) {
+    metrics.CountCameraFrame("cam-" + std::to_string(i + 100), wire::FrameResult::kOk, 0);
+  }
+  metrics.CountCameraFrame("cam-a", wire::FrameResult::kError, 0);
+  EXPECT_EQ(MetricValue(registry, "lanesvc_camera_frames_total", {{"camera", "cam-a"}}), 3);
+  EXPECT_EQ(
+      MetricValue(registry, "lanesvc_camera_frames_total", {{"camera", "cam-a"}, {"result", "ok"}}),
+      2);
+  EXPECT_EQ(MetricValue(registry, "lanesvc_camera_zero_lane_frames_total", {{"camera", "cam-a"}}),
+            1);
+  // An invalid frame is not a zero-lane frame.
+  EXPECT_EQ(MetricValue(registry, "lanesvc_camera_zero_lane_frames_total", {{"camera", "cam-b"}}),
+            0);
+  EXPECT_EQ(MetricValue(registry, "lanesvc_camera_frames_total", {{"camera", "_other"}}), 100);
+  std::set<std::string> cameras;
+  for (const prometheus::MetricFamily& f : registry.Collect()) {
+    if (f.name != "lanesvc_camera_frames_total") continue;
+    for (const auto& m : f.metric) {
+      for (const auto& l : m.label) {
+        if (l.name == "camera") cameras.insert(l.value);
+      }
+    }
+  }
+  EXPECT_EQ(cameras, (std::set<std::string>{"cam-a", "cam-b", "_other"}));
+}
+
 TEST(GrpcMetricsTest, MethodLabelsFromTheFullName) {
   prometheus::Registry registry;
   GrpcMetrics metrics(registry);
