@@ -7,6 +7,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git ca-certificates curl
   libopencv-dev          # image decoding, IPM remap, filtering, drawing, video and live input
   gstreamer1.0-plugins-base   # GStreamer pipelines as inputs (videotestsrc, videoconvert, appsink: tests/client/live_input_test.py)
+  ffmpeg                 # tests only: serves a live MJPEG-over-HTTP stream on loopback (tests/client/live_input_test.py)
   libjpeg62-turbo-dev    # decode/: JPEG frames decoded with bounded work (scan limit, deadline)
   libpng-dev zlib1g-dev  # decode/: PNG frames inflated only as far as their rows need
   libeigen3-dev          # linear algebra: Bezier least squares, TLS line fits

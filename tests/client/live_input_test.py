@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
 """Live and paced inputs of `lane detect` and `lane-client stream`, for real:
 
-* MJPEG over HTTP from a server on loopback (multipart/x-mixed-replace, as IP
-  cameras serve it), read through OpenCV's FFmpeg backend: every frame comes
+* MJPEG over HTTP served on loopback by a local `ffmpeg -re ... -f mpjpeg
+  -listen 1` (paced at 10 frames/s like a camera; Debian's ffmpeg), as IP
+  cameras serve it, read through OpenCV's FFmpeg backend: every frame comes
   out named URL#NNNNNN with the same lanes as the JPEG files it was made
-  from; --max-frames stops early; lane-client streams the same URL through a
-  real lane-server;
+  from; --max-frames stops early; lane-client streams such a URL through a
+  real lane-server. Without an ffmpeg binary a Python server (standard
+  library) serves the same stream;
 * a GStreamer pipeline (videotestsrc ... ! appsink), when Debian's
   gstreamer1.0-plugins-base is installed;
 * an unreachable URL: an error line, exit 1, no crash;
@@ -23,6 +25,7 @@ import socket
 import subprocess
 import sys
 import tempfile
+import shutil
 import threading
 import time
 
@@ -67,6 +70,49 @@ def serve_mjpeg(frames):
     return server, "http://127.0.0.1:%d/stream.mjpg" % server.server_address[1]
 
 
+def wait_listening(port, timeout=10.0):
+    """Waits until something listens on 127.0.0.1:port, without connecting
+    (ffmpeg -listen 1 serves exactly one client)."""
+    want = ":%04X" % port
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        with open("/proc/net/tcp") as f:
+            for line in f.readlines()[1:]:
+                fields = line.split()
+                if fields[1].endswith(want) and fields[3] == "0A":
+                    return True
+        time.sleep(0.05)
+    return False
+
+
+def ffmpeg_mjpeg(frames_dir):
+    """One client's MJPEG-over-HTTP stream of frames_dir/%06d.jpg, served by
+    a local ffmpeg at 10 frames/s; returns (process, url)."""
+    port = free_port()
+    url = "http://127.0.0.1:%d/stream.mjpg" % port
+    proc = subprocess.Popen(["ffmpeg", "-nostdin", "-loglevel", "error", "-re", "-framerate", "10",
+                             "-i", os.path.join(frames_dir, "%06d.jpg"), "-c:v", "copy",
+                             "-f", "mpjpeg", "-listen", "1", url],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    check(wait_listening(port), "ffmpeg did not listen on %d" % port)
+    return proc, url
+
+
+FFMPEG = shutil.which("ffmpeg")
+
+
+def live_url(frames_dir, python_url):
+    """A fresh live URL: ffmpeg's when installed, else the Python server's."""
+    if FFMPEG:
+        proc, url = ffmpeg_mjpeg(frames_dir)
+        servers.append(proc)
+        return url
+    return python_url
+
+
+servers = []
+
+
 def free_port():
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -82,7 +128,11 @@ with tempfile.TemporaryDirectory() as tmp:
     jpegs = [open(f, "rb").read() for f in files]
     server, url = serve_mjpeg(jpegs)
 
+    if not FFMPEG:
+        print("note: no ffmpeg binary (Debian package ffmpeg): the Python server serves the streams")
+
     # --- MJPEG over HTTP through `lane detect`.
+    url = live_url(frames_dir, url)
     r = run([LANE, "detect", "--config", CONFIG, "--seed", "7", url])
     check(r.returncode == 0, "lane detect URL: exit %d: %s" % (r.returncode, r.stderr[-500:]))
     live = lines_of(r.stdout)
@@ -111,7 +161,8 @@ with tempfile.TemporaryDirectory() as tmp:
     check(sum(len(x["lanes"]) for x in live) >= 2 * len(live),
           "lane detect URL: too few lanes on 3-lane roads")
 
-    r = run([LANE, "detect", "--config", CONFIG, "--max-frames", "5", url])
+    r = run([LANE, "detect", "--config", CONFIG, "--max-frames", "5",
+             live_url(frames_dir, url)])
     check(r.returncode == 0 and len(lines_of(r.stdout)) == 5,
           "--max-frames 5 on a live source: %d results" % len(lines_of(r.stdout)))
 
@@ -129,7 +180,7 @@ with tempfile.TemporaryDirectory() as tmp:
             time.sleep(0.1)
         check(ok, "lane-server did not become healthy")
         r = run([CLIENT, "stream", "--target", "127.0.0.1:%d" % port, "--camera", "live",
-                 "--config", CONFIG, url])
+                 "--config", CONFIG, live_url(frames_dir, url)])
         streamed = lines_of(r.stdout)
         check(r.returncode == 0, "lane-client stream URL: exit %d: %s"
               % (r.returncode, r.stderr[-500:]))
@@ -151,6 +202,9 @@ with tempfile.TemporaryDirectory() as tmp:
         srv.terminate()
         srv.wait(timeout=30)
     server.shutdown()
+    for proc in servers:  # an ffmpeg whose client left early (--max-frames)
+        proc.kill()
+        proc.wait(timeout=10)
 
     # --- lane detect --overlay-video, read back as a video input; a bad
     # extension is refused before any work.
@@ -198,6 +252,7 @@ with tempfile.TemporaryDirectory() as tmp:
 if failures:
     print("%d failure(s)" % len(failures))
     sys.exit(1)
-print("live inputs: MJPEG over HTTP (lane detect, lane-client + lane-server), --max-frames, "
+print("live inputs: MJPEG over HTTP from %s (lane detect, lane-client + lane-server), "
+      "--max-frames, " % ("ffmpeg" if FFMPEG else "a Python server") +
       "unreachable URL, GStreamer%s, --fps/--realtime pacing: PASS"
       % ("" if plugin_dirs else " (skipped)"))
