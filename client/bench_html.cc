@@ -189,13 +189,14 @@ std::string Row(const std::vector<std::string>& cells, const char* tag = "td") {
 
 std::string HtmlReport(const Report& r) {
   std::ostringstream html;
-  html << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-       << "<title>lane-client bench " << Escape(r.meta.date_utc) << "</title>\n"
-       << "<style>body{font-family:sans-serif;margin:24px;color:#222}"
-          "table{border-collapse:collapse;margin:8px 0 16px;font-size:13px}"
-          "td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}"
-          "th{background:#f0f0f0}td.l,th.l{text-align:left}"
-          ".warn{color:#a40;font-weight:bold}h2{margin-top:28px}</style>\n</head>\n<body>\n";
+  html
+      << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+      << "<title>lane-client bench " << Escape(r.meta.date_utc) << "</title>\n"
+      << "<style>body{font-family:sans-serif;margin:24px;color:#222}"
+         "table{border-collapse:collapse;margin:8px 0 16px;font-size:12px}div.wide{overflow-x:auto}"
+         "td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}"
+         "th{background:#f0f0f0}td.l,th.l{text-align:left}"
+         ".warn{color:#a40;font-weight:bold}h2{margin-top:28px}</style>\n</head>\n<body>\n";
   html << "<h1>lane-client bench</h1>\n<table>\n";
   const std::vector<std::pair<std::string, std::string>> meta = {
       {"date (UTC)", r.meta.date_utc},
@@ -213,7 +214,8 @@ std::string HtmlReport(const Report& r) {
     html << "<tr><th class=\"l\">" << Escape(k) << "</th><td class=\"l\">" << Escape(v)
          << "</td></tr>\n";
   }
-  html << "</table>\n<h2>Latency, ms (client: due or sent to answer received)</h2>\n<table>\n"
+  html << "</table>\n<h2>Latency, ms (client: due or sent to answer received)</h2>\n"
+       << "<div class=\"wide\"><table>\n"
        << Row({"cameras", "target/s", "achieved/s", "min", "p50", "p90", "p95", "p99", "p99.9",
                "max", "mean", "sent", "ok", "errors", "dropped", "service/in-process", "SLO"},
               "th");
@@ -228,7 +230,7 @@ std::string HtmlReport(const Report& r) {
          ratio ? absl::StrFormat("%.1f %%", *ratio * 100) : "",
          r.slo_p99_ms ? (r.SloMet(run) ? "met" : "BREACHED") : ""});
   }
-  html << "</table>\n";
+  html << "</table></div>\n";
   if (r.inprocess) {
     html << absl::StrFormat(
         "<p>In-process reference: %d workers, %.1f frames/s, decode+detect p50 %s ms, p99 %s "
