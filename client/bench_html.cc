@@ -54,11 +54,42 @@ double NiceCeiling(double v) {
 
 constexpr int kWidth = 640, kHeight = 240;
 constexpr int kLeft = 56, kRight = 16, kTop = 16, kBottom = 36;
+constexpr double kPlotW = kWidth - kLeft - kRight, kPlotH = kHeight - kTop - kBottom;
+
+// The row of value v on a y axis from 0 to y_max.
+double PlotY(double v, double y_max) { return kTop + kPlotH - std::min(v, y_max) / y_max * kPlotH; }
+
+// What both charts share: the opening <svg> tag, the plot area, the y axis
+// from 0 to y_max with four grid lines, and the two axis titles. The caller
+// draws the x ticks and the data, then closes with "</svg>".
+void OpenPlot(std::ostringstream& svg, const char* aria_label, double y_max, const char* x_title,
+              const char* y_title) {
+  svg << absl::StrFormat(
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" viewBox=\"0 0 %d %d\" "
+      "role=\"img\" aria-label=\"%s\">\n",
+      kWidth, kHeight, kWidth, kHeight, aria_label);
+  svg << absl::StrFormat(
+      "<rect x=\"%d\" y=\"%d\" width=\"%.0f\" height=\"%.0f\" fill=\"#fafafa\" "
+      "stroke=\"#999\"/>\n",
+      kLeft, kTop, kPlotW, kPlotH);
+  for (int i = 0; i <= 4; ++i) {
+    const double v = y_max * i / 4;
+    const double y = PlotY(v, y_max);
+    svg << absl::StrFormat(
+        "<line x1=\"%d\" x2=\"%.0f\" y1=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>"
+        "<text x=\"%d\" y=\"%.1f\" text-anchor=\"end\" font-size=\"11\">%g</text>\n",
+        kLeft, kLeft + kPlotW, y, y, kLeft - 4, y + 4, v);
+  }
+  svg << absl::StrFormat(
+      "<text x=\"%.0f\" y=\"%d\" text-anchor=\"middle\" font-size=\"11\">%s</text>\n"
+      "<text x=\"12\" y=\"%.0f\" font-size=\"11\" transform=\"rotate(-90 12 %.0f)\" "
+      "text-anchor=\"middle\">%s</text>\n",
+      kLeft + kPlotW / 2, kHeight - 4, x_title, kTop + kPlotH / 2, kTop + kPlotH / 2, y_title);
+}
 
 // Latency (p50, p99, max) per timeline interval.
 std::string TimelineSvg(const LoadResult& run) {
   std::ostringstream svg;
-  const double plot_w = kWidth - kLeft - kRight, plot_h = kHeight - kTop - kBottom;
   double t_max = 0, y_max = 0;
   for (const TimelinePoint& p : run.timeline) {
     t_max = std::max(t_max, p.end_s);
@@ -66,34 +97,15 @@ std::string TimelineSvg(const LoadResult& run) {
   }
   y_max = NiceCeiling(y_max * 1.05);
   if (t_max <= 0) t_max = 1;
-  const auto x = [&](double t) { return kLeft + t / t_max * plot_w; };
-  const auto y = [&](double v) { return kTop + plot_h - std::min(v, y_max) / y_max * plot_h; };
-  svg << absl::StrFormat(
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" viewBox=\"0 0 %d %d\" "
-      "role=\"img\" aria-label=\"latency over time\">\n",
-      kWidth, kHeight, kWidth, kHeight);
-  svg << absl::StrFormat(
-      "<rect x=\"%d\" y=\"%d\" width=\"%.0f\" height=\"%.0f\" fill=\"#fafafa\" "
-      "stroke=\"#999\"/>\n",
-      kLeft, kTop, plot_w, plot_h);
-  for (int i = 0; i <= 4; ++i) {
-    const double v = y_max * i / 4;
-    svg << absl::StrFormat(
-        "<line x1=\"%d\" x2=\"%.0f\" y1=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>"
-        "<text x=\"%d\" y=\"%.1f\" text-anchor=\"end\" font-size=\"11\">%g</text>\n",
-        kLeft, kLeft + plot_w, y(v), y(v), kLeft - 4, y(v) + 4, v);
-  }
+  const auto x = [&](double t) { return kLeft + t / t_max * kPlotW; };
+  const auto y = [&](double v) { return PlotY(v, y_max); };
+  OpenPlot(svg, "latency over time", y_max, "seconds into the measured window", "latency, ms");
   for (int i = 0; i <= 5; ++i) {
     const double t = t_max * i / 5;
     svg << absl::StrFormat(
         "<text x=\"%.1f\" y=\"%d\" text-anchor=\"middle\" font-size=\"11\">%.1f</text>\n", x(t),
         kHeight - kBottom + 14, t);
   }
-  svg << absl::StrFormat(
-      "<text x=\"%.0f\" y=\"%d\" text-anchor=\"middle\" font-size=\"11\">seconds into the "
-      "measured window</text>\n<text x=\"12\" y=\"%.0f\" font-size=\"11\" "
-      "transform=\"rotate(-90 12 %.0f)\" text-anchor=\"middle\">latency, ms</text>\n",
-      kLeft + plot_w / 2, kHeight - 4, kTop + plot_h / 2, kTop + plot_h / 2);
   const struct {
     const char* name;
     const char* colour;
@@ -112,7 +124,7 @@ std::string TimelineSvg(const LoadResult& run) {
     svg << absl::StrFormat(
         "<rect x=\"%.0f\" y=\"%d\" width=\"12\" height=\"3\" fill=\"%s\"/><text x=\"%.0f\" "
         "y=\"%d\" font-size=\"11\">%s</text>\n",
-        kLeft + plot_w - 90 + legend * 45, kTop + 10, s.colour, kLeft + plot_w - 74 + legend * 45,
+        kLeft + kPlotW - 90 + legend * 45, kTop + 10, s.colour, kLeft + kPlotW - 74 + legend * 45,
         kTop + 14, s.name);
     ++legend;
   }
@@ -124,7 +136,6 @@ std::string TimelineSvg(const LoadResult& run) {
 std::string HistogramSvg(const LoadResult& run) {
   std::ostringstream svg;
   const LatencyHistogram& h = run.latency_histogram;
-  const double plot_w = kWidth - kLeft - kRight, plot_h = kHeight - kTop - kBottom;
   // The bins that hold frames, and one either side.
   int first = kHistogramBins + 1, last = 0;
   uint64_t top = 0;
@@ -139,31 +150,16 @@ std::string HistogramSvg(const LoadResult& run) {
   if (last < first) last = first;
   const double y_max = NiceCeiling(static_cast<double>(top));
   const int bins = last - first + 1;
-  const double bar_w = plot_w / bins;
-  svg << absl::StrFormat(
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" viewBox=\"0 0 %d %d\" "
-      "role=\"img\" aria-label=\"latency histogram\">\n",
-      kWidth, kHeight, kWidth, kHeight);
-  svg << absl::StrFormat(
-      "<rect x=\"%d\" y=\"%d\" width=\"%.0f\" height=\"%.0f\" fill=\"#fafafa\" "
-      "stroke=\"#999\"/>\n",
-      kLeft, kTop, plot_w, plot_h);
-  for (int i = 0; i <= 4; ++i) {
-    const double v = y_max * i / 4;
-    const double yy = kTop + plot_h - v / y_max * plot_h;
-    svg << absl::StrFormat(
-        "<line x1=\"%d\" x2=\"%.0f\" y1=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>"
-        "<text x=\"%d\" y=\"%.1f\" text-anchor=\"end\" font-size=\"11\">%g</text>\n",
-        kLeft, kLeft + plot_w, yy, yy, kLeft - 4, yy + 4, v);
-  }
+  const double bar_w = kPlotW / bins;
+  OpenPlot(svg, "latency histogram", y_max, "latency, ms (log bins)", "frames");
   for (int b = first; b <= last; ++b) {
     const uint64_t n = b < static_cast<int>(h.counts.size()) ? h.counts[b] : 0;
-    const double bh = static_cast<double>(n) / y_max * plot_h;
+    const double bh = static_cast<double>(n) / y_max * kPlotH;
     const double bx = kLeft + (b - first) * bar_w;
     svg << absl::StrFormat(
         "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"#1f77b4\">"
         "<title>%s-%s ms: %d frames</title></rect>\n",
-        bx + 1, kTop + plot_h - bh, std::max(1.0, bar_w - 2), bh, Ms(LatencyHistogram::Edge(b)),
+        bx + 1, kTop + kPlotH - bh, std::max(1.0, bar_w - 2), bh, Ms(LatencyHistogram::Edge(b)),
         Ms(LatencyHistogram::Edge(b + 1)), n);
     if ((b - first) % std::max(1, bins / 8) == 0) {
       svg << absl::StrFormat(
@@ -171,11 +167,7 @@ std::string HistogramSvg(const LoadResult& run) {
           kHeight - kBottom + 14, LatencyHistogram::Edge(b));
     }
   }
-  svg << absl::StrFormat(
-      "<text x=\"%.0f\" y=\"%d\" text-anchor=\"middle\" font-size=\"11\">latency, ms (log "
-      "bins)</text>\n<text x=\"12\" y=\"%.0f\" font-size=\"11\" transform=\"rotate(-90 12 %.0f)\" "
-      "text-anchor=\"middle\">frames</text>\n</svg>\n",
-      kLeft + plot_w / 2, kHeight - 4, kTop + plot_h / 2, kTop + plot_h / 2);
+  svg << "</svg>\n";
   return svg.str();
 }
 
