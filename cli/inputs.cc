@@ -104,7 +104,7 @@ std::string UniqueStem(const std::string& stem, std::set<std::string>& used) {
 }
 
 FrameReader::FrameReader(const std::vector<std::string>& inputs, ReadOptions options)
-    : entries_(ExpandInputs(inputs)), options_(options) {}
+    : entries_(ExpandInputs(inputs)), gate_(options) {}
 
 FrameReader::~FrameReader() = default;
 
@@ -227,21 +227,20 @@ void FrameReader::ReadImage(const InputEntry& entry, InputFrame* frame) const {
   }
 }
 
-long long FrameReader::KnownFrameCount() const {
-  for (const InputEntry& entry : entries_) {
+long long ReadGate::KnownFrameCount(const std::vector<InputEntry>& entries) const {
+  for (const InputEntry& entry : entries) {
     if (entry.kind == InputEntry::kVideo) return 0;
   }
-  const long long n = static_cast<long long>(entries_.size());
+  const long long n = static_cast<long long>(entries.size());
   return options_.max_frames > 0 ? std::min(n, options_.max_frames) : n;
 }
 
 bool FrameReader::Next(InputFrame* frame) {
-  if (options_.max_frames > 0 && handed_out_ >= options_.max_frames) return false;
+  if (gate_.Closed()) return false;
   double source_fps = 0;
   if (!NextUnpaced(frame, &source_fps)) return false;
   frame->source_fps = source_fps;
-  ++handed_out_;
-  if (frame->error.empty()) options_.pacer.Wait(source_fps);
+  gate_.HandOut(frame->error.empty(), source_fps);
   return true;
 }
 

@@ -56,6 +56,30 @@ struct InputEntry {
   bool live = false;
 };
 
+// ReadOptions applied as a reader hands out frames: the count against
+// max_frames, and the pacing. Shared by FrameReader and lane-client's
+// FrameSource.
+class ReadGate {
+ public:
+  explicit ReadGate(ReadOptions options) : options_(options) {}
+  // max_frames handed out already: the reader is done.
+  bool Closed() const { return options_.max_frames > 0 && handed_out_ >= options_.max_frames; }
+  // Counts a frame handed out; one that was read (not an error) waits for
+  // its time at the source's rate.
+  void HandOut(bool read, double source_fps) {
+    ++handed_out_;
+    if (read) options_.pacer.Wait(source_fps);
+  }
+  // How many frames the entries give, when known without reading them
+  // (image files and errors only, within max_frames); 0 with a video or a
+  // live source.
+  long long KnownFrameCount(const std::vector<InputEntry>& entries) const;
+
+ private:
+  ReadOptions options_;
+  long long handed_out_ = 0;
+};
+
 // Expands the INPUT arguments, following the rules of FrameReader below,
 // without opening any image or video. Shared by `lane` and `lane-client`.
 std::vector<InputEntry> ExpandInputs(const std::vector<std::string>& inputs);
@@ -92,7 +116,7 @@ class FrameReader {
   // How many frames Next will hand out, when that is known without reading
   // (image files and errors only, within --max-frames); 0 with a video or a
   // live source.
-  long long KnownFrameCount() const;
+  long long KnownFrameCount() const { return gate_.KnownFrameCount(entries_); }
 
   // From now on, JPEG files of width x height are decoded only where `needs`
   // (a detector's) says, through lane/decode: the rows it reads and, where it
@@ -109,8 +133,7 @@ class FrameReader {
   bool NextUnpaced(InputFrame* frame, double* source_fps);
 
   std::vector<InputEntry> entries_;
-  ReadOptions options_;
-  long long handed_out_ = 0;
+  ReadGate gate_;
   std::optional<lane::FrameNeeds> needs_;
   int width_ = 0, height_ = 0;
   size_t next_ = 0;

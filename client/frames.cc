@@ -45,7 +45,7 @@ bool IsJpegOrPng(const std::string& bytes) {
 
 FrameSource::FrameSource(const std::vector<std::string>& inputs, bool raw,
                          lane_tools::ReadOptions options)
-    : raw_(raw), entries_(lane_tools::ExpandInputs(inputs)), options_(options) {}
+    : raw_(raw), entries_(lane_tools::ExpandInputs(inputs)), gate_(options) {}
 
 FrameSource::~FrameSource() = default;
 
@@ -74,20 +74,11 @@ void FrameSource::ReadImage(const lane_tools::InputEntry& entry, ClientFrame* fr
   frame->bgr = decoded;
 }
 
-long long FrameSource::KnownFrameCount() const {
-  for (const lane_tools::InputEntry& entry : entries_) {
-    if (entry.kind == lane_tools::InputEntry::kVideo) return 0;
-  }
-  const long long n = static_cast<long long>(entries_.size());
-  return options_.max_frames > 0 ? std::min(n, options_.max_frames) : n;
-}
-
 bool FrameSource::Next(ClientFrame* frame) {
-  if (options_.max_frames > 0 && handed_out_ >= options_.max_frames) return false;
+  if (gate_.Closed()) return false;
   double source_fps = 0;
   if (!NextUnpaced(frame, &source_fps)) return false;
-  ++handed_out_;
-  if (frame->error.empty()) options_.pacer.Wait(source_fps);
+  gate_.HandOut(frame->error.empty(), source_fps);
   return true;
 }
 

@@ -55,7 +55,7 @@ class FrameSource {
   bool Next(ClientFrame* frame);
   // How many frames Next will hand out when that is known without reading
   // (files only, within --max-frames); 0 with a video or a live source.
-  long long KnownFrameCount() const;
+  long long KnownFrameCount() const { return gate_.KnownFrameCount(entries_); }
 
  private:
   void ReadImage(const lane_tools::InputEntry& entry, ClientFrame* frame) const;
@@ -63,8 +63,7 @@ class FrameSource {
 
   const bool raw_;
   std::vector<lane_tools::InputEntry> entries_;
-  lane_tools::ReadOptions options_;
-  long long handed_out_ = 0;
+  lane_tools::ReadGate gate_;
   size_t next_ = 0;
   std::unique_ptr<lane_tools::VideoInput> video_;
 };
