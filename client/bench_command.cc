@@ -136,7 +136,8 @@ LoadSpec MakeLoadSpec(const BenchFlags& flags, const std::vector<std::string>& t
 
 // The report's description of the runs, without their results.
 Report MakeReport(const BenchFlags& flags, const LoadSpec& spec,
-                  const std::vector<std::string>& targets) {
+                  const std::vector<std::string>& targets,
+                  const absl::StatusOr<v1::ServerInfo>& server_info) {
   Report report;
   report.targets = targets;
   report.connections = static_cast<int>(spec.channels.size() / targets.size());
@@ -151,31 +152,37 @@ Report MakeReport(const BenchFlags& flags, const LoadSpec& spec,
   report.show_timeline = flags.timeline.has_value();
   report.meta = LocalMetadata();
   // The server's version, best effort: the report says "unknown" without it.
-  const auto stub = v1::LaneService::NewStub(spec.channels.front());
-  grpc::ClientContext context;
-  SetDeadline(&context, absl::Seconds(5));
-  v1::ServerInfo info;
-  if (stub->GetServerInfo(&context, v1::GetServerInfoRequest(), &info).ok()) {
-    report.meta.server_version = absl::StrCat(info.version(), " (", info.build(), ")");
+  if (server_info.ok()) {
+    report.meta.server_version =
+        absl::StrCat(server_info->version(), " (", server_info->build(), ")");
   }
   return report;
 }
 
+// GetServerInfo of the first target, once per run: the report's server
+// version and the in-process reference's worker count.
+absl::StatusOr<v1::ServerInfo> FetchServerInfo(const LoadSpec& spec) {
+  const auto stub = v1::LaneService::NewStub(spec.channels.front());
+  grpc::ClientContext context;
+  SetDeadline(&context, absl::Seconds(10));
+  v1::ServerInfo info;
+  const grpc::Status status = stub->GetServerInfo(&context, v1::GetServerInfoRequest(), &info);
+  if (!status.ok()) return absl::UnavailableError(StatusText(status));
+  return info;
+}
+
 // --inprocess: the reference run, on --workers threads or the server's.
-absl::Status RunReference(const BenchFlags& flags, const LoadSpec& spec, ProgressLine& progress,
+absl::Status RunReference(const BenchFlags& flags, const LoadSpec& spec,
+                          const absl::StatusOr<v1::ServerInfo>& server_info, ProgressLine& progress,
                           Report* report) {
   int threads = flags.workers.value_or(0);
   if (threads == 0) {
-    const auto stub = v1::LaneService::NewStub(spec.channels.front());
-    grpc::ClientContext context;
-    SetDeadline(&context, absl::Seconds(10));
-    v1::ServerInfo info;
-    const grpc::Status status = stub->GetServerInfo(&context, v1::GetServerInfoRequest(), &info);
-    if (!status.ok()) {
-      return absl::UnavailableError(absl::StrCat(
-          "GetServerInfo (for the number of workers; or give --workers): ", StatusText(status)));
+    if (!server_info.ok()) {
+      return absl::UnavailableError(
+          absl::StrCat("GetServerInfo (for the number of workers; or give --workers): ",
+                       server_info.status().message()));
     }
-    threads = static_cast<int>(info.limits().workers());
+    threads = static_cast<int>(server_info->limits().workers());
   }
   if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   absl::StatusOr<InprocessResult> inprocess = RunInprocess(
@@ -250,10 +257,11 @@ int RunBench(const CLI::App& app, const BenchFlags& flags) {
 
   const int most_cameras = *std::max_element(sweep.begin(), sweep.end());
   LoadSpec spec = MakeLoadSpec(flags, *targets, most_cameras, **session, &*frames);
-  Report report = MakeReport(flags, spec, *targets);
+  const absl::StatusOr<v1::ServerInfo> server_info = FetchServerInfo(spec);
+  Report report = MakeReport(flags, spec, *targets, server_info);
   ProgressLine progress;
   if (flags.inprocess) {
-    if (const absl::Status s = RunReference(flags, spec, progress, &report); !s.ok()) {
+    if (const absl::Status s = RunReference(flags, spec, server_info, progress, &report); !s.ok()) {
       return Failure("bench", std::string(s.message()));
     }
   }

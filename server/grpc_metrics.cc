@@ -67,13 +67,13 @@ void GrpcMetrics::Call::Handled(grpc::StatusCode code) {
 }
 
 GrpcMetrics::Method& GrpcMetrics::ForMethod(const char* full_method, Type type) {
-  // "/package.Service/Method"; anything else (an unknown method) is kept whole
-  // as the method under service "unknown".
+  // "/package.Service/Method"; anything else is kept whole as the method
+  // under service "unknown".
   const std::string_view name = full_method != nullptr ? full_method : "";
   const char* type_label = TypeLabel(type);
   std::lock_guard<std::mutex> lock(mu_);
-  // Method names come from clients (an unimplemented method is intercepted
-  // too): past kMaxMethods series they share one "unknown" series.
+  // The label set stays bounded whatever names callers pass: past
+  // kMaxMethods series they share one "unknown" series.
   const bool known =
       methods_.size() < kMaxMethods || methods_.count(std::string(name) + '\n' + type_label) != 0;
   const std::string_view label_name = known ? name : std::string_view("unknown");
