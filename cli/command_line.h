@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "absl/time/time.h"
+#include "cli/inputs.h"
 
 namespace lane_tools {
 
@@ -110,6 +111,14 @@ struct ReadFlags {
   double fps = 0;
   bool realtime = false;
   long long max_frames = 0;
+
+  // What the readers take (cli/inputs.h).
+  ReadOptions Options() const {
+    ReadOptions options;
+    options.max_frames = max_frames;
+    options.pacer = Pacer(fps, realtime);
+    return options;
+  }
 };
 void AddReadFlags(CLI::App* app, ReadFlags* flags);
 

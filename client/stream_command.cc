@@ -309,10 +309,7 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
     overlays = std::make_unique<OverlayDrawer>(overlay_writer.get());
   }
 
-  lane_tools::ReadOptions read;
-  read.max_frames = flags.read.max_frames;
-  read.pacer = lane_tools::Pacer(flags.read.fps, flags.read.realtime);
-  FrameSource frames(flags.inputs, flags.raw, read);
+  FrameSource frames(flags.inputs, flags.raw, flags.read.Options());
   Streamer streamer(MakeChannel(targets->front()), options,
                     [](const std::string& message) { Note("stream", message); });
   // A bar when the frame count is known (files), else a counter; only on a

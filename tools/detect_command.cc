@@ -264,10 +264,7 @@ int RunDetect(const DetectFlags& flags) {
   }
   DetectRun run(*detector, config, out, flags.overlay.value_or(""), flags.overlay_video,
                 flags.read.fps, flags.quiet);
-  ReadOptions read;
-  read.max_frames = flags.read.max_frames;
-  read.pacer = Pacer(flags.read.fps, flags.read.realtime);
-  FrameReader reader(flags.inputs, read);
+  FrameReader reader(flags.inputs, flags.read.Options());
   // JPEG frames are decoded only in the rows and channel the detector
   // reads (the same lanes), unless asked not to; overlays draw on the whole
   // frame.
