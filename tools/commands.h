@@ -15,6 +15,7 @@ namespace lane_tools {
 Command AddDetectCommand(CLI::App& lane);
 Command AddRenderCommand(CLI::App& lane);
 Command AddConfigCommand(CLI::App& lane);
+Command AddCalibrateCommand(CLI::App& lane);
 // `args`: the words after "eval", recorded in a --write-baseline file.
 Command AddEvalCommand(CLI::App& lane, const std::vector<std::string>& args);
 

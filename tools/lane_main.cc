@@ -15,7 +15,8 @@ int main(int argc, char** argv) {
       args.size() > 1 ? std::vector<std::string>(args.begin() + 1, args.end())
                       : std::vector<std::string>();
   const std::vector<Command> commands = {AddDetectCommand(app), AddRenderCommand(app),
-                                         AddConfigCommand(app), AddEvalCommand(app, eval_args)};
+                                         AddConfigCommand(app), AddEvalCommand(app, eval_args),
+                                         AddCalibrateCommand(app)};
   if (const std::optional<int> exit_code = ParseCommandLine(app, args)) return *exit_code;
   return RunChosen(commands);
 }

@@ -175,7 +175,7 @@ Road SampleRoad(const SyntheticOptions& o, Rng& rng) {
   const int ego = UniformInt(rng, 0, lanes - 1);
   // Distance of the car from its lane's left boundary.
   const double pos = Uniform(rng, 0.3, 0.7) * road.lane_width;
-  road.heading = Uniform(rng, -0.02, 0.02);
+  road.heading = Uniform(rng, -o.max_heading_rad, o.max_heading_rad);
   if (!Chance(rng, o.straight_probability)) {
     // Radius between min_radius and ~10x that, denser at the tight end.
     const double r = o.min_radius_m * std::exp(Uniform(rng, 0.0, std::log(10.0)));

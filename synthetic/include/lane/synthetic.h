@@ -24,6 +24,9 @@ struct SyntheticOptions {
   // probability straight_probability.
   double min_radius_m = 150.0;
   double straight_probability = 0.4;
+  // The road's heading relative to the camera's ground axis is uniform in
+  // +-max_heading_rad (the car is never perfectly aligned with its lane).
+  double max_heading_rad = 0.02;
   // Markings.
   double min_marking_width_m = 0.10;
   double max_marking_width_m = 0.15;

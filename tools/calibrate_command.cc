@@ -1,0 +1,293 @@
+// `lane calibrate`: a camera's config from frames of ordinary driving
+// (lane/calibration.h, docs/calibration.md).
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_split.h"
+#include "cli/cli_config.h"
+#include "cli/inputs.h"
+#include "commands.h"
+#include "lane/calibration.h"
+#include "lane/config.h"
+#include "lane/detector.h"
+
+namespace lane_tools {
+namespace {
+
+constexpr char kDescription[] =
+    "Estimates a camera from frames of ordinary driving and writes a complete\n"
+    "config: the camera's pitch and yaw from the vanishing point of the lane\n"
+    "markings (straight stretches; frames on curves or without markings are\n"
+    "left out and counted), the road's rows (the still hood is left out), and\n"
+    "a top view on the road (docs/config.md, \"Choosing a ground view\").\n"
+    "\n"
+    "The camera height sets the metric scale. The focal length is --focal-px,\n"
+    "or assumed (0.61 x the image width, a 79 degree field of view): at a\n"
+    "given vanishing point it only scales distances along the road.\n"
+    "INPUT is read twice (image files, directories, list files or videos).";
+
+struct CalibrateFlags {
+  double height_m = 0;
+  std::optional<double> focal_px;
+  std::optional<std::string> principal_point;
+  double lane_width_m = 3.5;
+  std::optional<int> road_bottom_row;
+  std::optional<std::string> template_config;
+  std::string output;
+  std::optional<std::string> overlay;
+  ReadFlags read;
+  std::vector<std::string> inputs;
+};
+
+// "U,V" -> point; nullopt when malformed.
+std::optional<Eigen::Vector2d> ParsePoint(const std::string& text) {
+  const std::vector<std::string> parts = absl::StrSplit(text, ',');
+  if (parts.size() != 2) return std::nullopt;
+  try {
+    size_t a = 0, b = 0;
+    const double u = std::stod(parts[0], &a), v = std::stod(parts[1], &b);
+    if (a != parts[0].size() || b != parts[1].size() || !std::isfinite(u) || !std::isfinite(v)) {
+      return std::nullopt;
+    }
+    return Eigen::Vector2d(u, v);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+// The frame of pass 2 whose point had the most support, with its segments.
+struct BestFrame {
+  cv::Mat bgr;
+  std::vector<lane::ImageSegment> segments;
+  lane::FrameVanishingPoint point;
+};
+
+void DrawOverlay(const BestFrame& best, const lane::CalibrationResult& r, const std::string& path) {
+  cv::Mat img = best.bgr.channels() == 3 ? best.bgr.clone() : cv::Mat();
+  if (img.empty()) cv::cvtColor(best.bgr, img, cv::COLOR_GRAY2BGR);
+  const double horizon = r.camera.HorizonRow();
+  cv::line(img, {0, static_cast<int>(std::lround(horizon))},
+           {img.cols - 1, static_cast<int>(std::lround(horizon))}, {255, 255, 0}, 1, cv::LINE_AA);
+  if (r.road_bottom_row < img.rows) {
+    cv::line(img, {0, r.road_bottom_row}, {img.cols - 1, r.road_bottom_row}, {0, 0, 255}, 1);
+  }
+  const Eigen::Vector2d vp = r.vanishing_point.point;
+  std::vector<bool> support(best.segments.size(), false);
+  for (int k : best.point.support) support[static_cast<size_t>(k)] = true;
+  for (size_t k = 0; k < best.segments.size(); ++k) {
+    const lane::ImageSegment& s = best.segments[k];
+    if (support[k]) {
+      // Supporting segments extended to the vanishing point.
+      cv::line(img, {static_cast<int>(s.centre.x()), static_cast<int>(s.centre.y())},
+               {static_cast<int>(vp.x()), static_cast<int>(vp.y())}, {0, 200, 0}, 1, cv::LINE_AA);
+    }
+    const Eigen::Vector2d a = s.centre - 0.5 * s.length * s.direction;
+    const Eigen::Vector2d b = s.centre + 0.5 * s.length * s.direction;
+    cv::line(img, {static_cast<int>(a.x()), static_cast<int>(a.y())},
+             {static_cast<int>(b.x()), static_cast<int>(b.y())},
+             support[k] ? cv::Scalar(0, 255, 0) : cv::Scalar(0, 0, 255), 2, cv::LINE_AA);
+  }
+  // The ground view's rectangle on the road.
+  const lane::GroundView& g = r.view;
+  std::vector<cv::Point> outline;
+  for (double t = 0; t <= 1.0001; t += 0.05) {
+    outline.emplace_back(cv::Point(0, 0));
+    const Eigen::Vector2d p =
+        r.camera.GroundToImage({g.x_min_m + t * (g.x_max_m - g.x_min_m), g.y_min_m});
+    outline.back() = {static_cast<int>(p.x()), static_cast<int>(p.y())};
+  }
+  for (double t = 1.0; t >= -0.0001; t -= 0.05) {
+    const Eigen::Vector2d p =
+        r.camera.GroundToImage({g.x_min_m + t * (g.x_max_m - g.x_min_m), g.y_max_m});
+    outline.emplace_back(static_cast<int>(p.x()), static_cast<int>(p.y()));
+  }
+  cv::polylines(img, outline, true, {0, 165, 255}, 1, cv::LINE_AA);
+  cv::drawMarker(img,
+                 {static_cast<int>(std::lround(vp.x())), static_cast<int>(std::lround(vp.y()))},
+                 {255, 0, 255}, cv::MARKER_CROSS, 24, 2);
+  cv::putText(img,
+              absl::StrFormat("VP (%.1f, %.1f)  pitch %.2f  yaw %.2f deg", vp.x(), vp.y(),
+                              r.camera.pitch_deg, r.camera.yaw_deg),
+              {10, 24}, cv::FONT_HERSHEY_SIMPLEX, 0.6, {255, 255, 255}, 2, cv::LINE_AA);
+  cv::imwrite(path, img);
+}
+
+std::string ConfigHeader(const lane::CalibrationResult& r, const CalibrateFlags& flags) {
+  const lane::CombinedVanishingPoint& vp = r.vanishing_point;
+  std::string h = "// Written by lane calibrate (docs/calibration.md).\n";
+  absl::StrAppendFormat(
+      &h,
+      "// Vanishing point (%.1f, %.1f) px +- (%.1f, %.1f) (standard error), "
+      "from %d of %d frames\n// (%d curved, %d without markings, %d stationary, %d "
+      "outliers) and %d marking segments.\n",
+      vp.point.x(), vp.point.y(), vp.standard_error.x(), vp.standard_error.y(), vp.frames_used,
+      r.frames, r.frames_curved, r.frames_no_markings, r.frames_stationary, vp.frames_rejected,
+      r.segments);
+  absl::StrAppendFormat(&h, "// Camera height %.3f m (given); focal length %.1f px (%s).\n",
+                        r.camera.height_m, r.camera.fu,
+                        r.focal_assumed ? "assumed: 0.61 x image width; only the along-road "
+                                          "scale depends on it"
+                                        : "given");
+  absl::StrAppendFormat(&h, "// Road rows end at row %d; lane width for the top view %.2f m.\n",
+                        r.road_bottom_row, flags.lane_width_m);
+  return h;
+}
+
+int RunCalibrate(const CalibrateFlags& flags) {
+  lane::CalibrationOptions options;
+  options.height_m = flags.height_m;
+  options.focal_px = flags.focal_px;
+  options.lane_width_m = flags.lane_width_m;
+  options.road_bottom_row = flags.road_bottom_row;
+  if (flags.principal_point) {
+    options.principal_point = ParsePoint(*flags.principal_point);
+    if (!options.principal_point) {
+      return Failure("calibrate", "--principal-point must be U,V in pixels, got \"" +
+                                      *flags.principal_point + "\"");
+    }
+  }
+  absl::StatusOr<lane::Config> base = LoadEffectiveConfig(flags.template_config, {});
+  if (!base.ok()) return Failure("calibrate", std::string(base.status().message()));
+
+  lane::CameraCalibrator calibrator(options);
+  int read_errors = 0;
+  auto each_frame = [&](const std::function<absl::Status(const InputFrame&)>& use) -> bool {
+    FrameReader reader(flags.inputs, flags.read.Options());
+    InputFrame frame;
+    while (reader.Next(&frame)) {
+      if (!frame.error.empty()) {
+        PrintMessage("lane calibrate", frame.name + ": " + frame.error);
+        ++read_errors;
+        continue;
+      }
+      if (absl::Status s = use(frame); !s.ok()) {
+        PrintMessage("lane calibrate", frame.name + ": " + std::string(s.message()));
+        return false;
+      }
+    }
+    return true;
+  };
+  if (!each_frame([&](const InputFrame& f) { return calibrator.AddFirstPass(f.bgr); })) {
+    return kExitFailure;
+  }
+  if (absl::Status s = calibrator.FinishFirstPass(); !s.ok()) {
+    return Failure("calibrate", std::string(s.message()));
+  }
+  read_errors = 0;
+  BestFrame best;
+  if (!each_frame([&](const InputFrame& f) -> absl::Status {
+        std::vector<lane::ImageSegment> segments;
+        absl::StatusOr<lane::FrameVanishingPoint> p = calibrator.AddSecondPass(f.bgr, &segments);
+        if (!p.ok()) return p.status();
+        if (flags.overlay && p->result == lane::VpFrameResult::kOk &&
+            p->inliers > best.point.inliers) {
+          best = {f.bgr.clone(), std::move(segments), *p};
+        }
+        return absl::OkStatus();
+      })) {
+    return kExitFailure;
+  }
+  const absl::StatusOr<lane::CalibrationResult> result = calibrator.Finish();
+  if (!result.ok()) return Failure("calibrate", std::string(result.status().message()));
+  const lane::CalibrationResult& r = *result;
+
+  lane::Config config = *base;
+  config.camera = r.camera;
+  config.ipm.view = lane::IpmView::kGround;
+  config.ipm.ground = r.view;
+  config.ipm.interpolation = lane::Interpolation::kArea;
+  if (absl::StatusOr<lane::Detector> d =
+          lane::Detector::Create(config.camera, config.ipm, config.detector);
+      !d.ok()) {
+    return Failure("calibrate",
+                   absl::StrCat("the estimated camera gives no detector: ", d.status().message()));
+  }
+  std::ofstream out;
+  if (!OpenOutputFile(flags.output, &out)) {
+    return Failure("calibrate", "cannot write " + flags.output);
+  }
+  out << ConfigHeader(r, flags) << lane::ConfigToJson(config) << '\n';
+  out.close();
+  if (!out) return Failure("calibrate", "error writing " + flags.output);
+  if (flags.overlay && !best.bgr.empty()) DrawOverlay(best, r, *flags.overlay);
+
+  const lane::CombinedVanishingPoint& vp = r.vanishing_point;
+  std::printf(
+      "vanishing point   (%.1f, %.1f) px, standard error (%.2f, %.2f) px, spread (%.1f, %.1f) px\n",
+      vp.point.x(), vp.point.y(), vp.standard_error.x(), vp.standard_error.y(), vp.spread.x(),
+      vp.spread.y());
+  std::printf(
+      "frames            %d read, %d used, %d curved, %d without markings, %d stationary, %d "
+      "outliers\n",
+      r.frames, vp.frames_used, r.frames_curved, r.frames_no_markings, r.frames_stationary,
+      vp.frames_rejected);
+  std::printf("segments          %d supporting\n", r.segments);
+  std::printf("pitch, yaw        %.3f, %.3f deg\n", r.camera.pitch_deg, r.camera.yaw_deg);
+  std::printf("focal length      %.1f px (%s)\n", r.camera.fu,
+              r.focal_assumed ? "assumed: 0.61 x image width, give --focal-px if known" : "given");
+  std::printf("principal point   (%.1f, %.1f) px%s\n", r.camera.cu, r.camera.cv,
+              flags.principal_point ? "" : " (image centre)");
+  std::printf("far ground point  (%.1f, %.1f) px (check: at the vanishing point)\n",
+              r.far_point.x(), r.far_point.y());
+  std::printf("road rows         end at row %d of %d%s\n", r.road_bottom_row, r.camera.image_height,
+              r.road_bottom_row < r.camera.image_height ? " (still hood below)" : "");
+  std::printf("top view          x %.2f..%.2f m, y %.2f..%.2f m\n", r.view.x_min_m, r.view.x_max_m,
+              r.view.y_min_m, r.view.y_max_m);
+  std::printf("config            %s\n", flags.output.c_str());
+  return read_errors > 0 ? kExitFailure : kExitOk;
+}
+
+}  // namespace
+
+Command AddCalibrateCommand(CLI::App& lane) {
+  auto flags = std::make_shared<CalibrateFlags>();
+  CLI::App* app =
+      AddCommand(lane, "calibrate", "estimate a camera from driving frames and write its config",
+                 kDescription);
+  app->add_option("--height-m", flags->height_m, "camera height above the road, metres")
+      ->type_name("H")
+      ->required()
+      ->check(CLI::Range(0.2, 10.0));
+  AddOptional(app, "--focal-px", &flags->focal_px,
+              "focal length in pixels (square pixels); assumed 0.61 x image width when not given")
+      ->type_name("F")
+      ->check(CLI::Range(10.0, 100000.0));
+  AddOptional(app, "--principal-point", &flags->principal_point,
+              "principal point U,V in pixels (default: the image centre)")
+      ->type_name("U,V");
+  app->add_option("--lane-width-m", flags->lane_width_m,
+                  "lane width of the roads, metres: the top view's lateral extent")
+      ->type_name("W")
+      ->check(CLI::Range(2.0, 6.0));
+  AddOptional(app, "--road-bottom-row", &flags->road_bottom_row,
+              "first image row below the road (where the car's hood starts), when the still "
+              "rows found are not it")
+      ->type_name("V")
+      ->check(CLI::Range(1, 16384));
+  AddOptional(app, "--template", &flags->template_config,
+              "config whose detector settings the output keeps (default: the built-in ones)")
+      ->type_name("CONFIG");
+  app->add_option("--output,-o", flags->output, "the config to write")
+      ->type_name("CONFIG.json")
+      ->required();
+  AddOptional(app, "--overlay", &flags->overlay,
+              "also draw the best-supported frame's segments, vanishing point, horizon, road "
+              "rows and top view to this PNG")
+      ->type_name("PNG");
+  AddReadFlags(app, &flags->read);
+  app->add_option("INPUT", flags->inputs, "image files, directories, list files or videos")
+      ->required();
+  return {app, [flags] { return RunCalibrate(*flags); }};
+}
+
+}  // namespace lane_tools
