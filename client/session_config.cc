@@ -33,14 +33,20 @@ void AddSessionConfigOptions(CLI::App* app, SessionConfigFlags* flags) {
                 "the session decodes whole JPEG/PNG frames (by default only the rows and "
                 "channel its detector reads: the same lanes)")
       ->group(group);
+  app->add_flag("--auto-calibrate", flags->auto_calibrate,
+                "the session refines the camera's pitch and yaw from the stream's straight-road "
+                "frames (docs/calibration.md)")
+      ->group(group);
 }
 
 absl::StatusOr<std::optional<lane::v1::SessionConfig>> SessionConfigFromFlags(
     const SessionConfigFlags& flags, bool required) {
   if (!required && !flags.config && !flags.mode) {
-    if (flags.backpressure || flags.max_inflight_frames || flags.full_decode) {
+    if (flags.backpressure || flags.max_inflight_frames || flags.full_decode ||
+        flags.auto_calibrate) {
       return absl::InvalidArgumentError(
-          "--backpressure, --max-inflight-frames and --full-decode need --config");
+          "--backpressure, --max-inflight-frames, --full-decode and --auto-calibrate need "
+          "--config");
     }
     return std::optional<lane::v1::SessionConfig>();
   }
@@ -56,6 +62,7 @@ absl::StatusOr<std::optional<lane::v1::SessionConfig>> SessionConfigFromFlags(
   }
   if (flags.max_inflight_frames) stream->set_max_inflight_frames(*flags.max_inflight_frames);
   if (flags.full_decode) proto.mutable_decode()->set_full_decode(true);
+  if (flags.auto_calibrate) proto.mutable_calibration()->set_auto_calibrate(true);
   return std::optional<lane::v1::SessionConfig>(std::move(proto));
 }
 

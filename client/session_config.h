@@ -20,10 +20,12 @@ struct SessionConfigFlags {
   std::optional<std::string> backpressure;
   std::optional<uint32_t> max_inflight_frames;
   bool full_decode = false;
+  bool auto_calibrate = false;
 };
 
 // --config FILE, --mode all|two, --backpressure block|drop_oldest,
-// --max-inflight-frames N (old spelling --session-inflight), --full-decode.
+// --max-inflight-frames N (old spelling --session-inflight), --full-decode,
+// --auto-calibrate.
 void AddSessionConfigOptions(CLI::App* app, SessionConfigFlags* flags);
 
 // The SessionConfig the options describe: the config file (or the defaults)

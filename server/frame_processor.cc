@@ -57,8 +57,9 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
   try {
     // Only the rows and channel the detector reads, unless the session asks
     // for whole frames.
+    const std::shared_ptr<const lane::Detector> detector = session.CurrentDetector();
     absl::StatusOr<cv::Mat> frame = wire::DecodeFrame(
-        request, decode, session.decode.full_decode ? nullptr : &session.detector.Needs());
+        request, decode, session.decode.full_decode ? nullptr : &detector->Needs());
     const SteadyTime decoded = std::chrono::steady_clock::now();
     const double decode_ms = MillisecondsBetween(start, decoded);
     timings->set_decode_ms(decode_ms);
@@ -66,8 +67,9 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
     if (!frame.ok()) {
       status = frame.status();
     } else {
-      absl::StatusOr<lane::Detection> detection = session.detector.Detect(*frame);
+      absl::StatusOr<lane::Detection> detection = detector->Detect(*frame);
       if (detection.ok()) {
+        session.ObserveLanes(detection->lanes);
         wire::LanesToProto(*detection, response);
         wire::TimingsToProto(detection->timings, timings);
         metrics.ObserveDetectorStages(detection->timings);

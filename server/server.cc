@@ -12,6 +12,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
+#include "calibration_metrics.h"
 #include "lane/config.h"
 #include "process_metrics.h"
 
@@ -163,7 +164,9 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
 
   if (!options.metrics_address.empty()) {
     absl::StatusOr<std::unique_ptr<HttpEndpoint>> http = HttpEndpoint::Start(
-        options.metrics_address, 2, {server->registry_, std::make_shared<ProcessMetrics>()},
+        options.metrics_address, 2,
+        {server->registry_, std::make_shared<ProcessMetrics>(),
+         std::make_shared<CalibrationMetrics>(*server->sessions_)},
         [s = server.get()] { return s->ready_.load(std::memory_order_acquire); });
     if (!http.ok()) {
       return absl::UnavailableError(
@@ -175,8 +178,8 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
 
   if (default_config.ok() && !options.default_config_path.empty()) {
     absl::StatusOr<SessionRegistry::CreateResult> created = server->sessions_->Create(
-        options.default_camera_id, SessionSpec{*default_config, StreamPolicy{}, DecodePolicy{}},
-        false);
+        options.default_camera_id,
+        SessionSpec{*default_config, StreamPolicy{}, DecodePolicy{}, CalibrationPolicy{}}, false);
     if (!created.ok()) {
       return absl::InvalidArgumentError(absl::StrCat(
           "--default_config ", options.default_config_path, ": ", created.status().message()));

@@ -1,16 +1,21 @@
 // A camera's session: what a client configured under a camera id, and the
-// detector built from it. Immutable once created (only its counter moves), so
-// a frame in flight keeps using the session it started with even when the
-// session is replaced or deleted meanwhile.
+// detector built from it. Immutable once created (only its counter and, with
+// auto_calibrate, its refined camera move), so a frame in flight keeps using
+// the session it started with even when the session is replaced or deleted
+// meanwhile.
 #ifndef LANE_SERVER_SESSION_H_
 #define LANE_SERVER_SESSION_H_
 
 #include <atomic>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "absl/time/time.h"
+#include "lane/calibration.h"
 #include "lane/config.h"
 #include "lane/detector.h"
 
@@ -47,25 +52,49 @@ struct DecodePolicy {
   bool operator!=(const DecodePolicy& o) const { return !(*this == o); }
 };
 
+// How a camera's calibration follows the stream (CalibrationOptions).
+struct CalibrationPolicy {
+  bool auto_calibrate = false;
+
+  bool operator==(const CalibrationPolicy& o) const { return auto_calibrate == o.auto_calibrate; }
+  bool operator!=(const CalibrationPolicy& o) const { return !(*this == o); }
+};
+
 // What CreateSession (or a stream's first frame) asks for.
 struct SessionSpec {
   lane::Config config;
   StreamPolicy stream;
   DecodePolicy decode;
+  CalibrationPolicy calibration;
+};
+
+// A session's camera now (CalibrationState in the proto).
+struct CalibrationSnapshot {
+  lane::CameraModel camera;
+  double confidence = 0;
+  double uncertainty_deg = 0;
+  uint64_t frames_seen = 0;
+  uint64_t frames_used = 0;
+  double drift_pitch_deg = 0;
+  double drift_yaw_deg = 0;
+  uint32_t rederived = 0;
 };
 
 struct Session {
   Session(std::string camera_id_in, uint64_t version_in, lane::Config config_in,
           std::string config_json_in, StreamPolicy stream_in, DecodePolicy decode_in,
-          lane::Detector detector_in, absl::Time create_time_in)
+          lane::Detector detector_in, absl::Time create_time_in,
+          CalibrationPolicy calibration_in = {})
       : camera_id(std::move(camera_id_in)),
         version(version_in),
         config(std::move(config_in)),
         config_json(std::move(config_json_in)),
         stream(stream_in),
         decode(decode_in),
+        calibration(calibration_in),
         detector(std::move(detector_in)),
-        create_time(create_time_in) {}
+        create_time(create_time_in),
+        calibrator_(config.camera) {}
 
   const std::string camera_id;
   // Unique within the process; new on every create and replace.
@@ -76,10 +105,27 @@ struct Session {
   // Resolved: max_inflight_frames > 0.
   const StreamPolicy stream;
   const DecodePolicy decode;
+  const CalibrationPolicy calibration;
+  // Built from `config`; frames use CurrentDetector().
   const lane::Detector detector;
   const absl::Time create_time;
   // Frames processed with this session.
   mutable std::atomic<uint64_t> frames_processed{0};
+
+  // The detector for the next frame: `detector`, or with auto_calibrate the
+  // one re-derived from the latest refined camera. Valid while the caller
+  // holds the session.
+  std::shared_ptr<const lane::Detector> CurrentDetector() const;
+  // A processed frame's lanes, with auto_calibrate: refines the camera and
+  // re-derives the detector (outside the lock) when it has moved enough.
+  void ObserveLanes(const std::vector<lane::Lane>& lanes) const;
+  CalibrationSnapshot Calibration() const;
+
+ private:
+  mutable std::mutex refine_mu_;
+  mutable lane::OnlineCalibrator calibrator_;              // guarded by refine_mu_
+  mutable std::shared_ptr<const lane::Detector> refined_;  // guarded by refine_mu_
+  mutable uint64_t refine_generation_ = 0;                 // guarded by refine_mu_
 };
 
 }  // namespace lane::server

@@ -41,7 +41,9 @@ absl::StatusOr<SessionSpec> SessionSpecFromProto(const v1::SessionConfig& proto)
   DecodePolicy decode;
   decode.accept_damaged_frames = proto.decode().accept_damaged_frames();
   decode.full_decode = proto.decode().full_decode();
-  return SessionSpec{*std::move(config), *stream, decode};
+  CalibrationPolicy calibration;
+  calibration.auto_calibrate = proto.calibration().auto_calibrate();
+  return SessionSpec{*std::move(config), *stream, decode, calibration};
 }
 
 absl::StatusOr<SessionRegistry::CreateResult> CreateSessionFromProto(
@@ -63,6 +65,22 @@ void SessionToProto(const Session& session, absl::Time last_used, v1::Session* o
   out->set_create_time_unix_ns(absl::ToUnixNanos(session.create_time));
   out->set_last_used_unix_ns(absl::ToUnixNanos(last_used));
   out->set_frames_processed(session.frames_processed.load(std::memory_order_relaxed));
+  out->mutable_config()->mutable_calibration()->set_auto_calibrate(
+      session.calibration.auto_calibrate);
+  const CalibrationSnapshot c = session.Calibration();
+  v1::CalibrationState* state = out->mutable_calibration();
+  state->set_pitch_deg(c.camera.pitch_deg);
+  state->set_yaw_deg(c.camera.yaw_deg);
+  const Eigen::Vector2d vp = c.camera.VanishingPoint();
+  state->mutable_vanishing_point()->set_x(vp.x());
+  state->mutable_vanishing_point()->set_y(vp.y());
+  state->set_confidence(c.confidence);
+  state->set_uncertainty_deg(c.uncertainty_deg);
+  state->set_frames_seen(c.frames_seen);
+  state->set_frames_used(c.frames_used);
+  state->set_drift_pitch_deg(c.drift_pitch_deg);
+  state->set_drift_yaw_deg(c.drift_yaw_deg);
+  state->set_rederived(c.rederived);
 }
 
 }  // namespace lane::server

@@ -264,7 +264,12 @@ Command AddCalibrateCommand(CLI::App& lane) {
       ->check(CLI::Range(10.0, 100000.0));
   AddOptional(app, "--principal-point", &flags->principal_point,
               "principal point U,V in pixels (default: the image centre)")
-      ->type_name("U,V");
+      ->type_name("U,V")
+      ->check(CLI::Validator(
+          [](std::string& text) {
+            return ParsePoint(text) ? std::string() : "must be U,V in pixels, got " + text;
+          },
+          "U,V"));
   app->add_option("--lane-width-m", flags->lane_width_m,
                   "lane width of the roads, metres: the top view's lateral extent")
       ->type_name("W")

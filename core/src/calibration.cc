@@ -213,6 +213,7 @@ absl::StatusOr<FrameVanishingPoint> CameraCalibrator::AddSecondPass(
                                                    ", the first was ", width_, "x", height_));
   }
   const size_t index = static_cast<size_t>(second_frames_++);
+  ++frames_;
   if (index < stationary_.size() && stationary_[index]) {
     ++stationary_count_;
     FrameVanishingPoint still;
@@ -225,7 +226,6 @@ absl::StatusOr<FrameVanishingPoint> CameraCalibrator::AddSecondPass(
   vo.prior = first_point_;
   vo.bounds = SearchBounds();
   FrameVanishingPoint p = EstimateFrameVanishingPoint(segs, vo);
-  ++frames_;
   switch (p.result) {
     case VpFrameResult::kOk:
       points_.push_back(p.point);
@@ -249,7 +249,14 @@ absl::StatusOr<CalibrationResult> CameraCalibrator::Finish() const {
   if (!c) {
     return absl::FailedPreconditionError(
         absl::StrCat("none of ", frames_, " frames gave a vanishing point (", no_markings_,
-                     " without two consistent markings, ", curved_, " on curves)"));
+                     " without two consistent markings, ", curved_, " on curves, ",
+                     stationary_count_, " standing still)"));
+  }
+  if (c->frames_used < kMinFramesUsed) {
+    return absl::FailedPreconditionError(absl::StrCat(
+        "only ", c->frames_used, " of ", frames_, " frames gave a vanishing point (", no_markings_,
+        " without two consistent markings, ", curved_, " on curves, ", stationary_count_,
+        " standing still); at least ", kMinFramesUsed, " are needed"));
   }
   CalibrationResult r;
   r.vanishing_point = *c;

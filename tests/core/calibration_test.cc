@@ -168,6 +168,79 @@ TEST(CalibrationTest, RandomCamerasAreRecoveredFromRenderedDrives) {
   }
 }
 
+// Online refinement: a camera whose pitch drifts by 1 degree during a
+// stream is followed, from the detector's own lanes, with the detector
+// re-derived as the estimate moves.
+TEST(CalibrationTest, OnlineRefinementFollowsAPitchDrift) {
+  const CameraModel start = TestCamera(8.0, 1.0, 1.5);
+  Config config;
+  config.camera = start;
+  config.ipm.view = IpmView::kGround;
+  const absl::StatusOr<GroundView> view = ChooseGroundView(start, 3.6, start.image_height);
+  ASSERT_TRUE(view.ok());
+  config.ipm.ground = *view;
+  config.ipm.interpolation = Interpolation::kArea;
+  absl::StatusOr<Detector> detector = Detector::Create(start, config.ipm, config.detector);
+  ASSERT_TRUE(detector.ok()) << detector.status();
+
+  OnlineCalibrator calibrator(start);
+  SyntheticOptions so;
+  so.num_lanes = 3;
+  so.straight_probability = 0.8;
+  so.max_heading_rad = 0.005;
+  constexpr int kFrames = 240;
+  constexpr double kDrift = 1.0;
+  int rebuilt = 0;
+  for (int i = 0; i < kFrames; ++i) {
+    CameraModel truth = start;
+    truth.pitch_deg += kDrift * std::min(1.0, i / 160.0);  // 1 degree over 160 frames
+    const absl::StatusOr<SyntheticFrame> frame = RenderSyntheticFrame(truth, so, 500 + i);
+    ASSERT_TRUE(frame.ok());
+    const absl::StatusOr<Detection> d = detector->Detect(frame->bgr);
+    ASSERT_TRUE(d.ok());
+    if (calibrator.Observe(d->lanes)) {
+      detector = Detector::Create(calibrator.camera(), config.ipm, config.detector);
+      ASSERT_TRUE(detector.ok()) << detector.status();
+      ++rebuilt;
+    }
+  }
+  EXPECT_NEAR(calibrator.camera().pitch_deg, start.pitch_deg + kDrift, 0.25);
+  EXPECT_NEAR(calibrator.drift_pitch_deg(), kDrift, 0.25);
+  EXPECT_NEAR(calibrator.camera().yaw_deg, start.yaw_deg, 0.3);
+  EXPECT_GE(rebuilt, 3);  // 0.2 degree steps
+  EXPECT_GT(calibrator.frames_used(), kFrames / 3);
+  EXPECT_GT(calibrator.confidence(), 0.5);
+}
+
+TEST(CalibrationTest, OnlineRefinementIsBoundedAndIgnoresOutliers) {
+  const CameraModel start = TestCamera(8.0, 0.0, 1.5);
+  OnlineCalibrationOptions o;
+  o.max_drift_deg = 0.5;
+  OnlineCalibrator calibrator(start, o);
+  // Straight lanes meeting 3 degrees below the camera's vanishing point.
+  const Eigen::Vector2d vp =
+      start.VanishingPoint() + Eigen::Vector2d(0, 390.0 * std::tan(3.0 * M_PI / 180));
+  auto lane_to = [&](double u) {
+    Lane lane;
+    const Eigen::Vector2d a(u, 479.0);
+    for (int k = 0; k < 4; ++k) lane.image[k] = a + (k / 3.0) * 0.6 * (vp - a);
+    return lane;
+  };
+  for (int i = 0; i < 200; ++i) calibrator.Observe({lane_to(100), lane_to(540)});
+  // Moved towards the lanes' point, but no further than max_drift_deg.
+  EXPECT_NEAR(calibrator.drift_pitch_deg(), -0.5, 1e-6);
+  // A frame far off (beyond gate_deg) is ignored; a bent lane gives nothing.
+  const int used = calibrator.frames_used();
+  Lane far_left = lane_to(100);
+  for (Eigen::Vector2d& p : far_left.image) p.y() -= 200;
+  calibrator.Observe({far_left, lane_to(540)});
+  Lane bent = lane_to(540);
+  bent.image[1].x() += 15;
+  calibrator.Observe({lane_to(100), bent});
+  EXPECT_EQ(calibrator.frames_used(), used);
+  EXPECT_EQ(calibrator.frames_seen(), 202);
+}
+
 // The real clips, when ../shared/data holds them: the vanishing point
 // within 6 px of the reference camera's.
 absl::StatusOr<CalibrationResult> CalibrateFiles(const std::vector<std::string>& files,

@@ -188,5 +188,59 @@ TEST(HttpEndpointTest, PerCameraSeriesWhenAskedFor) {
   EXPECT_EQ(scrape.body.find("camera=\"rear\""), std::string::npos);
 }
 
+// Online calibration: a session configured 1 degree off the camera that
+// renders its frames follows the true pitch when it auto-calibrates, reports
+// it in GetSession and exports the drift; a session that does not keep its
+// camera.
+TEST(HttpEndpointTest, AutoCalibratingSessionFollowsTheCameraAndExportsItsDrift) {
+  TestServer server(WithMetrics());
+  ASSERT_FALSE(HasFailure());
+  const lane::CameraModel truth = ScaledCamera(0.5, 14.0);
+  v1::SessionConfig config = SessionConfigFor(ScaledCamera(0.5, 13.0));
+  server.CreateSession("fixed", config);
+  config.mutable_calibration()->set_auto_calibrate(true);
+  server.CreateSession("drift", config);
+  constexpr int kFrames = 150;
+  for (const char* id : {"fixed", "drift"}) {
+    std::vector<v1::FrameRequest> requests;
+    for (int i = 0; i < kFrames; ++i) {
+      requests.push_back(JpegRequest(id, i, EncodeJpeg(RoadFrame(truth, kLineOffsets, i + 1))));
+    }
+    const StreamResult result = RunStream(server.stub(), requests);
+    ASSERT_TRUE(result.status.ok()) << result.status.error_message();
+    ASSERT_EQ(result.responses.size(), static_cast<size_t>(kFrames));
+  }
+  auto get = [&](const std::string& id) {
+    grpc::ClientContext context;
+    v1::GetSessionRequest request;
+    request.set_camera_id(id);
+    v1::Session session;
+    EXPECT_TRUE(server.stub().GetSession(&context, request, &session).ok());
+    return session;
+  };
+  const v1::Session drift = get("drift");
+  EXPECT_TRUE(drift.config().calibration().auto_calibrate());
+  EXPECT_NEAR(drift.calibration().drift_pitch_deg(), 1.0, 0.3) << drift.calibration().DebugString();
+  EXPECT_NEAR(drift.calibration().pitch_deg(), 14.0, 0.3);
+  EXPECT_NEAR(drift.calibration().drift_yaw_deg(), 0.0, 0.3);
+  EXPECT_GT(drift.calibration().frames_used(), kFrames / 2u);
+  EXPECT_GE(drift.calibration().rederived(), 3u);
+  EXPECT_GT(drift.calibration().confidence(), 0.5);
+  // The configured camera is what the session was created with.
+  EXPECT_DOUBLE_EQ(drift.config().camera().pitch_deg(), 13.0);
+  const v1::Session fixed = get("fixed");
+  EXPECT_FALSE(fixed.config().calibration().auto_calibrate());
+  EXPECT_EQ(fixed.calibration().frames_used(), 0u);
+  EXPECT_DOUBLE_EQ(fixed.calibration().pitch_deg(), 13.0);
+
+  const HttpResponse scrape = HttpFetch(server.server().metrics_port(), "/metrics");
+  ASSERT_EQ(scrape.status, 200);
+  EXPECT_NEAR(SampleValue(scrape.body,
+                          "lanesvc_calibration_drift_degrees{camera=\"drift\",axis=\"pitch\"}"),
+              drift.calibration().drift_pitch_deg(), 1e-6)
+      << scrape.body;
+  EXPECT_EQ(scrape.body.find("camera=\"fixed\""), std::string::npos);
+}
+
 }  // namespace
 }  // namespace lane::server::testing

@@ -120,8 +120,10 @@ class CameraCalibrator {
   // overlays.
   absl::StatusOr<FrameVanishingPoint> AddSecondPass(const cv::Mat& frame,
                                                     std::vector<ImageSegment>* segments = nullptr);
-  // FAILED_PRECONDITION when no frame of pass 2 gave a point.
+  // FAILED_PRECONDITION when fewer than kMinFramesUsed frames of pass 2
+  // gave a point.
   absl::StatusOr<CalibrationResult> Finish() const;
+  static constexpr int kMinFramesUsed = 3;
 
   // The camera before pitch and yaw: focal length, principal point, height
   // and size (valid after the first frame).

@@ -1,0 +1,50 @@
+#include "session.h"
+
+namespace lane::server {
+
+std::shared_ptr<const lane::Detector> Session::CurrentDetector() const {
+  if (calibration.auto_calibrate) {
+    std::lock_guard<std::mutex> lock(refine_mu_);
+    if (refined_) return refined_;
+  }
+  // Not owned: the caller holds the session, which holds `detector`.
+  return std::shared_ptr<const lane::Detector>(std::shared_ptr<const lane::Detector>(), &detector);
+}
+
+void Session::ObserveLanes(const std::vector<lane::Lane>& lanes) const {
+  if (!calibration.auto_calibrate) return;
+  lane::CameraModel camera;
+  uint64_t generation = 0;
+  {
+    std::lock_guard<std::mutex> lock(refine_mu_);
+    if (!calibrator_.Observe(lanes)) return;
+    camera = calibrator_.camera();
+    generation = ++refine_generation_;
+  }
+  // Expensive (the IPM maps): outside the lock. The top view is re-derived
+  // from the same ipm options (a ground view keeps its rectangle on the
+  // road; an image ROI stays where it is in the image).
+  absl::StatusOr<lane::Detector> rebuilt =
+      lane::Detector::Create(camera, config.ipm, config.detector);
+  if (!rebuilt.ok()) return;  // keeps the detector in use
+  auto shared = std::make_shared<const lane::Detector>(*std::move(rebuilt));
+  std::lock_guard<std::mutex> lock(refine_mu_);
+  // A later re-derivation may have finished first.
+  if (generation == refine_generation_) refined_ = std::move(shared);
+}
+
+CalibrationSnapshot Session::Calibration() const {
+  std::lock_guard<std::mutex> lock(refine_mu_);
+  CalibrationSnapshot s;
+  s.camera = calibrator_.camera();
+  s.confidence = calibrator_.confidence();
+  s.uncertainty_deg = calibrator_.frames_used() > 0 ? calibrator_.uncertainty_deg() : 0.0;
+  s.frames_seen = static_cast<uint64_t>(calibrator_.frames_seen());
+  s.frames_used = static_cast<uint64_t>(calibrator_.frames_used());
+  s.drift_pitch_deg = calibrator_.drift_pitch_deg();
+  s.drift_yaw_deg = calibrator_.drift_yaw_deg();
+  s.rederived = static_cast<uint32_t>(calibrator_.rederived());
+  return s;
+}
+
+}  // namespace lane::server

@@ -1,0 +1,48 @@
+# `lane calibrate` end to end: frames rendered through the synthetic camera
+# (pitch 14, yaw 0) give a config whose camera is that one again; bad input
+# fails cleanly.
+include(${CMAKE_CURRENT_LIST_DIR}/cli_test_common.cmake)
+
+run(0 render render --config ${CONFIG} --count 40 --seed 7 --output ${OUT}/frames)
+run(0 calibrate calibrate ${OUT}/frames --height-m 2.1798 --focal-px 344.2161
+    --principal-point 317.9034,256.5352 --output ${OUT}/calibrated.json
+    --overlay ${OUT}/check.png)
+expect_contains("${calibrate_out}" "vanishing point" "calibrate output")
+expect_contains("${calibrate_out}" "(given)" "calibrate output: the focal length was given")
+if(NOT EXISTS ${OUT}/check.png)
+  message(FATAL_ERROR "lane calibrate --overlay wrote no ${OUT}/check.png")
+endif()
+# The written config loads (its header is comments) and holds the camera.
+run(0 show config --config ${OUT}/calibrated.json)
+string(JSON pitch GET "${show_out}" camera pitch_deg)
+string(JSON yaw GET "${show_out}" camera yaw_deg)
+string(JSON view GET "${show_out}" ipm view)
+if(pitch LESS 13.7 OR pitch GREATER 14.3 OR yaw LESS -0.3 OR yaw GREATER 0.3)
+  message(FATAL_ERROR "calibrated pitch ${pitch}, yaw ${yaw}: expected 14 +- 0.3 and 0 +- 0.3\n"
+                      "${calibrate_out}")
+endif()
+if(NOT view STREQUAL "ground")
+  message(FATAL_ERROR "calibrated config's view is ${view}, expected ground")
+endif()
+# ... and detects lanes on the rendered frames.
+run(0 detect detect --config ${OUT}/calibrated.json --output ${OUT}/lanes.jsonl --quiet
+    ${OUT}/frames)
+file(STRINGS ${OUT}/lanes.jsonl records)
+list(LENGTH records n)
+if(NOT n EQUAL 40)
+  message(FATAL_ERROR "lane detect with the calibrated config: ${n} records, expected 40")
+endif()
+
+# Frames without markings: a clear failure, not a config.
+file(MAKE_DIRECTORY ${OUT}/blank)
+run(0 blank_render render --config ${CONFIG} --count 1 --output ${OUT}/one)
+foreach(i RANGE 1 10)
+  configure_file(${OUT}/one/000000.png ${OUT}/blank/b${i}.png COPYONLY)
+endforeach()
+run(1 blank calibrate ${OUT}/blank --height-m 2.0 --output ${OUT}/blank.json)
+if(EXISTS ${OUT}/blank.json)
+  message(FATAL_ERROR "lane calibrate wrote a config from ten copies of one frame")
+endif()
+# No height: a usage error.
+run(2 noheight calibrate ${OUT}/frames --output ${OUT}/x.json)
+run(2 badpp calibrate ${OUT}/frames --height-m 1.5 --principal-point 3 --output ${OUT}/x.json)
