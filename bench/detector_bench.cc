@@ -41,6 +41,7 @@
 #include "lane/decode/image_decoder.h"
 #include "lane/detector.h"
 #include "lane/synthetic.h"
+#include "lane/tracking.h"
 
 namespace {
 
@@ -337,6 +338,41 @@ void BM_DetectClip(benchmark::State& state) {
   state.SetLabel(set->name);
 }
 BENCHMARK(BM_DetectClip)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+// What tracking adds to a frame (docs/tracking.md): each lane's colour from
+// the image, then the tracker and the ego lane, over the clip's frames in
+// order (their detections made beforehand). The counter detect_ms is the
+// mean detection time of the same frames, measured in the same run: the
+// benchmark's time over it is tracking's share.
+void BM_TrackClip(benchmark::State& state) {
+  ClipSet* set = GetClip(static_cast<int>(state.range(0)));
+  if (set == nullptr) {
+    state.SkipWithError("clip not present (../shared/data)");
+    return;
+  }
+  std::vector<lane::Detection> detections;
+  double detect_ms = 0;
+  for (const cv::Mat& f : set->frames) {
+    detections.push_back(*set->detector->Detect(f));
+    detect_ms += detections.back().timings.total_ms;
+  }
+  detect_ms /= static_cast<double>(detections.size());
+  const lane::CameraModel& camera = set->detector->ipm().camera();
+  lane::SequenceTracker tracker(camera);
+  size_t i = 0;
+  double t = 0;
+  for (auto _ : state) {
+    const size_t k = i++ % detections.size();
+    if (k == 0) tracker.Reset();
+    std::vector<lane::Lane> lanes = detections[k].lanes;
+    for (lane::Lane& lane : lanes) lane.color = lane::MarkingColorOf(set->frames[k], lane, camera);
+    auto ego = tracker.Track(lanes, t += 1.0 / 15);
+    benchmark::DoNotOptimize(ego);
+  }
+  state.counters["detect_ms"] = detect_ms;
+  state.SetLabel(set->name);
+}
+BENCHMARK(BM_TrackClip)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 // Decode + detect of the clips' frames as JPEGs (driver161's own files,
 // cordova1's PNGs encoded at q90), the whole frame (range(1) = 0, DecodeImage:

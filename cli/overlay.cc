@@ -113,8 +113,20 @@ cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
                 cv::LINE_AA, kShift);
 
   for (size_t i = 0; i < detection.lanes.size(); ++i) {
-    DrawBezier(canvas, detection.lanes[i].image, LaneColour(static_cast<int>(i)),
+    const lane::Lane& lane = detection.lanes[i];
+    DrawBezier(canvas, lane.image, LaneColour(static_cast<int>(i)),
                [](const Eigen::Vector2d& p) { return p; });
+    if (lane.id >= 0) {
+      // Tracked: "#id colour" at the lane's lower end, '?' until confirmed.
+      const Eigen::Vector2d& low =
+          lane.image[0].y() > lane.image[3].y() ? lane.image[0] : lane.image[3];
+      const int x = std::clamp(static_cast<int>(low.x()), 0, std::max(0, canvas.cols - 80));
+      const int y = std::clamp(static_cast<int>(low.y()) - canvas.rows / 12, 0, canvas.rows - 1);
+      DrawCaption(canvas,
+                  absl::StrCat("#", lane.id, lane.confirmed ? " " : "? ",
+                               lane::MarkingColorName(lane.color)),
+                  x, y, LaneColour(static_cast<int>(i)));
+    }
   }
   // Caption: the frame's name; the mode, the lane count and the lanes'
   // scores in their colours; the details.
@@ -132,7 +144,17 @@ cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
     std::snprintf(score, sizeof(score), "%.1f", detection.lanes[i].score);
     at = DrawCaption(canvas, score, at.x, y, LaneColour(static_cast<int>(i)));
   }
-  if (!details.empty()) DrawCaption(canvas, details, margin, at.y);
+  if (!details.empty()) at.y = DrawCaption(canvas, details, margin, at.y).y;
+  if (detection.ego) {
+    const lane::EgoLane& e = *detection.ego;
+    char ego[160];
+    std::snprintf(ego, sizeof(ego),
+                  "ego: offset %+.2f m, width %.2f m, heading %+.1f deg, lanes #%d|#%d%s",
+                  e.offset_m, e.width_m, e.heading_deg, e.left_id, e.right_id,
+                  e.departing ? "  DEPARTING" : "");
+    DrawCaption(canvas, ego, margin, at.y,
+                e.departing ? cv::Scalar(0, 0, 255) : cv::Scalar(255, 255, 255));
+  }
   return canvas;
 }
 

@@ -37,10 +37,26 @@ Json Header(const std::string& frame, int width, int height, lane::Mode mode) {
 // Invalid UTF-8 (file names) would make dump() throw: replace it.
 std::string Dump(const Json& j) { return j.dump(-1, ' ', false, Json::error_handler_t::replace); }
 
+Json EgoJson(const std::optional<lane::EgoLane>& ego) {
+  if (!ego) return nullptr;
+  Json e = Json::object();
+  e["offset_m"] = Round(ego->offset_m, 1e3);
+  e["width_m"] = Round(ego->width_m, 1e3);
+  e["heading_deg"] = Round(ego->heading_deg, 1e3);
+  e["curvature_per_m"] = Round(ego->curvature_per_m, 1e6);
+  e["left_id"] = ego->left_id;
+  e["right_id"] = ego->right_id;
+  e["left_distance_m"] = Round(ego->left_distance_m, 1e3);
+  e["right_distance_m"] = Round(ego->right_distance_m, 1e3);
+  e["offset_rate_mps"] = Round(ego->offset_rate_mps, 1e3);
+  e["departing"] = ego->departing;
+  return e;
+}
+
 }  // namespace
 
 std::string DetectionJsonLine(const std::string& frame, int width, int height, lane::Mode mode,
-                              const lane::Detection& detection, double decode_ms) {
+                              const lane::Detection& detection, double decode_ms, bool tracked) {
   Json out = Header(frame, width, height, mode);
   Json lanes = Json::array();
   for (const lane::Lane& lane : detection.lanes) {
@@ -49,9 +65,15 @@ std::string DetectionJsonLine(const std::string& frame, int width, int height, l
     l["ipm"] = Points(lane.ipm, 1e3);
     l["ground"] = Points(lane.ground, 1e4);
     l["score"] = Round(lane.score, 1e4);
+    if (tracked) {
+      l["id"] = lane.id;
+      l["confirmed"] = lane.confirmed;
+      l["color"] = lane::MarkingColorName(lane.color);
+    }
     lanes.push_back(std::move(l));
   }
   out["lanes"] = std::move(lanes);
+  if (tracked) out["ego"] = EgoJson(detection.ego);
   const lane::StageTimings& t = detection.timings;
   Json timing = Json::object();
   timing["decode"] = Round(decode_ms, 1e3);

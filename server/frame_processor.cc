@@ -1,9 +1,12 @@
 #include "frame_processor.h"
 
 #include <exception>
+#include <optional>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
+#include "lane/tracking.h"
 #include "session_proto.h"
 #include "wire/config_proto.h"
 #include "wire/detection_proto.h"
@@ -37,7 +40,7 @@ void StartResponse(const v1::FrameRequest& request, const std::string& camera_id
 
 absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& session,
                           const FrameLimits& limits, const Arrival& arrival, Metrics& metrics,
-                          v1::FrameResponse* response) {
+                          v1::FrameResponse* response, bool colors) {
   const SteadyTime start = std::chrono::steady_clock::now();
   const double queue_wait_ms = MillisecondsBetween(arrival.steady, start);
   metrics.ObserveQueueWait(queue_wait_ms * 1e-3);
@@ -70,6 +73,13 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
       absl::StatusOr<lane::Detection> detection = detector->Detect(*frame);
       if (detection.ok()) {
         session.ObserveLanes(detection->lanes);
+        if (colors) {
+          const lane::FrameNeeds& needs = detector->Needs();
+          for (lane::Lane& lane : detection->lanes) {
+            lane.color = lane::MarkingColorOf(*frame, lane, detector->ipm().camera(), needs.top,
+                                              needs.bottom);
+          }
+        }
         wire::LanesToProto(*detection, response);
         wire::TimingsToProto(detection->timings, timings);
         metrics.ObserveDetectorStages(detection->timings);
@@ -91,6 +101,15 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
   metrics.CountCameraFrame(session.camera_id, result, static_cast<size_t>(response->lanes_size()));
   metrics.ObserveFrameLatency(SecondsSince(arrival.steady));
   return status;
+}
+
+void TrackFrame(const Session& session, v1::FrameResponse* response) {
+  if (response->status().code() != v1::FRAME_CODE_OK) return;
+  std::vector<lane::Lane> lanes = wire::LanesFromProto(*response);
+  std::optional<double> time_s;
+  if (response->capture_time_unix_ns() > 0) time_s = response->capture_time_unix_ns() * 1e-9;
+  const std::optional<lane::EgoLane> ego = session.Track(lanes, time_s);
+  wire::TrackingToProto(lanes, ego, response);
 }
 
 void AnswerUnprocessed(const absl::Status& status, Metrics& metrics, v1::FrameResponse* response) {

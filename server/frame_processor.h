@@ -46,9 +46,16 @@ struct FrameLimits {
 // not an error of the call: its status goes into the response and is also
 // returned. Records queue wait, stage durations, frame latency and the
 // frame's result in `metrics`.
+// With `colors` (a tracked frame), each lane's paint colour in this frame
+// goes into the response for TrackFrame's vote.
 absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& session,
                           const FrameLimits& limits, const Arrival& arrival, Metrics& metrics,
-                          v1::FrameResponse* response);
+                          v1::FrameResponse* response, bool colors = false);
+
+// In frame order, after ProcessFrame: an OK frame's lanes through the
+// session's tracker: ids, confirmed flags, voted colours and the ego lane
+// into the response. Time: the frame's capture time when it has one.
+void TrackFrame(const Session& session, v1::FrameResponse* response);
 
 // Answers a frame without processing it (dropped, or refused before
 // processing): sets the status and counts the result.

@@ -160,7 +160,7 @@ void FrameStream::Process(const std::shared_ptr<Slot>& slot) {
     if (slot->session != nullptr) {
       // A bad frame's status is in its response; the stream goes on.
       ProcessFrame(request, *slot->session, deps_.limits, slot->arrival, deps_.metrics,
-                   &slot->response)
+                   &slot->response, slot->session->TracksStreams())
           .IgnoreError();
     }
   }
@@ -263,6 +263,10 @@ void FrameStream::MaybeWriteLocked() {
     if (front.skipped) {
       PopFrontLocked();
       continue;
+    }
+    // Tracking sees the frames in the stream's order.
+    if (front.session != nullptr && front.session->TracksStreams()) {
+      TrackFrame(*front.session, &front.response);
     }
     front.response.set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
     if (absl::Status s = SerializeMessage(front.response, &front.wire); !s.ok()) {

@@ -217,8 +217,10 @@ grpc::ServerUnaryReactor* LaneServiceImpl::Detect(grpc::CallbackServerContext* c
               }
               if (session != nullptr) {
                 StartResponse(request, request.camera_id(), arrival, response);
+                const bool track = session->TracksUnary();
                 status = ProcessFrame(request, *session, options_.frame_limits, arrival, metrics_,
-                                      response);
+                                      response, track);
+                if (track) TrackFrame(*session, response);
                 response->set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
               }
               metrics_.FrameAnswered();

@@ -177,9 +177,11 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
   }
 
   if (default_config.ok() && !options.default_config_path.empty()) {
-    absl::StatusOr<SessionRegistry::CreateResult> created = server->sessions_->Create(
-        options.default_camera_id,
-        SessionSpec{*default_config, StreamPolicy{}, DecodePolicy{}, CalibrationPolicy{}}, false);
+    absl::StatusOr<SessionRegistry::CreateResult> created =
+        server->sessions_->Create(options.default_camera_id,
+                                  SessionSpec{*default_config, StreamPolicy{}, DecodePolicy{},
+                                              CalibrationPolicy{}, TrackingPolicy{}},
+                                  false);
     if (!created.ok()) {
       return absl::InvalidArgumentError(absl::StrCat(
           "--default_config ", options.default_config_path, ": ", created.status().message()));

@@ -33,6 +33,12 @@ void Session::ObserveLanes(const std::vector<lane::Lane>& lanes) const {
   if (generation == refine_generation_) refined_ = std::move(shared);
 }
 
+std::optional<lane::EgoLane> Session::Track(std::vector<lane::Lane>& lanes,
+                                            std::optional<double> time_s) const {
+  std::lock_guard<std::mutex> lock(track_mu_);
+  return tracker_.Track(lanes, time_s);
+}
+
 CalibrationSnapshot Session::Calibration() const {
   std::lock_guard<std::mutex> lock(refine_mu_);
   CalibrationSnapshot s;

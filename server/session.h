@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -18,6 +19,7 @@
 #include "lane/calibration.h"
 #include "lane/config.h"
 #include "lane/detector.h"
+#include "lane/tracking.h"
 
 namespace lane::server {
 
@@ -60,12 +62,24 @@ struct CalibrationPolicy {
   bool operator!=(const CalibrationPolicy& o) const { return !(*this == o); }
 };
 
+// When a camera's frames are tracked (TrackingOptions).
+struct TrackingPolicy {
+  bool disabled = false;  // StreamFrames is tracked unless this is set
+  bool unary = false;     // also Detect
+
+  bool operator==(const TrackingPolicy& o) const {
+    return disabled == o.disabled && unary == o.unary;
+  }
+  bool operator!=(const TrackingPolicy& o) const { return !(*this == o); }
+};
+
 // What CreateSession (or a stream's first frame) asks for.
 struct SessionSpec {
   lane::Config config;
   StreamPolicy stream;
   DecodePolicy decode;
   CalibrationPolicy calibration;
+  TrackingPolicy tracking;
 };
 
 // A session's camera now (CalibrationState in the proto).
@@ -84,7 +98,7 @@ struct Session {
   Session(std::string camera_id_in, uint64_t version_in, lane::Config config_in,
           std::string config_json_in, StreamPolicy stream_in, DecodePolicy decode_in,
           lane::Detector detector_in, absl::Time create_time_in,
-          CalibrationPolicy calibration_in = {})
+          CalibrationPolicy calibration_in = {}, TrackingPolicy tracking_in = {})
       : camera_id(std::move(camera_id_in)),
         version(version_in),
         config(std::move(config_in)),
@@ -92,9 +106,11 @@ struct Session {
         stream(stream_in),
         decode(decode_in),
         calibration(calibration_in),
+        tracking(tracking_in),
         detector(std::move(detector_in)),
         create_time(create_time_in),
-        calibrator_(config.camera) {}
+        calibrator_(config.camera),
+        tracker_(config.camera) {}
 
   const std::string camera_id;
   // Unique within the process; new on every create and replace.
@@ -106,6 +122,7 @@ struct Session {
   const StreamPolicy stream;
   const DecodePolicy decode;
   const CalibrationPolicy calibration;
+  const TrackingPolicy tracking;
   // Built from `config`; frames use CurrentDetector().
   const lane::Detector detector;
   const absl::Time create_time;
@@ -121,11 +138,21 @@ struct Session {
   void ObserveLanes(const std::vector<lane::Lane>& lanes) const;
   CalibrationSnapshot Calibration() const;
 
+  bool TracksStreams() const { return !tracking.disabled; }
+  bool TracksUnary() const { return !tracking.disabled && tracking.unary; }
+  // One frame's lanes, in frame order, through the session's tracker
+  // (lane::SequenceTracker): ids, confirmed flags and voted colours set,
+  // the ego lane returned. `time_s`: the capture time, if the frame had one.
+  std::optional<lane::EgoLane> Track(std::vector<lane::Lane>& lanes,
+                                     std::optional<double> time_s) const;
+
  private:
   mutable std::mutex refine_mu_;
   mutable lane::OnlineCalibrator calibrator_;              // guarded by refine_mu_
   mutable std::shared_ptr<const lane::Detector> refined_;  // guarded by refine_mu_
   mutable uint64_t refine_generation_ = 0;                 // guarded by refine_mu_
+  mutable std::mutex track_mu_;
+  mutable lane::SequenceTracker tracker_;  // guarded by track_mu_
 };
 
 }  // namespace lane::server

@@ -43,7 +43,10 @@ absl::StatusOr<SessionSpec> SessionSpecFromProto(const v1::SessionConfig& proto)
   decode.full_decode = proto.decode().full_decode();
   CalibrationPolicy calibration;
   calibration.auto_calibrate = proto.calibration().auto_calibrate();
-  return SessionSpec{*std::move(config), *stream, decode, calibration};
+  TrackingPolicy tracking;
+  tracking.disabled = proto.tracking().disabled();
+  tracking.unary = proto.tracking().unary();
+  return SessionSpec{*std::move(config), *stream, decode, calibration, tracking};
 }
 
 absl::StatusOr<SessionRegistry::CreateResult> CreateSessionFromProto(
@@ -67,6 +70,8 @@ void SessionToProto(const Session& session, absl::Time last_used, v1::Session* o
   out->set_frames_processed(session.frames_processed.load(std::memory_order_relaxed));
   out->mutable_config()->mutable_calibration()->set_auto_calibrate(
       session.calibration.auto_calibrate);
+  out->mutable_config()->mutable_tracking()->set_disabled(session.tracking.disabled);
+  out->mutable_config()->mutable_tracking()->set_unary(session.tracking.unary);
   const CalibrationSnapshot c = session.Calibration();
   v1::CalibrationState* state = out->mutable_calibration();
   state->set_pitch_deg(c.camera.pitch_deg);

@@ -60,7 +60,8 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
     if (it != sessions_.end()) {
       const Session& existing = *it->second.session;
       if (existing.config_json == config_json && existing.stream == stream &&
-          existing.decode == spec.decode && existing.calibration == spec.calibration) {
+          existing.decode == spec.decode && existing.calibration == spec.calibration &&
+          existing.tracking == spec.tracking) {
         it->second.last_used = now;
         return it->second.session;
       }
@@ -103,9 +104,9 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
   }
   if (old != sessions_.end()) replaced = std::move(old->second.session);
 
-  auto session = std::make_shared<const Session>(camera_id, next_version_++, spec.config,
-                                                 std::move(config_json), stream, spec.decode,
-                                                 *std::move(detector), now, spec.calibration);
+  auto session = std::make_shared<const Session>(
+      camera_id, next_version_++, spec.config, std::move(config_json), stream, spec.decode,
+      *std::move(detector), now, spec.calibration, spec.tracking);
   memory_bytes_ = held + SessionBytes(*session);
   const bool inserted = replaced == nullptr;
   sessions_.insert_or_assign(camera_id, Entry{session, now});

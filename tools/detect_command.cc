@@ -25,6 +25,7 @@
 #include "commands.h"
 #include "lane/config.h"
 #include "lane/detector.h"
+#include "lane/tracking.h"
 
 namespace lane_tools {
 namespace {
@@ -51,6 +52,7 @@ struct DetectFlags {
   std::optional<std::string> overlay;
   std::optional<std::string> overlay_video;
   bool full_decode = false;
+  bool track = false;
   bool quiet = false;
   bool no_progress = false;
   ReadFlags read;
@@ -117,6 +119,15 @@ class DetectRun {
         out_(out),
         overlay_dir_(std::move(overlay_dir)) {}
 
+  // Frames in the given order are one camera's: lanes get ids, colours and
+  // the ego lane (lane/tracking.h). `fps`: their rate (0: 30/s).
+  void EnableTracking(const lane::CameraModel& camera, double fps) {
+    lane::LaneTrackingOptions options;
+    if (fps > 0) options.default_fps = fps;
+    tracker_.emplace(camera, options);
+    camera_ = camera;
+  }
+
   void Process(const InputFrame& frame) {
     ++frames_;
     std::string error = frame.error;
@@ -151,8 +162,15 @@ class DetectRun {
       out_.flush();
       return;
     }
+    if (tracker_) {
+      const lane::FrameNeeds& needs = detector_.Needs();
+      for (lane::Lane& lane : detection->lanes) {
+        lane.color = lane::MarkingColorOf(frame.bgr, lane, camera_, needs.top, needs.bottom);
+      }
+      detection->ego = tracker_->Track(detection->lanes, std::nullopt);
+    }
     out_ << DetectionJsonLine(frame.name, frame.bgr.cols, frame.bgr.rows, mode_, *detection,
-                              frame.decode_ms)
+                              frame.decode_ms, tracker_.has_value())
          << '\n';
     out_.flush();
     total_lanes_ += static_cast<long>(detection->lanes.size());
@@ -239,6 +257,8 @@ class DetectRun {
   long total_lanes_ = 0;
   std::vector<double> total_ms_;
   std::set<std::string> used_stems_;
+  std::optional<lane::SequenceTracker> tracker_;
+  lane::CameraModel camera_;
 };
 
 int RunDetect(const DetectFlags& flags) {
@@ -264,6 +284,7 @@ int RunDetect(const DetectFlags& flags) {
   }
   DetectRun run(*detector, config, out, flags.overlay.value_or(""), flags.overlay_video,
                 flags.read.fps, flags.quiet);
+  if (flags.track) run.EnableTracking(config.camera, flags.read.fps);
   FrameReader reader(flags.inputs, flags.read.Options());
   // JPEG frames are decoded only in the rows and channel the detector
   // reads (the same lanes), unless asked not to; overlays draw on the whole
@@ -322,6 +343,9 @@ Command AddDetectCommand(CLI::App& lane) {
                 "decode whole frames with OpenCV (by default JPEG frames are decoded only in "
                 "the rows and channel the detector reads, which gives the same lanes)");
   AddReadFlags(app, &flags->read);
+  app->add_flag("--track", flags->track,
+                "the frames, in the given order, are one camera's: lanes get a stable id, "
+                "confirmed and colour, frames the ego lane (docs/tracking.md)");
   app->add_flag("--quiet,-q", flags->quiet,
                 "print only errors on stderr: no top-view line, progress or summary");
   app->add_flag("--no-progress", flags->no_progress,

@@ -88,7 +88,7 @@ std::vector<std::string> ProtoSchemaMismatches() {
   SchemaChecker checker(v1::SessionConfig::descriptor(), &problems);
   const lane::Config config;
   VisitFields(config, checker);
-  checker.Finish({"config_json", "stream", "decode", "calibration"});
+  checker.Finish({"config_json", "stream", "decode", "calibration", "tracking"});
   return problems;
 }
 

@@ -12,6 +12,63 @@ void BezierToProto(const std::array<Eigen::Vector2d, 4>& points, v1::Bezier* out
   }
 }
 
+v1::MarkingColor ColorToProto(lane::MarkingColor c) {
+  switch (c) {
+    case lane::MarkingColor::kWhite:
+      return v1::MARKING_COLOR_WHITE;
+    case lane::MarkingColor::kYellow:
+      return v1::MARKING_COLOR_YELLOW;
+    case lane::MarkingColor::kUnknown:
+      break;
+  }
+  return v1::MARKING_COLOR_UNKNOWN;
+}
+
+lane::MarkingColor ColorFromProto(v1::MarkingColor c) {
+  switch (c) {
+    case v1::MARKING_COLOR_WHITE:
+      return lane::MarkingColor::kWhite;
+    case v1::MARKING_COLOR_YELLOW:
+      return lane::MarkingColor::kYellow;
+    default:
+      return lane::MarkingColor::kUnknown;
+  }
+}
+
+std::array<Eigen::Vector2d, 4> BezierFromProto(const v1::Bezier& b) {
+  std::array<Eigen::Vector2d, 4> out;
+  for (int k = 0; k < 4; ++k) {
+    out[k] = k < b.control_points_size()
+                 ? Eigen::Vector2d(b.control_points(k).x(), b.control_points(k).y())
+                 : Eigen::Vector2d::Zero();
+  }
+  return out;
+}
+
+void IdentityToProto(const lane::Lane& lane, v1::Lane* l) {
+  l->set_id(lane.id > 0 ? lane.id : 0);
+  l->set_confirmed(lane.confirmed);
+  l->set_color(ColorToProto(lane.color));
+}
+
+void EgoToProto(const std::optional<lane::EgoLane>& ego, v1::FrameResponse* out) {
+  if (!ego) {
+    out->clear_ego();
+    return;
+  }
+  v1::EgoLane* e = out->mutable_ego();
+  e->set_offset_m(ego->offset_m);
+  e->set_width_m(ego->width_m);
+  e->set_heading_deg(ego->heading_deg);
+  e->set_curvature_per_m(ego->curvature_per_m);
+  e->set_left_lane_id(ego->left_id > 0 ? ego->left_id : 0);
+  e->set_right_lane_id(ego->right_id > 0 ? ego->right_id : 0);
+  e->set_left_distance_m(ego->left_distance_m);
+  e->set_right_distance_m(ego->right_distance_m);
+  e->set_offset_rate_mps(ego->offset_rate_mps);
+  e->set_departing(ego->departing);
+}
+
 }  // namespace
 
 void LanesToProto(const lane::Detection& detection, v1::FrameResponse* out) {
@@ -22,7 +79,33 @@ void LanesToProto(const lane::Detection& detection, v1::FrameResponse* out) {
     BezierToProto(lane.ipm, l->mutable_ipm());
     BezierToProto(lane.ground, l->mutable_ground());
     l->set_score(lane.score);
+    IdentityToProto(lane, l);
   }
+  if (detection.ego) EgoToProto(detection.ego, out);
+}
+
+std::vector<lane::Lane> LanesFromProto(const v1::FrameResponse& response) {
+  std::vector<lane::Lane> lanes;
+  for (const v1::Lane& l : response.lanes()) {
+    lane::Lane lane;
+    lane.image = BezierFromProto(l.image());
+    lane.ipm = BezierFromProto(l.ipm());
+    lane.ground = BezierFromProto(l.ground());
+    lane.score = l.score();
+    lane.id = l.id() > 0 ? l.id() : -1;
+    lane.confirmed = l.confirmed();
+    lane.color = ColorFromProto(l.color());
+    lanes.push_back(lane);
+  }
+  return lanes;
+}
+
+void TrackingToProto(const std::vector<lane::Lane>& lanes, const std::optional<lane::EgoLane>& ego,
+                     v1::FrameResponse* out) {
+  for (int i = 0; i < out->lanes_size() && static_cast<size_t>(i) < lanes.size(); ++i) {
+    IdentityToProto(lanes[static_cast<size_t>(i)], out->mutable_lanes(i));
+  }
+  EgoToProto(ego, out);
 }
 
 void TimingsToProto(const lane::StageTimings& timings, v1::StageTimings* out) {

@@ -3,12 +3,23 @@
 #ifndef LANE_WIRE_DETECTION_PROTO_H_
 #define LANE_WIRE_DETECTION_PROTO_H_
 
+#include <optional>
+#include <vector>
+
 #include "lane/detector.h"
 #include "lane/v1/lane_service.pb.h"
 
 namespace lane::wire {
 
+// Lanes with their id, confirmed flag and colour; the ego lane when set.
 void LanesToProto(const lane::Detection& detection, v1::FrameResponse* out);
+// The lanes of a response back (control points, score, id, confirmed,
+// colour).
+std::vector<lane::Lane> LanesFromProto(const v1::FrameResponse& response);
+// Tracking's results into a response whose lanes are `lanes` (same order):
+// id, confirmed, colour, and the ego lane (cleared when none).
+void TrackingToProto(const std::vector<lane::Lane>& lanes, const std::optional<lane::EgoLane>& ego,
+                     v1::FrameResponse* out);
 // The detector's stage timings (milliseconds) into `out`.
 void TimingsToProto(const lane::StageTimings& timings, v1::StageTimings* out);
 

@@ -28,6 +28,18 @@ std::optional<Mode> ParseMode(const std::string& name) {
   return std::nullopt;
 }
 
+const char* MarkingColorName(MarkingColor color) {
+  switch (color) {
+    case MarkingColor::kWhite:
+      return "white";
+    case MarkingColor::kYellow:
+      return "yellow";
+    case MarkingColor::kUnknown:
+      break;
+  }
+  return "unknown";
+}
+
 const char* ChannelName(Channel channel) {
   switch (channel) {
     case Channel::kRed:

@@ -65,8 +65,9 @@ struct DetectorOptions {
   absl::Status Validate() const;
 };
 
-// Room for later work: lane identity across frames and marking type.
-enum class LaneType { kUnknown, kSolidWhite, kDashedWhite, kSolidYellow, kDashedYellow, kDouble };
+// A marking's paint colour (lane/tracking.h, MarkingColorOf).
+enum class MarkingColor { kUnknown, kWhite, kYellow };
+const char* MarkingColorName(MarkingColor color);  // "unknown", "white", "yellow"
 
 struct Lane {
   // Cubic Bezier control points of the same boundary in three frames:
@@ -74,8 +75,32 @@ struct Lane {
   std::array<Eigen::Vector2d, 4> ipm;     // IPM pixels (may lie outside the view after extension)
   std::array<Eigen::Vector2d, 4> ground;  // metres: x lateral (right +), y ahead
   double score = 0;                       // spline score in the top view
-  int id = -1;                            // reserved: tracking id
-  LaneType type = LaneType::kUnknown;     // reserved: marking type
+  // With tracking (lane/tracking.h): the track's id (stable while tracked,
+  // never reused within a tracker), whether it is confirmed, and its colour.
+  // -1, false, unknown without.
+  int id = -1;
+  bool confirmed = false;
+  MarkingColor color = MarkingColor::kUnknown;
+};
+
+// The ego lane: the nearest boundary on each side of the camera.
+struct EgoLane {
+  double offset_m = 0;  // camera from the lane centre, positive to the right
+  double width_m = 0;
+  double heading_deg = 0;      // lane direction from the optical axis on the ground, right +
+  double curvature_per_m = 0;  // positive when the lane bends right
+  int left_index = -1;         // into the frame's lanes
+  int right_index = -1;
+  int left_id = -1;  // tracking ids, -1 without tracking
+  int right_id = -1;
+  double left_distance_m = 0;  // camera to each boundary, laterally
+  double right_distance_m = 0;
+  // Lateral speed of the camera in the lane (m/s, right +), from tracking;
+  // 0 without.
+  double offset_rate_mps = 0;
+  // Time to line crossing below departure_tlc_s while moving towards that
+  // line faster than departure_min_rate_mps.
+  bool departing = false;
 };
 
 // Wall time of each stage, milliseconds.
@@ -101,6 +126,8 @@ struct Intermediates {
 
 struct Detection {
   std::vector<Lane> lanes;  // sorted left to right at the bottom of the image
+  // With tracking (lane/tracking.h): the ego lane, or none when not found.
+  std::optional<EgoLane> ego;
   StageTimings timings;
   std::optional<Intermediates> debug;
 };

@@ -1,0 +1,191 @@
+// Video-aware detection: a per-camera tracker that gives lanes stable ids,
+// the ego lane's geometry with lane departure, and the marking colour
+// (docs/tracking.md).
+//
+// Each lane is held on the ground as x(y) = offset + heading y +
+// curvature y^2 / 2 (metres; x right, y ahead) with its extent in y. Each
+// frame the tracker predicts (a random walk whose noise grows with the
+// time since the last frame), associates the frame's lanes one to one with
+// the tracks by the mean lateral distance over their common extent (best
+// pairs first, within a gate), and updates the matched tracks with a Kalman
+// filter (Eigen). A track is confirmed once it has been seen in
+// confirm_frames frames and ends after max_misses frames without a match.
+// Ids are never reused within a tracker. A gap longer than max_gap_s, or
+// time going backwards (a new clip), resets it.
+#ifndef LANE_TRACKING_H_
+#define LANE_TRACKING_H_
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <deque>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "lane/camera.h"
+#include "lane/detector.h"
+
+namespace lane {
+
+// x(y) = offset + heading * y + curvature * y^2 / 2 over [y_near, y_far].
+struct GroundCurve {
+  Eigen::Vector3d coefficients = Eigen::Vector3d::Zero();  // offset, heading, curvature
+  double y_near = 0;
+  double y_far = 0;
+
+  double X(double y) const {
+    return coefficients(0) + coefficients(1) * y + 0.5 * coefficients(2) * y * y;
+  }
+};
+
+// Least-squares fit of a lane's ground Bezier (sampled); none when the lane
+// does not advance along the road.
+std::optional<GroundCurve> FitGroundCurve(const Lane& lane);
+
+struct LaneTrackingOptions {
+  // Confirmed after being seen in this many frames (k); ended after this
+  // many frames in a row without a match (m).
+  int confirm_frames = 3;
+  int max_misses = 5;
+  // Association gate: mean lateral distance over the common extent, metres
+  // (a third of a narrow lane: neighbours never match each other).
+  double gate_m = 0.9;
+  // A longer gap between frames, or time going backwards, resets.
+  double max_gap_s = 1.0;
+  // Frame interval when frames carry no time (the camera's rate).
+  double default_fps = 30.0;
+  // Process noise (standard deviation per sqrt(second)) of the random walk
+  // of offset (m), heading (rad) and curvature (1/m): a car weaving in its
+  // lane, steering, entering a bend.
+  double offset_noise = 0.5;
+  double heading_noise = 0.05;
+  double curvature_noise = 0.002;
+  // Measurement noise (standard deviation) of a detected lane's offset,
+  // heading and curvature.
+  double measured_offset_sd = 0.10;
+  double measured_heading_sd = 0.01;
+  double measured_curvature_sd = 0.002;
+};
+
+struct Track {
+  int id = 0;
+  bool confirmed = false;
+  int hits = 0;       // frames matched
+  int misses = 0;     // frames in a row without a match
+  GroundCurve curve;  // the filtered estimate
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  // Colour votes over the frames (MarkingColorOf): white and yellow.
+  double white_votes = 0;
+  double yellow_votes = 0;
+};
+
+// What the tracker says of one frame's lane.
+struct LaneIdentity {
+  int id = -1;
+  bool confirmed = false;
+  MarkingColor color = MarkingColor::kUnknown;  // voted over the track's frames
+  GroundCurve curve;                            // the track's filtered curve after this frame
+};
+
+class LaneTracker {
+ public:
+  explicit LaneTracker(LaneTrackingOptions options = {});
+
+  // One frame, in order. `time_s`: the frame's time (capture time), or
+  // none for the previous frame's time + 1 / default_fps. `colors`: each
+  // lane's colour in this frame (MarkingColorOf), or empty. Returns each
+  // lane's identity, in the order of `lanes`.
+  std::vector<LaneIdentity> Update(const std::vector<Lane>& lanes, std::optional<double> time_s,
+                                   const std::vector<MarkingColor>& colors = {});
+  void Reset();
+
+  const std::vector<Track>& tracks() const { return tracks_; }
+  int resets() const { return resets_; }
+  const LaneTrackingOptions& options() const { return options_; }
+  // The time of the last frame, seconds.
+  double time_s() const { return time_s_; }
+
+ private:
+  void Predict(double dt);
+
+  LaneTrackingOptions options_;
+  std::vector<Track> tracks_;
+  int next_id_ = 1;
+  bool started_ = false;
+  double time_s_ = 0;
+  int resets_ = 0;
+};
+
+struct EgoOptions {
+  double min_width_m = 2.2;
+  double max_width_m = 5.0;
+  double departure_tlc_s = 1.0;
+  double departure_min_rate_mps = 0.3;
+  // The lateral speed is the slope of the offset over this window (at
+  // least 4 frames spanning 0.2 s).
+  double rate_window_s = 0.7;
+};
+
+// The ego lane of one frame's lanes (none when no pair of boundaries one on
+// each side lies a plausible lane width apart). `camera` gives the optical
+// axis (yaw).
+std::optional<EgoLane> ComputeEgoLane(const std::vector<Lane>& lanes, const CameraModel& camera,
+                                      const EgoOptions& options = {});
+// The same from ground curves (one per lane, none for a lane that has
+// none); `ids` (may be empty) fill left_id and right_id.
+std::optional<EgoLane> EgoLaneOfCurves(const std::vector<std::optional<GroundCurve>>& curves,
+                                       const std::vector<int>& ids, const CameraModel& camera,
+                                       const EgoOptions& options = {});
+
+// Follows the ego lane over frames for its lateral speed and departure
+// warnings; a change of bounding lanes (a lane change) restarts the rate.
+class EgoTracker {
+ public:
+  explicit EgoTracker(EgoOptions options = {}) : options_(options) {}
+  // `ego` from ComputeEgoLane with its ids filled in; sets offset_rate_mps
+  // and departing.
+  void Update(std::optional<EgoLane>& ego, double time_s);
+  void Reset();
+
+ private:
+  EgoOptions options_;
+  std::deque<std::pair<double, double>> history_;  // (time, offset) in the window
+  int left_id_ = -1, right_id_ = -1;
+};
+
+// A marking's colour from the image along it: the paint's yellowness
+// ((R + G) / 2 - B) against the road's beside it, as a share of the paint's
+// brightness above the road, so that a white balance shifting both alike
+// cancels. Unknown when the paint is not brighter than the road (a road
+// edge, a worn marking) or the samples disagree.
+// Only rows [top_row, bottom_row) are read (a region-decoded frame); a
+// frame that is not BGR gives unknown.
+MarkingColor MarkingColorOf(const cv::Mat& bgr, const Lane& lane, const CameraModel& camera,
+                            int top_row = 0, int bottom_row = -1);
+
+// Everything video-aware for one camera, frame after frame: each lane's
+// colour in the frame must already be in Lane::color (MarkingColorOf);
+// Track replaces it by the track's vote and sets id and confirmed, and
+// returns the ego lane with its lateral speed and departure flag.
+class SequenceTracker {
+ public:
+  explicit SequenceTracker(const CameraModel& camera, LaneTrackingOptions lanes = {},
+                           EgoOptions ego = {})
+      : camera_(camera), lanes_(lanes), ego_options_(ego), ego_(ego) {}
+
+  std::optional<EgoLane> Track(std::vector<Lane>& lanes, std::optional<double> time_s);
+  void Reset();
+  const LaneTracker& lane_tracker() const { return lanes_; }
+
+ private:
+  CameraModel camera_;
+  LaneTracker lanes_;
+  EgoOptions ego_options_;
+  EgoTracker ego_;
+  int resets_seen_ = 0;
+};
+
+}  // namespace lane
+
+#endif  // LANE_TRACKING_H_

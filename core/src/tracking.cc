@@ -1,0 +1,361 @@
+#include "lane/tracking.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <tuple>
+
+#include "lane/bezier.h"
+
+namespace lane {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+Bezier GroundBezier(const Lane& lane) {
+  Bezier b;
+  for (int k = 0; k < 4; ++k) b.p[k] = lane.ground[k];
+  return b;
+}
+
+// Mean |a(y) - b(y)| over the common extent (or b's when they barely meet).
+double LateralDistance(const GroundCurve& a, const GroundCurve& b) {
+  double lo = std::max(a.y_near, b.y_near), hi = std::min(a.y_far, b.y_far);
+  if (hi - lo < 1.0) {
+    lo = b.y_near;
+    hi = b.y_far;
+  }
+  double sum = 0;
+  constexpr int kSamples = 8;
+  for (int i = 0; i < kSamples; ++i) {
+    const double y = lo + (hi - lo) * i / (kSamples - 1);
+    sum += std::abs(a.X(y) - b.X(y));
+  }
+  return sum / kSamples;
+}
+
+}  // namespace
+
+std::optional<GroundCurve> FitGroundCurve(const Lane& lane) {
+  const std::vector<Eigen::Vector2d> pts = GroundBezier(lane).Sample(20);
+  double lo = pts[0].y(), hi = pts[0].y();
+  for (const Eigen::Vector2d& p : pts) {
+    lo = std::min(lo, p.y());
+    hi = std::max(hi, p.y());
+  }
+  if (!(hi - lo >= 1.0) || !std::isfinite(lo) || !std::isfinite(hi)) return std::nullopt;
+  // Curvature only when the lane is long enough to show it.
+  const int terms = hi - lo >= 6.0 ? 3 : 2;
+  Eigen::MatrixXd a(static_cast<Eigen::Index>(pts.size()), terms);
+  Eigen::VectorXd x(static_cast<Eigen::Index>(pts.size()));
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const double y = pts[i].y();
+    const auto r = static_cast<Eigen::Index>(i);
+    a(r, 0) = 1.0;
+    a(r, 1) = y;
+    if (terms == 3) a(r, 2) = 0.5 * y * y;
+    x(r) = pts[i].x();
+  }
+  const Eigen::VectorXd c = a.colPivHouseholderQr().solve(x);
+  if (!c.allFinite()) return std::nullopt;
+  GroundCurve g;
+  g.coefficients.head(terms) = c;
+  g.y_near = lo;
+  g.y_far = hi;
+  return g;
+}
+
+// ---------------------------------------------------------------------------
+// LaneTracker
+
+LaneTracker::LaneTracker(LaneTrackingOptions options) : options_(options) {}
+
+void LaneTracker::Reset() {
+  tracks_.clear();
+  started_ = false;
+  ++resets_;
+}
+
+void LaneTracker::Predict(double dt) {
+  const Eigen::Vector3d q(options_.offset_noise, options_.heading_noise, options_.curvature_noise);
+  const Eigen::Matrix3d noise = (q.cwiseProduct(q) * dt).asDiagonal();
+  for (Track& t : tracks_) t.covariance += noise;
+}
+
+std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
+                                              std::optional<double> time_s,
+                                              const std::vector<MarkingColor>& colors) {
+  const double frame_dt = 1.0 / std::max(1e-3, options_.default_fps);
+  const double t = time_s.value_or(started_ ? time_s_ + frame_dt : 0.0);
+  double dt = started_ ? t - time_s_ : frame_dt;
+  if (started_ && (dt < 0 || dt > options_.max_gap_s)) {
+    Reset();  // a new clip, or the camera was away too long
+    dt = frame_dt;
+  }
+  started_ = true;
+  time_s_ = t;
+  Predict(dt);
+
+  std::vector<std::optional<GroundCurve>> curves;
+  for (const Lane& lane : lanes) curves.push_back(FitGroundCurve(lane));
+
+  // One to one, best pairs first, within the gate.
+  std::vector<std::tuple<double, size_t, size_t>> pairs;
+  for (size_t i = 0; i < tracks_.size(); ++i) {
+    for (size_t j = 0; j < curves.size(); ++j) {
+      if (!curves[j]) continue;
+      const double cost = LateralDistance(tracks_[i].curve, *curves[j]);
+      if (cost < options_.gate_m) pairs.emplace_back(cost, i, j);
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<int> track_of(lanes.size(), -1);
+  std::vector<bool> matched(tracks_.size(), false);
+  for (const auto& [cost, i, j] : pairs) {
+    if (matched[i] || track_of[j] >= 0) continue;
+    matched[i] = true;
+    track_of[j] = static_cast<int>(i);
+  }
+
+  const Eigen::Vector3d r(options_.measured_offset_sd, options_.measured_heading_sd,
+                          options_.measured_curvature_sd);
+  const Eigen::Matrix3d measurement_noise = r.cwiseProduct(r).asDiagonal();
+  auto vote = [&](Track& track, size_t j) {
+    if (j >= colors.size()) return;
+    if (colors[j] == MarkingColor::kWhite) track.white_votes += 1;
+    if (colors[j] == MarkingColor::kYellow) track.yellow_votes += 1;
+  };
+  for (size_t j = 0; j < lanes.size(); ++j) {
+    if (track_of[j] < 0) continue;
+    Track& track = tracks_[static_cast<size_t>(track_of[j])];
+    // Kalman update with H = I: the lane's fitted coefficients are measured.
+    const Eigen::Matrix3d s = track.covariance + measurement_noise;
+    const Eigen::Matrix3d gain = track.covariance * s.inverse();
+    track.curve.coefficients += gain * (curves[j]->coefficients - track.curve.coefficients);
+    track.covariance = (Eigen::Matrix3d::Identity() - gain) * track.covariance;
+    track.curve.y_near = curves[j]->y_near;
+    track.curve.y_far = curves[j]->y_far;
+    ++track.hits;
+    track.misses = 0;
+    track.confirmed = track.confirmed || track.hits >= options_.confirm_frames;
+    vote(track, j);
+  }
+  for (size_t i = 0; i < tracks_.size(); ++i) {
+    if (!matched[i]) ++tracks_[i].misses;
+  }
+  // New tracks for the lanes no track took.
+  std::vector<size_t> born;
+  for (size_t j = 0; j < lanes.size(); ++j) {
+    if (track_of[j] >= 0 || !curves[j]) continue;
+    Track track;
+    track.id = next_id_++;
+    track.hits = 1;
+    track.confirmed = options_.confirm_frames <= 1;
+    track.curve = *curves[j];
+    track.covariance = measurement_noise;
+    vote(track, j);
+    born.push_back(j);
+    tracks_.push_back(track);
+    track_of[j] = static_cast<int>(tracks_.size()) - 1;
+  }
+
+  std::vector<LaneIdentity> out(lanes.size());
+  for (size_t j = 0; j < lanes.size(); ++j) {
+    if (track_of[j] < 0) continue;
+    const Track& track = tracks_[static_cast<size_t>(track_of[j])];
+    out[j].id = track.id;
+    out[j].confirmed = track.confirmed;
+    out[j].curve = track.curve;
+    if (track.yellow_votes > track.white_votes) {
+      out[j].color = MarkingColor::kYellow;
+    } else if (track.white_votes > track.yellow_votes) {
+      out[j].color = MarkingColor::kWhite;
+    }
+  }
+  // Tracks missed max_misses frames in a row end.
+  tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
+                               [&](const Track& tr) { return tr.misses >= options_.max_misses; }),
+                tracks_.end());
+  return out;
+}
+
+// ---------------------------------------------------------------------------
+// Ego lane
+
+std::optional<EgoLane> ComputeEgoLane(const std::vector<Lane>& lanes, const CameraModel& camera,
+                                      const EgoOptions& options) {
+  std::vector<std::optional<GroundCurve>> curves;
+  std::vector<int> ids;
+  for (const Lane& lane : lanes) {
+    curves.push_back(FitGroundCurve(lane));
+    ids.push_back(lane.id);
+  }
+  return EgoLaneOfCurves(curves, ids, camera, options);
+}
+
+std::optional<EgoLane> EgoLaneOfCurves(const std::vector<std::optional<GroundCurve>>& curves,
+                                       const std::vector<int>& ids, const CameraModel& camera,
+                                       const EgoOptions& options) {
+  int left = -1, right = -1;
+  double xl = -1e9, xr = 1e9;
+  for (size_t i = 0; i < curves.size(); ++i) {
+    if (!curves[i]) continue;
+    const double x0 = curves[i]->X(0.0);
+    if (x0 < 0 && x0 > xl) {
+      xl = x0;
+      left = static_cast<int>(i);
+    }
+    if (x0 >= 0 && x0 < xr) {
+      xr = x0;
+      right = static_cast<int>(i);
+    }
+  }
+  if (left < 0 || right < 0) return std::nullopt;
+  const double width = xr - xl;
+  if (width < options.min_width_m || width > options.max_width_m) return std::nullopt;
+  const GroundCurve& l = *curves[static_cast<size_t>(left)];
+  const GroundCurve& r = *curves[static_cast<size_t>(right)];
+  EgoLane ego;
+  ego.width_m = width;
+  ego.offset_m = -0.5 * (xl + xr);
+  ego.heading_deg =
+      std::atan(0.5 * (l.coefficients(1) + r.coefficients(1))) * kRadToDeg + camera.yaw_deg;
+  ego.curvature_per_m = 0.5 * (l.coefficients(2) + r.coefficients(2));
+  ego.left_index = left;
+  ego.right_index = right;
+  ego.left_id = static_cast<size_t>(left) < ids.size() ? ids[static_cast<size_t>(left)] : -1;
+  ego.right_id = static_cast<size_t>(right) < ids.size() ? ids[static_cast<size_t>(right)] : -1;
+  ego.left_distance_m = -xl;
+  ego.right_distance_m = xr;
+  return ego;
+}
+
+void EgoTracker::Reset() { history_.clear(); }
+
+void EgoTracker::Update(std::optional<EgoLane>& ego, double time_s) {
+  if (!ego) {
+    Reset();
+    return;
+  }
+  // A new pair of boundaries (a lane change, or other lanes found): the
+  // rate starts again. Without ids, a jump of half a lane says the same.
+  const bool ids = ego->left_id >= 0 && ego->right_id >= 0;
+  const bool same = !history_.empty() &&
+                    (ids ? ego->left_id == left_id_ && ego->right_id == right_id_
+                         : std::abs(ego->offset_m - history_.back().second) < 0.5 * ego->width_m);
+  if (!same || time_s <= history_.back().first) history_.clear();
+  history_.emplace_back(time_s, ego->offset_m);
+  while (history_.front().first < time_s - options_.rate_window_s) history_.pop_front();
+  left_id_ = ego->left_id;
+  right_id_ = ego->right_id;
+  // Least-squares slope of the offset over the window.
+  double rate = 0;
+  const double span = history_.back().first - history_.front().first;
+  if (history_.size() >= 4 && span >= 0.2) {
+    double st = 0, so = 0, stt = 0, sto = 0;
+    for (const auto& [t, o] : history_) {
+      st += t;
+      so += o;
+      stt += t * t;
+      sto += t * o;
+    }
+    const double n = static_cast<double>(history_.size());
+    const double var = stt / n - (st / n) * (st / n);
+    if (var > 0) rate = (sto / n - (st / n) * (so / n)) / var;
+  }
+  ego->offset_rate_mps = rate;
+  const double min_rate = options_.departure_min_rate_mps;
+  ego->departing = (rate > min_rate && ego->right_distance_m / rate < options_.departure_tlc_s) ||
+                   (rate < -min_rate && ego->left_distance_m / -rate < options_.departure_tlc_s);
+}
+
+// ---------------------------------------------------------------------------
+// Colour
+
+MarkingColor MarkingColorOf(const cv::Mat& bgr, const Lane& lane, const CameraModel& camera,
+                            int top_row, int bottom_row) {
+  if (bgr.type() != CV_8UC3) return MarkingColor::kUnknown;
+  const int bottom = bottom_row < 0 ? bgr.rows : std::min(bottom_row, bgr.rows);
+  Bezier image;
+  for (int k = 0; k < 4; ++k) image.p[k] = lane.image[k];
+  auto mean = [&](int row, int c0, int c1) {
+    cv::Vec3d sum(0, 0, 0);
+    const cv::Vec3b* p = bgr.ptr<cv::Vec3b>(row);
+    for (int c = c0; c <= c1; ++c) sum += cv::Vec3d(p[c][0], p[c][1], p[c][2]);
+    return sum / static_cast<double>(c1 - c0 + 1);
+  };
+  auto yellowness = [](const cv::Vec3d& bgr_mean) {
+    return 0.5 * (bgr_mean[2] + bgr_mean[1]) - bgr_mean[0];
+  };
+  std::vector<double> ratios;
+  for (const Eigen::Vector2d& p : image.Sample(24)) {
+    const int row = static_cast<int>(std::lround(p.y()));
+    if (row < top_row || row >= bottom || row <= camera.HorizonRow() + 5) continue;
+    // The marking's width here (15 cm on the road), pixels.
+    const Eigen::Vector2d g = camera.ImageToGround(p);
+    const double w = (camera.GroundToImage(g + Eigen::Vector2d(0.15, 0.0)) - p).norm();
+    if (!(w >= 2.0) || w > bgr.cols / 8.0) continue;
+    const int u = static_cast<int>(std::lround(p.x()));
+    const int half = std::max(0, static_cast<int>(w / 4));
+    const int off = static_cast<int>(std::ceil(1.5 * w));
+    const int span = std::max(1, static_cast<int>(w / 2));
+    if (u - off - span < 0 || u + off + span >= bgr.cols) continue;
+    const cv::Vec3d paint = mean(row, u - half, u + half);
+    const cv::Vec3d left = mean(row, u - off - span, u - off);
+    const cv::Vec3d right = mean(row, u + off, u + off + span);
+    const cv::Vec3d road = 0.5 * (left + right);
+    auto grey = [](const cv::Vec3d& c) { return (c[0] + c[1] + c[2]) / 3.0; };
+    // Paint is a bar: brighter than the road on both sides (not a car body,
+    // a curb or a shadow border).
+    const double contrast = grey(paint) - grey(road);
+    if (std::min(grey(paint) - grey(left), grey(paint) - grey(right)) < 12.0) continue;
+    ratios.push_back((yellowness(paint) - yellowness(road)) / contrast);
+  }
+  if (ratios.size() < 4) return MarkingColor::kUnknown;
+  std::nth_element(ratios.begin(), ratios.begin() + static_cast<long>(ratios.size() / 2),
+                   ratios.end());
+  const double median = ratios[ratios.size() / 2];
+  if (median > 0.35) return MarkingColor::kYellow;
+  if (median < 0.15) return MarkingColor::kWhite;
+  return MarkingColor::kUnknown;
+}
+
+}  // namespace lane
+
+namespace lane {
+
+std::optional<EgoLane> SequenceTracker::Track(std::vector<Lane>& lanes,
+                                              std::optional<double> time_s) {
+  std::vector<MarkingColor> colors;
+  for (const Lane& lane : lanes) colors.push_back(lane.color);
+  const std::vector<LaneIdentity> ids = lanes_.Update(lanes, time_s, colors);
+  for (size_t i = 0; i < lanes.size(); ++i) {
+    lanes[i].id = ids[i].id;
+    lanes[i].confirmed = ids[i].confirmed;
+    lanes[i].color = ids[i].color;
+  }
+  // The ego lane from the confirmed lanes' filtered curves only: a
+  // one-frame streak on a car does not bound it, and the filter steadies
+  // the offset whose rate warns of a departure.
+  std::vector<std::optional<GroundCurve>> curves(lanes.size());
+  std::vector<int> track_ids(lanes.size(), -1);
+  for (size_t i = 0; i < lanes.size(); ++i) {
+    if (!ids[i].confirmed) continue;
+    curves[i] = ids[i].curve;
+    track_ids[i] = ids[i].id;
+  }
+  std::optional<EgoLane> ego = EgoLaneOfCurves(curves, track_ids, camera_, ego_options_);
+  if (lanes_.resets() != resets_seen_) {
+    ego_.Reset();
+    resets_seen_ = lanes_.resets();
+  }
+  ego_.Update(ego, lanes_.time_s());
+  return ego;
+}
+
+void SequenceTracker::Reset() {
+  lanes_.Reset();
+  ego_.Reset();
+}
+
+}  // namespace lane

@@ -1,0 +1,225 @@
+// Video-aware detection (lane/tracking.h): the Kalman tracker, association,
+// ids, the ego lane with departure, and the marking colour.
+#include "lane/tracking.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "lane/synthetic.h"
+
+namespace lane {
+namespace {
+
+// A lane on the ground along x(y) = c0 + c1 y + c2 y^2 / 2 over [y0, y1],
+// as the exact cubic Bezier of that parabola (only ground points are set).
+Lane GroundLane(double c0, double c1, double c2, double y0 = 4.0, double y1 = 24.0) {
+  auto x = [&](double y) { return c0 + c1 * y + 0.5 * c2 * y * y; };
+  const Eigen::Vector2d q0(x(y0), y0), q2(x(y1), y1);
+  const Eigen::Vector2d q1(x(y0) + (c1 + c2 * y0) * (y1 - y0) / 2, (y0 + y1) / 2);
+  Lane lane;
+  lane.ground = {q0, q0 + 2.0 / 3.0 * (q1 - q0), q2 + 2.0 / 3.0 * (q1 - q2), q2};
+  return lane;
+}
+
+TEST(TrackingTest, GroundCurveFitIsExactForAParabola) {
+  const std::optional<GroundCurve> c = FitGroundCurve(GroundLane(1.8, 0.02, 0.003));
+  ASSERT_TRUE(c);
+  EXPECT_NEAR(c->coefficients(0), 1.8, 1e-6);
+  EXPECT_NEAR(c->coefficients(1), 0.02, 1e-7);
+  EXPECT_NEAR(c->coefficients(2), 0.003, 1e-8);
+  EXPECT_NEAR(c->y_near, 4.0, 1e-9);
+  EXPECT_NEAR(c->y_far, 24.0, 1e-9);
+}
+
+TEST(TrackingTest, ConstantCurvatureLaneIsFollowedWithOneId) {
+  LaneTracker tracker;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.08);
+  int id = -1;
+  for (int f = 0; f < 60; ++f) {
+    const std::vector<LaneIdentity> out =
+        tracker.Update({GroundLane(1.8 + noise(rng), 0.01, 0.002)}, f / 30.0);
+    ASSERT_EQ(out.size(), 1u);
+    if (f == 0) id = out[0].id;
+    EXPECT_EQ(out[0].id, id) << "frame " << f;
+    EXPECT_EQ(out[0].confirmed, f + 1 >= tracker.options().confirm_frames) << "frame " << f;
+  }
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  const Eigen::Vector3d c = tracker.tracks()[0].curve.coefficients;
+  EXPECT_NEAR(c(0), 1.8, 0.08);  // filtered: well inside the 8 cm noise
+  EXPECT_NEAR(c(1), 0.01, 0.01);
+  EXPECT_NEAR(c(2), 0.002, 0.001);
+}
+
+TEST(TrackingTest, AVanishedLaneEndsAfterMMissesAndItsIdIsNotReused) {
+  LaneTrackingOptions o;
+  LaneTracker tracker(o);
+  int id = -1;
+  for (int f = 0; f < 10; ++f) id = tracker.Update({GroundLane(-1.7, 0, 0)}, f / 30.0)[0].id;
+  for (int miss = 1; miss < o.max_misses; ++miss) {
+    tracker.Update({}, (10 + miss) / 30.0);
+    EXPECT_EQ(tracker.tracks().size(), 1u) << "after " << miss << " misses";
+  }
+  tracker.Update({}, (10 + o.max_misses) / 30.0);
+  EXPECT_TRUE(tracker.tracks().empty()) << "the track outlived " << o.max_misses << " misses";
+  const std::vector<LaneIdentity> back = tracker.Update({GroundLane(-1.7, 0, 0)}, 0.6);
+  EXPECT_NE(back[0].id, id);
+  EXPECT_FALSE(back[0].confirmed);
+}
+
+TEST(TrackingTest, CrossingLanesKeepTheirIds) {
+  // Two lanes forming an X on the road (crossing at y = 10 m), drifting.
+  LaneTracker tracker;
+  int a = -1, b = -1;
+  for (int f = 0; f < 30; ++f) {
+    const double d = 0.01 * f;
+    const std::vector<LaneIdentity> out =
+        tracker.Update({GroundLane(-1.0 + d, 0.1, 0), GroundLane(1.0 + d, -0.1, 0)}, f / 30.0);
+    if (f == 0) {
+      a = out[0].id;
+      b = out[1].id;
+      EXPECT_NE(a, b);
+    }
+    EXPECT_EQ(out[0].id, a) << "frame " << f;
+    EXPECT_EQ(out[1].id, b) << "frame " << f;
+  }
+}
+
+TEST(TrackingTest, MergingLanesAreAssociatedOneToOne) {
+  // Two boundaries converging (a lane ending); the survivor keeps its id,
+  // and while both are seen they never share one.
+  LaneTracker tracker;
+  int left = -1, right = -1;
+  for (int f = 0; f < 40; ++f) {
+    const double gap = std::max(0.0, 3.4 - 0.1 * f);  // metres between them
+    std::vector<Lane> lanes = {GroundLane(-gap / 2, 0, 0)};
+    if (gap > 0.3) lanes.push_back(GroundLane(gap / 2, 0, 0));
+    const std::vector<LaneIdentity> out = tracker.Update(lanes, f / 30.0);
+    if (f == 0) {
+      left = out[0].id;
+      right = out[1].id;
+    }
+    EXPECT_EQ(out[0].id, left) << "frame " << f;
+    if (out.size() == 2) {
+      EXPECT_EQ(out[1].id, right) << "frame " << f;
+    }
+  }
+}
+
+TEST(TrackingTest, AGapOrTimeGoingBackResets) {
+  LaneTracker tracker;
+  const int first = tracker.Update({GroundLane(1.7, 0, 0)}, 0.0)[0].id;
+  tracker.Update({GroundLane(1.7, 0, 0)}, 0.033);
+  EXPECT_EQ(tracker.resets(), 0);
+  const int after_jump = tracker.Update({GroundLane(1.7, 0, 0)}, 5.0)[0].id;  // a 5 s gap
+  EXPECT_EQ(tracker.resets(), 1);
+  EXPECT_NE(after_jump, first);
+  tracker.Update({GroundLane(1.7, 0, 0)}, 1.0);  // back in time: a new clip
+  EXPECT_EQ(tracker.resets(), 2);
+}
+
+TEST(TrackingTest, EgoLaneGeometryAndDeparture) {
+  CameraModel camera;  // yaw 0
+  // Boundaries at -1.6 m and +2.0 m, heading 0.02 rad, curvature 0.001.
+  std::optional<EgoLane> ego = ComputeEgoLane(
+      {GroundLane(-1.6, 0.02, 0.001), GroundLane(2.0, 0.02, 0.001), GroundLane(5.6, 0.02, 0.001)},
+      camera);
+  ASSERT_TRUE(ego);
+  EXPECT_NEAR(ego->width_m, 3.6, 1e-6);
+  EXPECT_NEAR(ego->offset_m, -0.2, 1e-6);  // the lane centre is 0.2 m to the right
+  EXPECT_NEAR(ego->heading_deg, std::atan(0.02) * 180 / M_PI, 1e-6);
+  EXPECT_NEAR(ego->curvature_per_m, 0.001, 1e-9);
+  EXPECT_EQ(ego->left_index, 0);
+  EXPECT_EQ(ego->right_index, 1);
+  EXPECT_NEAR(ego->right_distance_m, 2.0, 1e-6);
+  // Yaw: the lane's direction is measured from the optical axis.
+  camera.yaw_deg = 3.0;
+  EXPECT_NEAR(ComputeEgoLane({GroundLane(-1.6, 0, 0), GroundLane(2.0, 0, 0)}, camera)->heading_deg,
+              3.0, 1e-6);
+  // No lane on one side, or an implausible width: none.
+  EXPECT_FALSE(ComputeEgoLane({GroundLane(1.0, 0, 0), GroundLane(4.6, 0, 0)}, camera));
+  EXPECT_FALSE(ComputeEgoLane({GroundLane(-0.5, 0, 0), GroundLane(0.6, 0, 0)}, camera));
+
+  // The car drifts right at 0.8 m/s: departing once the line is < 0.8 s away.
+  SequenceTracker sequence(CameraModel{});
+  bool warned_early = false, warned = false;
+  for (int f = 0; f < 60; ++f) {
+    const double t = f / 30.0;
+    const double shift = -0.8 * t;  // the lanes move left as the car moves right
+    std::vector<Lane> lanes = {GroundLane(-1.8 + shift, 0, 0), GroundLane(1.8 + shift, 0, 0)};
+    const std::optional<EgoLane> e = sequence.Track(lanes, t);
+    if (!e) continue;
+    if (e->departing && e->right_distance_m > 1.2) warned_early = true;
+    if (e->departing && e->right_distance_m > 0.2) warned = true;
+    if (f > 20) {
+      EXPECT_NEAR(e->offset_rate_mps, 0.8, 0.1) << "frame " << f;
+    }
+  }
+  EXPECT_TRUE(warned) << "no departure before the crossing";
+  EXPECT_FALSE(warned_early) << "a departure 1.5 s before the crossing";
+}
+
+TEST(TrackingTest, StraightDrivingIsNoDeparture) {
+  SequenceTracker sequence(CameraModel{});
+  std::mt19937 rng(9);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  for (int f = 0; f < 300; ++f) {
+    std::vector<Lane> lanes = {GroundLane(-1.7 + noise(rng), 0, 0),
+                               GroundLane(1.9 + noise(rng), 0, 0)};
+    const std::optional<EgoLane> e = sequence.Track(lanes, f / 30.0);
+    if (e) {
+      EXPECT_FALSE(e->departing) << "frame " << f;
+    }
+  }
+}
+
+// Colour against rendered truth, also under a strong colour cast (a white
+// balance off by 30 %).
+TEST(TrackingTest, MarkingColourFollowsThePaintUnderAColourCast) {
+  CameraModel camera;
+  SyntheticOptions so;
+  so.yellow_probability = 0.5;
+  so.num_lanes = 3;
+  int right = 0, total = 0, yellow_right = 0, yellow_total = 0;
+  for (int cast = 0; cast < 2; ++cast) {
+    for (uint64_t seed = 1; seed <= 25; ++seed) {
+      absl::StatusOr<SyntheticFrame> frame = RenderSyntheticFrame(camera, so, seed);
+      ASSERT_TRUE(frame.ok());
+      cv::Mat bgr = frame->bgr;
+      if (cast == 1) {
+        std::vector<cv::Mat> ch;
+        cv::split(bgr, ch);
+        ch[0].convertTo(ch[0], -1, 1.3);  // bluish
+        ch[2].convertTo(ch[2], -1, 0.8);
+        cv::merge(ch, bgr);
+      }
+      for (const SyntheticBoundary& b : frame->boundaries) {
+        // The ego lane's boundaries and the next ones: those a detector
+        // reports (further out they are a few pixels wide at the verge).
+        if (std::abs(b.lateral_offset_m) > 5.5) continue;
+        Lane lane;
+        lane.image = b.image;
+        const MarkingColor c = MarkingColorOf(bgr, lane, camera);
+        if (c == MarkingColor::kUnknown) continue;  // not enough paint seen
+        ++total;
+        const bool yellow = c == MarkingColor::kYellow;
+        right += yellow == b.yellow;
+        if (b.yellow) {
+          ++yellow_total;
+          yellow_right += yellow;
+        }
+      }
+    }
+  }
+  std::printf("colour right for %d of %d boundaries; yellow for %d of %d\n", right, total,
+              yellow_right, yellow_total);
+  ASSERT_GT(total, 60);
+  EXPECT_GE(right, 0.95 * total) << right << " of " << total;
+  EXPECT_GE(yellow_right, 0.9 * yellow_total) << yellow_right << " of " << yellow_total;
+}
+
+}  // namespace
+}  // namespace lane
