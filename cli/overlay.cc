@@ -122,10 +122,11 @@ cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
           lane.image[0].y() > lane.image[3].y() ? lane.image[0] : lane.image[3];
       const int x = std::clamp(static_cast<int>(low.x()), 0, std::max(0, canvas.cols - 80));
       const int y = std::clamp(static_cast<int>(low.y()) - canvas.rows / 12, 0, canvas.rows - 1);
-      DrawCaption(canvas,
-                  absl::StrCat("#", lane.id, lane.confirmed ? " " : "? ",
-                               lane::MarkingColorName(lane.color)),
-                  x, y, LaneColour(static_cast<int>(i)));
+      DrawCaption(
+          canvas,
+          absl::StrCat("#", lane.id, lane.confirmed ? " " : "? ",
+                       lane::MarkingColorName(lane.color), " ", lane::MarkingTypeName(lane.type)),
+          x, y, LaneColour(static_cast<int>(i)));
     }
   }
   // Caption: the frame's name; the mode, the lane count and the lanes'

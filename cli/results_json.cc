@@ -69,6 +69,7 @@ std::string DetectionJsonLine(const std::string& frame, int width, int height, l
       l["id"] = lane.id;
       l["confirmed"] = lane.confirmed;
       l["color"] = lane::MarkingColorName(lane.color);
+      l["type"] = lane::MarkingTypeName(lane.type);
     }
     lanes.push_back(std::move(l));
   }

@@ -78,6 +78,8 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
           for (lane::Lane& lane : detection->lanes) {
             lane.color = lane::MarkingColorOf(*frame, lane, detector->ipm().camera(), needs.top,
                                               needs.bottom);
+            lane.type = lane::MarkingTypeOf(*frame, lane, detector->ipm().camera(), needs.top,
+                                            needs.bottom);
           }
         }
         wire::LanesToProto(*detection, response);

@@ -166,6 +166,7 @@ class DetectRun {
       const lane::FrameNeeds& needs = detector_.Needs();
       for (lane::Lane& lane : detection->lanes) {
         lane.color = lane::MarkingColorOf(frame.bgr, lane, camera_, needs.top, needs.bottom);
+        lane.type = lane::MarkingTypeOf(frame.bgr, lane, camera_, needs.top, needs.bottom);
       }
       detection->ego = tracker_->Track(detection->lanes, std::nullopt);
     }

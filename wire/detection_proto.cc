@@ -49,6 +49,8 @@ void IdentityToProto(const lane::Lane& lane, v1::Lane* l) {
   l->set_id(lane.id > 0 ? lane.id : 0);
   l->set_confirmed(lane.confirmed);
   l->set_color(ColorToProto(lane.color));
+  // MarkingType's order is the proto's.
+  l->set_type(static_cast<v1::MarkingType>(static_cast<int>(lane.type)));
 }
 
 void EgoToProto(const std::optional<lane::EgoLane>& ego, v1::FrameResponse* out) {
@@ -95,6 +97,9 @@ std::vector<lane::Lane> LanesFromProto(const v1::FrameResponse& response) {
     lane.id = l.id() > 0 ? l.id() : -1;
     lane.confirmed = l.confirmed();
     lane.color = ColorFromProto(l.color());
+    lane.type = l.type() >= v1::MARKING_TYPE_UNKNOWN && l.type() <= v1::MARKING_TYPE_ROAD_EDGE
+                    ? static_cast<lane::MarkingType>(static_cast<int>(l.type()))
+                    : lane::MarkingType::kUnknown;
     lanes.push_back(lane);
   }
   return lanes;

@@ -40,6 +40,22 @@ const char* MarkingColorName(MarkingColor color) {
   return "unknown";
 }
 
+const char* MarkingTypeName(MarkingType type) {
+  switch (type) {
+    case MarkingType::kSolid:
+      return "solid";
+    case MarkingType::kDashed:
+      return "dashed";
+    case MarkingType::kDouble:
+      return "double";
+    case MarkingType::kRoadEdge:
+      return "road_edge";
+    case MarkingType::kUnknown:
+      break;
+  }
+  return "unknown";
+}
+
 const char* ChannelName(Channel channel) {
   switch (channel) {
     case Channel::kRed:

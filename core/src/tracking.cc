@@ -84,7 +84,8 @@ void LaneTracker::Predict(double dt) {
 
 std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
                                               std::optional<double> time_s,
-                                              const std::vector<MarkingColor>& colors) {
+                                              const std::vector<MarkingColor>& colors,
+                                              const std::vector<MarkingType>& types) {
   const double frame_dt = 1.0 / std::max(1e-3, options_.default_fps);
   const double t = time_s.value_or(started_ ? time_s_ + frame_dt : 0.0);
   double dt = started_ ? t - time_s_ : frame_dt;
@@ -121,6 +122,9 @@ std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
                           options_.measured_curvature_sd);
   const Eigen::Matrix3d measurement_noise = r.cwiseProduct(r).asDiagonal();
   auto vote = [&](Track& track, size_t j) {
+    if (j < types.size() && types[j] != MarkingType::kUnknown) {
+      track.type_votes[static_cast<size_t>(types[j])] += 1;
+    }
     if (j >= colors.size()) return;
     if (colors[j] == MarkingColor::kWhite) track.white_votes += 1;
     if (colors[j] == MarkingColor::kYellow) track.yellow_votes += 1;
@@ -166,6 +170,18 @@ std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
     out[j].id = track.id;
     out[j].confirmed = track.confirmed;
     out[j].curve = track.curve;
+    const std::array<double, 5>& v = track.type_votes;
+    const double solid = v[static_cast<size_t>(MarkingType::kSolid)];
+    const double dashed = v[static_cast<size_t>(MarkingType::kDashed)];
+    size_t best = 0;
+    for (size_t k = 1; k < v.size(); ++k) {
+      if (v[k] > v[best]) best = k;
+    }
+    out[j].type = v[best] > 0 ? static_cast<MarkingType>(best) : MarkingType::kUnknown;
+    if ((out[j].type == MarkingType::kSolid || out[j].type == MarkingType::kDashed) && dashed > 0 &&
+        dashed >= (solid + dashed) / 3.0) {
+      out[j].type = MarkingType::kDashed;
+    }
     if (track.yellow_votes > track.white_votes) {
       out[j].color = MarkingColor::kYellow;
     } else if (track.white_votes > track.yellow_votes) {
@@ -284,8 +300,10 @@ MarkingColor MarkingColorOf(const cv::Mat& bgr, const Lane& lane, const CameraMo
     for (int c = c0; c <= c1; ++c) sum += cv::Vec3d(p[c][0], p[c][1], p[c][2]);
     return sum / static_cast<double>(c1 - c0 + 1);
   };
+  // Yellow paint is bright in red *and* green over blue; a red car or tail
+  // light is bright in red only.
   auto yellowness = [](const cv::Vec3d& bgr_mean) {
-    return 0.5 * (bgr_mean[2] + bgr_mean[1]) - bgr_mean[0];
+    return std::min(bgr_mean[2], bgr_mean[1]) - bgr_mean[0];
   };
   std::vector<double> ratios;
   for (const Eigen::Vector2d& p : image.Sample(24)) {
@@ -324,15 +342,160 @@ MarkingColor MarkingColorOf(const cv::Mat& bgr, const Lane& lane, const CameraMo
 
 namespace lane {
 
+// ---------------------------------------------------------------------------
+// Type
+
+namespace {
+
+// Grey level of a pixel of a BGR or single-channel frame.
+double GreyAt(const cv::Mat& frame, int row, int col) {
+  if (frame.type() == CV_8UC3) {
+    const cv::Vec3b& p = frame.at<cv::Vec3b>(row, col);
+    return (p[0] + p[1] + p[2]) / 3.0;
+  }
+  return frame.at<uint8_t>(row, col);
+}
+
+double GreyMean(const cv::Mat& frame, int row, int c0, int c1) {
+  double sum = 0;
+  for (int c = c0; c <= c1; ++c) sum += GreyAt(frame, row, c);
+  return sum / (c1 - c0 + 1);
+}
+
+}  // namespace
+
+MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraModel& camera,
+                          int top_row, int bottom_row) {
+  if (frame.empty() || (frame.type() != CV_8UC3 && frame.type() != CV_8UC1)) {
+    return MarkingType::kUnknown;
+  }
+  const int bottom = bottom_row < 0 ? frame.rows : std::min(bottom_row, frame.rows);
+  Bezier image;
+  for (int k = 0; k < 4; ++k) image.p[k] = lane.image[k];
+  // Samples every kStep metres of road along the lane (from the image spline
+  // mapped to the ground), near to far.
+  constexpr double kStep = 0.25;
+  const std::vector<Eigen::Vector2d> dense = image.Sample(200);
+  std::vector<Eigen::Vector2d> samples;
+  double run = kStep;
+  Eigen::Vector2d previous = Eigen::Vector2d::Zero();
+  bool have_previous = false;
+  const double horizon = camera.HorizonRow();
+  for (const Eigen::Vector2d& p : dense) {
+    if (p.y() <= horizon + 5) continue;
+    const Eigen::Vector2d g = camera.ImageToGround(p);
+    if (have_previous) run += (g - previous).norm();
+    previous = g;
+    have_previous = true;
+    if (run >= kStep) {
+      samples.push_back(p);
+      run = 0;
+    }
+  }
+  int n = 0, on = 0, steps = 0, resolvable = 0, doubles = 0;
+  std::vector<bool> pattern;  // bar or not, near to far
+  for (const Eigen::Vector2d& p : samples) {
+    const int row = static_cast<int>(std::lround(p.y()));
+    if (row < top_row || row >= bottom) continue;
+    const Eigen::Vector2d g = camera.ImageToGround(p);
+    const double w = (camera.GroundToImage(g + Eigen::Vector2d(0.15, 0.0)) - p).norm();
+    if (!(w >= 1.5) || w > frame.cols / 8.0) continue;
+    const int u = static_cast<int>(std::lround(p.x()));
+    const int half = std::max(0, static_cast<int>(w / 4));
+    const int off = static_cast<int>(std::ceil(1.5 * w));
+    const int span = std::max(1, static_cast<int>(w / 2));
+    if (u - off - span < 0 || u + off + span >= frame.cols) continue;
+    ++n;
+    const double paint = GreyMean(frame, row, u - half, u + half);
+    const double left = GreyMean(frame, row, u - off - span, u - off);
+    const double right = GreyMean(frame, row, u + off, u + off + span);
+    const bool bar = std::min(paint - left, paint - right) >= 12.0;
+    if (!bar && std::abs(left - right) >= 15.0) ++steps;
+    on += bar;
+    pattern.push_back(bar);
+    // Two bars side by side: the profile across +-0.3 m has two peaks
+    // 0.1..0.45 m apart with a dip between them.
+    if (bar && w >= 4.0) {
+      ++resolvable;
+      std::vector<double> profile;
+      for (int k = -10; k <= 10; ++k) {
+        const Eigen::Vector2d q = camera.GroundToImage(g + Eigen::Vector2d(0.03 * k, 0.0));
+        const int c = static_cast<int>(std::lround(q.x()));
+        profile.push_back(c >= 0 && c < frame.cols ? GreyAt(frame, row, c) : 0.0);
+      }
+      const double floor = std::min(profile.front(), profile.back());
+      std::vector<int> peaks;
+      for (int k = 1; k + 1 < static_cast<int>(profile.size()); ++k) {
+        const double v = profile[static_cast<size_t>(k)];
+        if (v >= floor + 12 && v >= profile[static_cast<size_t>(k - 1)] &&
+            v > profile[static_cast<size_t>(k + 1)]) {
+          peaks.push_back(k);
+        }
+      }
+      for (size_t a = 0; a + 1 < peaks.size(); ++a) {
+        const int k0 = peaks[a], k1 = peaks[a + 1];
+        const double gap_m = 0.03 * (k1 - k0);
+        if (gap_m < 0.1 || gap_m > 0.45) continue;
+        // Between two lines of paint the road shows: the dip goes at least
+        // half way down to the road's level (texture on one line does not).
+        double dip = 1e9;
+        for (int k = k0 + 1; k < k1; ++k) dip = std::min(dip, profile[static_cast<size_t>(k)]);
+        const double low_peak =
+            std::min(profile[static_cast<size_t>(k0)], profile[static_cast<size_t>(k1)]);
+        if (low_peak >= floor + 20 && dip <= floor + 0.5 * (low_peak - floor)) {
+          ++doubles;
+          break;
+        }
+      }
+    }
+  }
+  if (n < 12) return MarkingType::kUnknown;
+  const double on_share = static_cast<double>(on) / n;
+  if (on_share < 0.15) {
+    return steps >= 0.5 * n ? MarkingType::kRoadEdge : MarkingType::kUnknown;
+  }
+  if (resolvable >= 6 && doubles >= 0.4 * resolvable) return MarkingType::kDouble;
+  // Painted runs and the gaps between them (not the ends: paint fades into
+  // the distance, and the view ends).
+  double longest_on = 0, longest_gap = 0, current = 0;
+  bool seen_paint = false;
+  for (size_t i = 0; i <= pattern.size(); ++i) {
+    const bool end = i == pattern.size();
+    if (!end && (i == 0 || pattern[i] == pattern[i - 1])) {
+      current += kStep;
+      continue;
+    }
+    // A run of pattern[i - 1] ends here.
+    if (pattern[i - 1]) {
+      longest_on = std::max(longest_on, current);
+      seen_paint = true;
+    } else if (seen_paint && !end) {
+      longest_gap = std::max(longest_gap, current);
+    }
+    current = kStep;
+  }
+  // A long stretch of paint is a solid line (another stretch may be hidden
+  // by a vehicle); short dashes with gaps between them are a dashed line
+  // (dashes of 2-6 m: US 3 m, Chinese urban 2 and 6 m).
+  if (longest_on > 6.5 || (on_share >= 0.85 && longest_gap < 1.0)) return MarkingType::kSolid;
+  if (longest_gap >= 1.5 && longest_on >= 0.5) return MarkingType::kDashed;
+  return MarkingType::kUnknown;
+}
+
 std::optional<EgoLane> SequenceTracker::Track(std::vector<Lane>& lanes,
                                               std::optional<double> time_s) {
   std::vector<MarkingColor> colors;
-  for (const Lane& lane : lanes) colors.push_back(lane.color);
-  const std::vector<LaneIdentity> ids = lanes_.Update(lanes, time_s, colors);
+  std::vector<MarkingType> types;
+  for (const Lane& lane : lanes) {
+    colors.push_back(lane.color);
+    types.push_back(lane.type);
+  }
+  const std::vector<LaneIdentity> ids = lanes_.Update(lanes, time_s, colors, types);
   for (size_t i = 0; i < lanes.size(); ++i) {
     lanes[i].id = ids[i].id;
     lanes[i].confirmed = ids[i].confirmed;
     lanes[i].color = ids[i].color;
+    lanes[i].type = ids[i].type;
   }
   // The ego lane from the confirmed lanes' filtered curves only: a
   // one-frame streak on a car does not bound it, and the filter steadies

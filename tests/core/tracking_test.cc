@@ -221,5 +221,53 @@ TEST(TrackingTest, MarkingColourFollowsThePaintUnderAColourCast) {
   EXPECT_GE(yellow_right, 0.9 * yellow_total) << yellow_right << " of " << yellow_total;
 }
 
+// Type against rendered truth (solid or dashed), per frame.
+TEST(TrackingTest, MarkingTypeFollowsThePaintPattern) {
+  CameraModel camera;
+  SyntheticOptions so;
+  so.num_lanes = 3;
+  int right = 0, total = 0, dashed_right = 0, dashed_total = 0;
+  for (uint64_t seed = 1; seed <= 30; ++seed) {
+    absl::StatusOr<SyntheticFrame> frame = RenderSyntheticFrame(camera, so, seed);
+    ASSERT_TRUE(frame.ok());
+    for (const SyntheticBoundary& b : frame->boundaries) {
+      if (std::abs(b.lateral_offset_m) > 5.5) continue;  // as for the colour
+      Lane lane;
+      lane.image = b.image;
+      const MarkingType t = MarkingTypeOf(frame->bgr, lane, camera);
+      if (t == MarkingType::kUnknown) continue;
+      ++total;
+      const bool ok = t == (b.dashed ? MarkingType::kDashed : MarkingType::kSolid);
+      right += ok;
+      if (b.dashed) {
+        ++dashed_total;
+        dashed_right += ok;
+      }
+    }
+  }
+  std::printf("type right for %d of %d boundaries; dashed for %d of %d\n", right, total,
+              dashed_right, dashed_total);
+  ASSERT_GT(total, 60);
+  EXPECT_GE(right, 0.9 * total);
+  EXPECT_GE(dashed_right, 0.85 * dashed_total);
+}
+
+TEST(TrackingTest, TypeVotesFavourDashedOnceSeen) {
+  LaneTracker tracker;
+  // A dash fills the view in two frames of three: still a dashed line.
+  const std::vector<MarkingType> frames = {MarkingType::kSolid, MarkingType::kDashed,
+                                           MarkingType::kSolid};
+  MarkingType last = MarkingType::kUnknown;
+  for (size_t f = 0; f < frames.size(); ++f) {
+    last = tracker.Update({GroundLane(1.8, 0, 0)}, f / 30.0, {}, {frames[f]})[0].type;
+  }
+  EXPECT_EQ(last, MarkingType::kDashed);
+  LaneTracker solid;
+  for (int f = 0; f < 5; ++f) {
+    last = solid.Update({GroundLane(1.8, 0, 0)}, f / 30.0, {}, {MarkingType::kSolid})[0].type;
+  }
+  EXPECT_EQ(last, MarkingType::kSolid);
+}
+
 }  // namespace
 }  // namespace lane

@@ -68,6 +68,11 @@ struct DetectorOptions {
 // A marking's paint colour (lane/tracking.h, MarkingColorOf).
 enum class MarkingColor { kUnknown, kWhite, kYellow };
 const char* MarkingColorName(MarkingColor color);  // "unknown", "white", "yellow"
+// A marking's pattern (lane/tracking.h, MarkingTypeOf); kRoadEdge: a
+// boundary without paint (a curb, the asphalt's edge).
+enum class MarkingType { kUnknown, kSolid, kDashed, kDouble, kRoadEdge };
+// "unknown", "solid", "dashed", "double", "road_edge"
+const char* MarkingTypeName(MarkingType type);
 
 struct Lane {
   // Cubic Bezier control points of the same boundary in three frames:
@@ -76,11 +81,12 @@ struct Lane {
   std::array<Eigen::Vector2d, 4> ground;  // metres: x lateral (right +), y ahead
   double score = 0;                       // spline score in the top view
   // With tracking (lane/tracking.h): the track's id (stable while tracked,
-  // never reused within a tracker), whether it is confirmed, and its colour.
-  // -1, false, unknown without.
+  // never reused within a tracker), whether it is confirmed, its colour and
+  // its type. -1, false, unknown, unknown without.
   int id = -1;
   bool confirmed = false;
   MarkingColor color = MarkingColor::kUnknown;
+  MarkingType type = MarkingType::kUnknown;
 };
 
 // The ego lane: the nearest boundary on each side of the camera.

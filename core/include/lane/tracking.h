@@ -16,6 +16,7 @@
 #define LANE_TRACKING_H_
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <opencv2/core.hpp>
@@ -78,6 +79,8 @@ struct Track {
   // Colour votes over the frames (MarkingColorOf): white and yellow.
   double white_votes = 0;
   double yellow_votes = 0;
+  // Type votes (MarkingTypeOf), indexed by MarkingType.
+  std::array<double, 5> type_votes{};
 };
 
 // What the tracker says of one frame's lane.
@@ -85,7 +88,10 @@ struct LaneIdentity {
   int id = -1;
   bool confirmed = false;
   MarkingColor color = MarkingColor::kUnknown;  // voted over the track's frames
-  GroundCurve curve;                            // the track's filtered curve after this frame
+  // Voted too; dashed once a third of the solid/dashed votes say dashed (a
+  // dash can fill the whole view for a frame, a gap never looks solid).
+  MarkingType type = MarkingType::kUnknown;
+  GroundCurve curve;  // the track's filtered curve after this frame
 };
 
 class LaneTracker {
@@ -97,7 +103,8 @@ class LaneTracker {
   // lane's colour in this frame (MarkingColorOf), or empty. Returns each
   // lane's identity, in the order of `lanes`.
   std::vector<LaneIdentity> Update(const std::vector<Lane>& lanes, std::optional<double> time_s,
-                                   const std::vector<MarkingColor>& colors = {});
+                                   const std::vector<MarkingColor>& colors = {},
+                                   const std::vector<MarkingType>& types = {});
   void Reset();
 
   const std::vector<Track>& tracks() const { return tracks_; }
@@ -155,7 +162,7 @@ class EgoTracker {
 };
 
 // A marking's colour from the image along it: the paint's yellowness
-// ((R + G) / 2 - B) against the road's beside it, as a share of the paint's
+// (min(R, G) - B) against the road's beside it, as a share of the paint's
 // brightness above the road, so that a white balance shifting both alike
 // cancels. Unknown when the paint is not brighter than the road (a road
 // edge, a worn marking) or the samples disagree.
@@ -164,9 +171,20 @@ class EgoTracker {
 MarkingColor MarkingColorOf(const cv::Mat& bgr, const Lane& lane, const CameraModel& camera,
                             int top_row = 0, int bottom_row = -1);
 
+// A marking's pattern from the image along it, every 0.25 m of road: a bar
+// (paint brighter than the road on both sides) at 85 % of the samples with
+// no gap of 1 m is solid; gaps of 1.5 m or more between painted runs of
+// 0.5 m or more, dashed; two bars 0.1..0.45 m apart across the lane at 40 %
+// of the samples wide enough to tell, double; no paint but a brightness
+// step along it, a road edge. Reads BGR or one-channel frames, only rows
+// [top_row, bottom_row).
+MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraModel& camera,
+                          int top_row = 0, int bottom_row = -1);
+
 // Everything video-aware for one camera, frame after frame: each lane's
-// colour in the frame must already be in Lane::color (MarkingColorOf);
-// Track replaces it by the track's vote and sets id and confirmed, and
+// colour and type in the frame must already be in Lane::color and
+// Lane::type (MarkingColorOf, MarkingTypeOf); Track replaces them by the
+// track's votes and sets id and confirmed, and
 // returns the ego lane with its lateral speed and departure flag.
 class SequenceTracker {
  public:
