@@ -339,8 +339,8 @@ void BM_DetectClip(benchmark::State& state) {
 }
 BENCHMARK(BM_DetectClip)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
-// What tracking adds to a frame (docs/tracking.md): each lane's colour from
-// the image, then the tracker and the ego lane, over the clip's frames in
+// What tracking adds to a frame (docs/tracking.md): each lane's colour and
+// type from the image, then the tracker and the ego lane, over the clip's frames in
 // order (their detections made beforehand). The counter detect_ms is the
 // mean detection time of the same frames, measured in the same run: the
 // benchmark's time over it is tracking's share.
@@ -365,7 +365,10 @@ void BM_TrackClip(benchmark::State& state) {
     const size_t k = i++ % detections.size();
     if (k == 0) tracker.Reset();
     std::vector<lane::Lane> lanes = detections[k].lanes;
-    for (lane::Lane& lane : lanes) lane.color = lane::MarkingColorOf(set->frames[k], lane, camera);
+    for (lane::Lane& lane : lanes) {
+      lane.color = lane::MarkingColorOf(set->frames[k], lane, camera);
+      lane.type = lane::MarkingTypeOf(set->frames[k], lane, camera);
+    }
     auto ego = tracker.Track(lanes, t += 1.0 / 15);
     benchmark::DoNotOptimize(ego);
   }

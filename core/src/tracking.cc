@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <tuple>
 
 #include "lane/bezier.h"
@@ -11,6 +12,39 @@ namespace lane {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
+
+// The camera's image <-> ground maps as homographies, built once per call
+// from four points (the camera's own transforms evaluate trigonometry at
+// every point).
+struct PlaneMaps {
+  Eigen::Matrix3d to_ground, to_image;
+
+  explicit PlaneMaps(const CameraModel& camera) {
+    const double v0 = std::max(camera.HorizonRow() + 10.0, 0.0);
+    const double v1 = std::max<double>(camera.image_height - 1, v0 + 1.0);
+    std::vector<cv::Point2f> image = {
+        {0.0f, static_cast<float>(v0)},
+        {static_cast<float>(camera.image_width - 1), static_cast<float>(v0)},
+        {0.0f, static_cast<float>(v1)},
+        {static_cast<float>(camera.image_width - 1), static_cast<float>(v1)}};
+    std::vector<cv::Point2f> ground;
+    for (const cv::Point2f& q : image) {
+      const Eigen::Vector2d g = camera.ImageToGround({q.x, q.y});
+      ground.emplace_back(static_cast<float>(g.x()), static_cast<float>(g.y()));
+    }
+    const cv::Mat h = cv::getPerspectiveTransform(image, ground);
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) to_ground(r, c) = h.at<double>(r, c);
+    }
+    to_image = to_ground.inverse();
+  }
+  static Eigen::Vector2d Apply(const Eigen::Matrix3d& m, const Eigen::Vector2d& p) {
+    const Eigen::Vector3d q = m * Eigen::Vector3d(p.x(), p.y(), 1.0);
+    return q.head<2>() / q.z();
+  }
+  Eigen::Vector2d Ground(const Eigen::Vector2d& p) const { return Apply(to_ground, p); }
+  Eigen::Vector2d Image(const Eigen::Vector2d& g) const { return Apply(to_image, g); }
+};
 
 Bezier GroundBezier(const Lane& lane) {
   Bezier b;
@@ -291,14 +325,18 @@ void EgoTracker::Update(std::optional<EgoLane>& ego, double time_s) {
 MarkingColor MarkingColorOf(const cv::Mat& bgr, const Lane& lane, const CameraModel& camera,
                             int top_row, int bottom_row) {
   if (bgr.type() != CV_8UC3) return MarkingColor::kUnknown;
+  const PlaneMaps maps(camera);
   const int bottom = bottom_row < 0 ? bgr.rows : std::min(bottom_row, bgr.rows);
   Bezier image;
   for (int k = 0; k < 4; ++k) image.p[k] = lane.image[k];
+  // Mean colour over columns c0..c1, at most 8 of them read.
   auto mean = [&](int row, int c0, int c1) {
+    const int stride = std::max(1, (c1 - c0 + 1) / 8);
     cv::Vec3d sum(0, 0, 0);
+    int n = 0;
     const cv::Vec3b* p = bgr.ptr<cv::Vec3b>(row);
-    for (int c = c0; c <= c1; ++c) sum += cv::Vec3d(p[c][0], p[c][1], p[c][2]);
-    return sum / static_cast<double>(c1 - c0 + 1);
+    for (int c = c0; c <= c1; c += stride, ++n) sum += cv::Vec3d(p[c][0], p[c][1], p[c][2]);
+    return sum / static_cast<double>(n);
   };
   // Yellow paint is bright in red *and* green over blue; a red car or tail
   // light is bright in red only.
@@ -310,8 +348,8 @@ MarkingColor MarkingColorOf(const cv::Mat& bgr, const Lane& lane, const CameraMo
     const int row = static_cast<int>(std::lround(p.y()));
     if (row < top_row || row >= bottom || row <= camera.HorizonRow() + 5) continue;
     // The marking's width here (15 cm on the road), pixels.
-    const Eigen::Vector2d g = camera.ImageToGround(p);
-    const double w = (camera.GroundToImage(g + Eigen::Vector2d(0.15, 0.0)) - p).norm();
+    const Eigen::Vector2d g = maps.Ground(p);
+    const double w = (maps.Image(g + Eigen::Vector2d(0.15, 0.0)) - p).norm();
     if (!(w >= 2.0) || w > bgr.cols / 8.0) continue;
     const int u = static_cast<int>(std::lround(p.x()));
     const int half = std::max(0, static_cast<int>(w / 4));
@@ -356,10 +394,20 @@ double GreyAt(const cv::Mat& frame, int row, int col) {
   return frame.at<uint8_t>(row, col);
 }
 
+// Mean grey over columns c0..c1 of a row, at most 8 columns read (a wide
+// window near the camera is sampled, not summed whole).
 double GreyMean(const cv::Mat& frame, int row, int c0, int c1) {
+  const int stride = std::max(1, (c1 - c0 + 1) / 8);
   double sum = 0;
-  for (int c = c0; c <= c1; ++c) sum += GreyAt(frame, row, c);
-  return sum / (c1 - c0 + 1);
+  int n = 0;
+  if (frame.type() == CV_8UC3) {
+    const cv::Vec3b* p = frame.ptr<cv::Vec3b>(row);
+    for (int c = c0; c <= c1; c += stride, ++n) sum += p[c][0] + p[c][1] + p[c][2];
+    return sum / (3.0 * n);
+  }
+  const uint8_t* p = frame.ptr<uint8_t>(row);
+  for (int c = c0; c <= c1; c += stride, ++n) sum += p[c];
+  return sum / n;
 }
 
 }  // namespace
@@ -369,13 +417,15 @@ MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraMo
   if (frame.empty() || (frame.type() != CV_8UC3 && frame.type() != CV_8UC1)) {
     return MarkingType::kUnknown;
   }
+  const PlaneMaps maps(camera);
   const int bottom = bottom_row < 0 ? frame.rows : std::min(bottom_row, frame.rows);
   Bezier image;
   for (int k = 0; k < 4; ++k) image.p[k] = lane.image[k];
-  // Samples every kStep metres of road along the lane (from the image spline
+  // Samples every kStep metres of road along the lane (fine enough for gaps
+  // of 1.5 m and more) (from the image spline
   // mapped to the ground), near to far.
-  constexpr double kStep = 0.25;
-  const std::vector<Eigen::Vector2d> dense = image.Sample(200);
+  constexpr double kStep = 0.4;
+  const std::vector<Eigen::Vector2d> dense = image.Sample(120);
   std::vector<Eigen::Vector2d> samples;
   double run = kStep;
   Eigen::Vector2d previous = Eigen::Vector2d::Zero();
@@ -383,7 +433,7 @@ MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraMo
   const double horizon = camera.HorizonRow();
   for (const Eigen::Vector2d& p : dense) {
     if (p.y() <= horizon + 5) continue;
-    const Eigen::Vector2d g = camera.ImageToGround(p);
+    const Eigen::Vector2d g = maps.Ground(p);
     if (have_previous) run += (g - previous).norm();
     previous = g;
     have_previous = true;
@@ -397,8 +447,8 @@ MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraMo
   for (const Eigen::Vector2d& p : samples) {
     const int row = static_cast<int>(std::lround(p.y()));
     if (row < top_row || row >= bottom) continue;
-    const Eigen::Vector2d g = camera.ImageToGround(p);
-    const double w = (camera.GroundToImage(g + Eigen::Vector2d(0.15, 0.0)) - p).norm();
+    const Eigen::Vector2d g = maps.Ground(p);
+    const double w = (maps.Image(g + Eigen::Vector2d(0.15, 0.0)) - p).norm();
     if (!(w >= 1.5) || w > frame.cols / 8.0) continue;
     const int u = static_cast<int>(std::lround(p.x()));
     const int half = std::max(0, static_cast<int>(w / 4));
@@ -410,17 +460,18 @@ MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraMo
     const double left = GreyMean(frame, row, u - off - span, u - off);
     const double right = GreyMean(frame, row, u + off, u + off + span);
     const bool bar = std::min(paint - left, paint - right) >= 12.0;
-    if (!bar && std::abs(left - right) >= 15.0) ++steps;
-    on += bar;
-    pattern.push_back(bar);
     // Two bars side by side: the profile across +-0.3 m has two peaks
-    // 0.1..0.45 m apart with a dip between them.
-    if (bar && w >= 4.0) {
-      ++resolvable;
+    // 0.1..0.45 m apart with the road showing between them. A double
+    // line's centre (where its lane runs) is that dip, not a bar, so the
+    // check runs where there is no bar, and on every other bar sample (a
+    // double line runs on: half of them tell as much for half the reads).
+    bool twin = false;
+    const bool check = w >= 4.0 && (!bar || (n % 2) == 0);
+    if (check) {
+      // Along the row, 3 cm on the road is 0.2 w pixels (w: 15 cm).
       std::vector<double> profile;
       for (int k = -10; k <= 10; ++k) {
-        const Eigen::Vector2d q = camera.GroundToImage(g + Eigen::Vector2d(0.03 * k, 0.0));
-        const int c = static_cast<int>(std::lround(q.x()));
+        const int c = static_cast<int>(std::lround(p.x() + 0.2 * w * k));
         profile.push_back(c >= 0 && c < frame.cols ? GreyAt(frame, row, c) : 0.0);
       }
       const double floor = std::min(profile.front(), profile.back());
@@ -432,22 +483,27 @@ MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraMo
           peaks.push_back(k);
         }
       }
-      for (size_t a = 0; a + 1 < peaks.size(); ++a) {
+      for (size_t a = 0; a + 1 < peaks.size() && !twin; ++a) {
         const int k0 = peaks[a], k1 = peaks[a + 1];
         const double gap_m = 0.03 * (k1 - k0);
         if (gap_m < 0.1 || gap_m > 0.45) continue;
-        // Between two lines of paint the road shows: the dip goes at least
-        // half way down to the road's level (texture on one line does not).
+        // The dip goes at least half way down to the road's level (texture
+        // on one line does not).
         double dip = 1e9;
         for (int k = k0 + 1; k < k1; ++k) dip = std::min(dip, profile[static_cast<size_t>(k)]);
         const double low_peak =
             std::min(profile[static_cast<size_t>(k0)], profile[static_cast<size_t>(k1)]);
-        if (low_peak >= floor + 20 && dip <= floor + 0.5 * (low_peak - floor)) {
-          ++doubles;
-          break;
-        }
+        twin = low_peak >= floor + 20 && dip <= floor + 0.5 * (low_peak - floor);
       }
     }
+    const bool painted = bar || twin;
+    if (check && painted) {
+      ++resolvable;
+      doubles += twin;
+    }
+    if (!painted && std::abs(left - right) >= 15.0) ++steps;
+    on += painted;
+    pattern.push_back(painted);
   }
   if (n < 12) return MarkingType::kUnknown;
   const double on_share = static_cast<double>(on) / n;

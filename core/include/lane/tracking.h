@@ -171,7 +171,7 @@ class EgoTracker {
 MarkingColor MarkingColorOf(const cv::Mat& bgr, const Lane& lane, const CameraModel& camera,
                             int top_row = 0, int bottom_row = -1);
 
-// A marking's pattern from the image along it, every 0.25 m of road: a bar
+// A marking's pattern from the image along it, every 0.4 m of road: a bar
 // (paint brighter than the road on both sides) at 85 % of the samples with
 // no gap of 1 m is solid; gaps of 1.5 m or more between painted runs of
 // 0.5 m or more, dashed; two bars 0.1..0.45 m apart across the lane at 40 %
