@@ -153,7 +153,7 @@ absl::StatusOr<CalibrationResult> CalibrateRendered(const CameraModel& camera, i
 TEST(CalibrationTest, RandomCamerasAreRecoveredFromRenderedDrives) {
   std::mt19937_64 rng(20261202);
   std::uniform_real_distribution<double> pitch(-5.0, 15.0), yaw(-5.0, 5.0), height(1.2, 2.5);
-  for (int k = 0; k < 6; ++k) {
+  for (int k = 0; k < 4; ++k) {
     const CameraModel truth = TestCamera(pitch(rng), yaw(rng), height(rng));
     SCOPED_TRACE(::testing::Message() << "camera " << k << ": pitch " << truth.pitch_deg << " yaw "
                                       << truth.yaw_deg << " height " << truth.height_m);
@@ -188,12 +188,12 @@ TEST(CalibrationTest, OnlineRefinementFollowsAPitchDrift) {
   so.num_lanes = 3;
   so.straight_probability = 0.8;
   so.max_heading_rad = 0.005;
-  constexpr int kFrames = 240;
+  constexpr int kFrames = 180;
   constexpr double kDrift = 1.0;
   int rebuilt = 0;
   for (int i = 0; i < kFrames; ++i) {
     CameraModel truth = start;
-    truth.pitch_deg += kDrift * std::min(1.0, i / 160.0);  // 1 degree over 160 frames
+    truth.pitch_deg += kDrift * std::min(1.0, i / 120.0);  // 1 degree over 120 frames
     const absl::StatusOr<SyntheticFrame> frame = RenderSyntheticFrame(truth, so, 500 + i);
     ASSERT_TRUE(frame.ok());
     const absl::StatusOr<Detection> d = detector->Detect(frame->bgr);
