@@ -46,6 +46,33 @@ struct PlaneMaps {
   Eigen::Vector2d Image(const Eigen::Vector2d& g) const { return Apply(to_image, g); }
 };
 
+// Where to read a 15 cm marking at image point p of a lane: its row and
+// column, its width in pixels, the paint window (a quarter width each side)
+// and the road windows 1.5 widths to its left and right. None when the
+// marking is narrower than min_width_px or wider than an eighth of the
+// frame, or a window leaves the frame.
+struct BarWindows {
+  int row = 0, u = 0;
+  double width_px = 0;
+  int half = 0, off = 0, span = 0;  // paint u +- half; road u -+ off .. off + span
+};
+
+std::optional<BarWindows> BarWindowsAt(const PlaneMaps& maps, const Eigen::Vector2d& p, int cols,
+                                       double min_width_px) {
+  BarWindows b;
+  b.row = static_cast<int>(std::lround(p.y()));
+  const Eigen::Vector2d g = maps.Ground(p);
+  b.width_px = (maps.Image(g + Eigen::Vector2d(0.15, 0.0)) - p).norm();
+  const double w = b.width_px;
+  if (!(w >= min_width_px) || w > cols / 8.0) return std::nullopt;
+  b.u = static_cast<int>(std::lround(p.x()));
+  b.half = std::max(0, static_cast<int>(w / 4));
+  b.off = static_cast<int>(std::ceil(1.5 * w));
+  b.span = std::max(1, static_cast<int>(w / 2));
+  if (b.u - b.off - b.span < 0 || b.u + b.off + b.span >= cols) return std::nullopt;
+  return b;
+}
+
 Bezier GroundBezier(const Lane& lane) {
   Bezier b;
   for (int k = 0; k < 4; ++k) b.p[k] = lane.ground[k];
@@ -347,15 +374,9 @@ MarkingColor MarkingColorOf(const cv::Mat& bgr, const Lane& lane, const CameraMo
   for (const Eigen::Vector2d& p : image.Sample(24)) {
     const int row = static_cast<int>(std::lround(p.y()));
     if (row < top_row || row >= bottom || row <= camera.HorizonRow() + 5) continue;
-    // The marking's width here (15 cm on the road), pixels.
-    const Eigen::Vector2d g = maps.Ground(p);
-    const double w = (maps.Image(g + Eigen::Vector2d(0.15, 0.0)) - p).norm();
-    if (!(w >= 2.0) || w > bgr.cols / 8.0) continue;
-    const int u = static_cast<int>(std::lround(p.x()));
-    const int half = std::max(0, static_cast<int>(w / 4));
-    const int off = static_cast<int>(std::ceil(1.5 * w));
-    const int span = std::max(1, static_cast<int>(w / 2));
-    if (u - off - span < 0 || u + off + span >= bgr.cols) continue;
+    const std::optional<BarWindows> b = BarWindowsAt(maps, p, bgr.cols, 2.0);
+    if (!b) continue;
+    const int u = b->u, half = b->half, off = b->off, span = b->span;
     const cv::Vec3d paint = mean(row, u - half, u + half);
     const cv::Vec3d left = mean(row, u - off - span, u - off);
     const cv::Vec3d right = mean(row, u + off, u + off + span);
@@ -447,14 +468,10 @@ MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraMo
   for (const Eigen::Vector2d& p : samples) {
     const int row = static_cast<int>(std::lround(p.y()));
     if (row < top_row || row >= bottom) continue;
-    const Eigen::Vector2d g = maps.Ground(p);
-    const double w = (maps.Image(g + Eigen::Vector2d(0.15, 0.0)) - p).norm();
-    if (!(w >= 1.5) || w > frame.cols / 8.0) continue;
-    const int u = static_cast<int>(std::lround(p.x()));
-    const int half = std::max(0, static_cast<int>(w / 4));
-    const int off = static_cast<int>(std::ceil(1.5 * w));
-    const int span = std::max(1, static_cast<int>(w / 2));
-    if (u - off - span < 0 || u + off + span >= frame.cols) continue;
+    const std::optional<BarWindows> b = BarWindowsAt(maps, p, frame.cols, 1.5);
+    if (!b) continue;
+    const int u = b->u, half = b->half, off = b->off, span = b->span;
+    const double w = b->width_px;
     ++n;
     const double paint = GreyMean(frame, row, u - half, u + half);
     const double left = GreyMean(frame, row, u - off - span, u - off);
