@@ -68,6 +68,7 @@ std::string DetectionJsonLine(const std::string& frame, int width, int height, l
     if (tracked) {
       l["id"] = lane.id;
       l["confirmed"] = lane.confirmed;
+      l["predicted"] = lane.predicted;
       l["color"] = lane::MarkingColorName(lane.color);
       l["type"] = lane::MarkingTypeName(lane.type);
     }

@@ -75,12 +75,8 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
         session.ObserveLanes(detection->lanes);
         if (colors) {
           const lane::FrameNeeds& needs = detector->Needs();
-          for (lane::Lane& lane : detection->lanes) {
-            lane.color = lane::MarkingColorOf(*frame, lane, detector->ipm().camera(), needs.top,
-                                              needs.bottom);
-            lane.type = lane::MarkingTypeOf(*frame, lane, detector->ipm().camera(), needs.top,
-                                            needs.bottom);
-          }
+          lane::ReadMarkings(*frame, detector->ipm().camera(), detection->lanes, needs.top,
+                             needs.bottom);
         }
         wire::LanesToProto(*detection, response);
         wire::TimingsToProto(detection->timings, timings);

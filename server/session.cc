@@ -35,8 +35,9 @@ void Session::ObserveLanes(const std::vector<lane::Lane>& lanes) const {
 
 std::optional<lane::EgoLane> Session::Track(std::vector<lane::Lane>& lanes,
                                             std::optional<double> time_s) const {
+  const std::shared_ptr<const lane::Detector> detector = CurrentDetector();
   std::lock_guard<std::mutex> lock(track_mu_);
-  return tracker_.Track(lanes, time_s);
+  return tracker_.Track(lanes, time_s, &detector->ipm());
 }
 
 CalibrationSnapshot Session::Calibration() const {

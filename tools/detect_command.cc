@@ -164,11 +164,8 @@ class DetectRun {
     }
     if (tracker_) {
       const lane::FrameNeeds& needs = detector_.Needs();
-      for (lane::Lane& lane : detection->lanes) {
-        lane.color = lane::MarkingColorOf(frame.bgr, lane, camera_, needs.top, needs.bottom);
-        lane.type = lane::MarkingTypeOf(frame.bgr, lane, camera_, needs.top, needs.bottom);
-      }
-      detection->ego = tracker_->Track(detection->lanes, std::nullopt);
+      lane::ReadMarkings(frame.bgr, camera_, detection->lanes, needs.top, needs.bottom);
+      detection->ego = tracker_->Track(detection->lanes, std::nullopt, &detector_.ipm());
     }
     out_ << DetectionJsonLine(frame.name, frame.bgr.cols, frame.bgr.rows, mode_, *detection,
                               frame.decode_ms, tracker_.has_value())

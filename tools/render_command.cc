@@ -21,7 +21,12 @@ constexpr char kDescription[] =
     "Renders N synthetic road frames through the config's camera, with exact\n"
     "ground truth. Writes DIR/000000.png ... (frame i uses seed S + i),\n"
     "DIR/labels.jsonl (one JSON object per frame: docs/results-format.md) and\n"
-    "DIR/list.txt (the frame names, one a line: an INPUT for 'lane detect').";
+    "DIR/list.txt (the frame names, one a line: an INPUT for 'lane detect').\n"
+    "With --sequence the frames are one continuous drive instead (seed S for\n"
+    "the whole drive, frame i at i / fps seconds): a lane change, bends,\n"
+    "occluding traffic, a dashed line turning solid and changing light; the\n"
+    "labels add stable boundary ids, the time and the true ego lane\n"
+    "(docs/results-format.md). Replay it with 'lane detect --track'.";
 
 struct RenderFlags {
   std::string config;
@@ -31,6 +36,9 @@ struct RenderFlags {
   int num_lanes = lane::SyntheticOptions().num_lanes;
   int jpeg_quality = lane::SyntheticOptions().jpeg_quality;
   std::string format = "png";
+  bool sequence = false;
+  double fps = lane::SyntheticDriveOptions().fps;
+  double speed_mps = lane::SyntheticDriveOptions().speed_mps;
 };
 
 // Creates `dir` and opens its labels.jsonl and list.txt; an error message or "".
@@ -70,9 +78,21 @@ int RunRender(const RenderFlags& flags) {
   if (const std::string e = OpenOutputs(dir, &labels, &list); !e.empty()) {
     return Failure("render", e);
   }
+  lane::SyntheticDriveOptions drive;
+  drive.count = static_cast<int>(flags.count);
+  drive.fps = flags.fps;
+  drive.speed_mps = flags.speed_mps;
+  drive.frame = options;
+  if (flags.sequence) {
+    if (absl::Status s = drive.Validate(); !s.ok())
+      return Failure("render", std::string(s.message()));
+  }
   for (int64_t i = 0; i < flags.count; ++i) {
     absl::StatusOr<lane::SyntheticFrame> frame =
-        lane::RenderSyntheticFrame(config->camera, options, flags.seed + static_cast<uint64_t>(i));
+        flags.sequence ? lane::RenderSyntheticDriveFrame(config->camera, drive, flags.seed,
+                                                         static_cast<int>(i))
+                       : lane::RenderSyntheticFrame(config->camera, options,
+                                                    flags.seed + static_cast<uint64_t>(i));
     if (!frame.ok()) {
       return Failure("render", absl::StrCat("frame ", i, ": ", frame.status().message()));
     }
@@ -94,8 +114,8 @@ int RunRender(const RenderFlags& flags) {
   if (!labels || !list) {
     return Failure("render", absl::StrCat("error writing labels.jsonl/list.txt in ", dir.string()));
   }
-  std::fprintf(stderr, "lane render: %lld frames in %s\n", static_cast<long long>(flags.count),
-               dir.string().c_str());
+  std::fprintf(stderr, "lane render: %lld %s in %s\n", static_cast<long long>(flags.count),
+               flags.sequence ? "frames of one drive" : "frames", dir.string().c_str());
   return kExitOk;
 }
 
@@ -127,6 +147,15 @@ Command AddRenderCommand(CLI::App& lane) {
       ->type_name("Q")
       ->check(Between(0, 100));
   OneOf(app->add_option("--format", flags->format, "image file format"), {"png", "jpg"});
+  app->add_flag("--sequence", flags->sequence,
+                "one continuous drive (lane change, bends, traffic, a dashed line turning "
+                "solid, changing light) instead of independent frames");
+  app->add_option("--fps", flags->fps, "--sequence: frames per second")
+      ->type_name("F")
+      ->check(CLI::Range(1.0, 240.0));
+  app->add_option("--speed", flags->speed_mps, "--sequence: the car's speed, m/s")
+      ->type_name("V")
+      ->check(CLI::Range(1.0, 40.0));
   return {app, [flags] { return RunRender(*flags); }};
 }
 

@@ -51,6 +51,15 @@ void IdentityToProto(const lane::Lane& lane, v1::Lane* l) {
   l->set_color(ColorToProto(lane.color));
   // MarkingType's order is the proto's.
   l->set_type(static_cast<v1::MarkingType>(static_cast<int>(lane.type)));
+  l->set_predicted(lane.predicted);
+}
+
+void LaneToProto(const lane::Lane& lane, v1::Lane* l) {
+  BezierToProto(lane.image, l->mutable_image());
+  BezierToProto(lane.ipm, l->mutable_ipm());
+  BezierToProto(lane.ground, l->mutable_ground());
+  l->set_score(lane.score);
+  IdentityToProto(lane, l);
 }
 
 void EgoToProto(const std::optional<lane::EgoLane>& ego, v1::FrameResponse* out) {
@@ -75,14 +84,7 @@ void EgoToProto(const std::optional<lane::EgoLane>& ego, v1::FrameResponse* out)
 
 void LanesToProto(const lane::Detection& detection, v1::FrameResponse* out) {
   out->mutable_lanes()->Reserve(static_cast<int>(detection.lanes.size()));
-  for (const lane::Lane& lane : detection.lanes) {
-    v1::Lane* l = out->add_lanes();
-    BezierToProto(lane.image, l->mutable_image());
-    BezierToProto(lane.ipm, l->mutable_ipm());
-    BezierToProto(lane.ground, l->mutable_ground());
-    l->set_score(lane.score);
-    IdentityToProto(lane, l);
-  }
+  for (const lane::Lane& lane : detection.lanes) LaneToProto(lane, out->add_lanes());
   if (detection.ego) EgoToProto(detection.ego, out);
 }
 
@@ -96,6 +98,7 @@ std::vector<lane::Lane> LanesFromProto(const v1::FrameResponse& response) {
     lane.score = l.score();
     lane.id = l.id() > 0 ? l.id() : -1;
     lane.confirmed = l.confirmed();
+    lane.predicted = l.predicted();
     lane.color = ColorFromProto(l.color());
     lane.type = l.type() >= v1::MARKING_TYPE_UNKNOWN && l.type() <= v1::MARKING_TYPE_ROAD_EDGE
                     ? static_cast<lane::MarkingType>(static_cast<int>(l.type()))
@@ -107,9 +110,10 @@ std::vector<lane::Lane> LanesFromProto(const v1::FrameResponse& response) {
 
 void TrackingToProto(const std::vector<lane::Lane>& lanes, const std::optional<lane::EgoLane>& ego,
                      v1::FrameResponse* out) {
-  for (int i = 0; i < out->lanes_size() && static_cast<size_t>(i) < lanes.size(); ++i) {
-    IdentityToProto(lanes[static_cast<size_t>(i)], out->mutable_lanes(i));
-  }
+  // The tracker may have added predicted lanes and re-sorted: all anew.
+  out->clear_lanes();
+  out->mutable_lanes()->Reserve(static_cast<int>(lanes.size()));
+  for (const lane::Lane& lane : lanes) LaneToProto(lane, out->add_lanes());
   EgoToProto(ego, out);
 }
 

@@ -95,6 +95,58 @@ double LateralDistance(const GroundCurve& a, const GroundCurve& b) {
   return sum / kSamples;
 }
 
+// Kalman update of a track with a detected lane: the measurement is the
+// lane's lateral position at points spread over its extent, each with
+// standard deviation `sd`, so that a short lane says little of the
+// curvature and the heading it implies at the camera.
+void KalmanUpdate(const Lane& lane, double sd, double sd_per_m, Track* track) {
+  constexpr int kPoints = 6;
+  const std::vector<Eigen::Vector2d> pts = GroundBezier(lane).Sample(kPoints);
+  Eigen::Matrix<double, kPoints, 3> h;
+  Eigen::Matrix<double, kPoints, 1> z;
+  for (int i = 0; i < kPoints; ++i) {
+    const double y = pts[static_cast<size_t>(i)].y();
+    h.row(i) << 1.0, y, 0.5 * y * y;
+    z(i) = pts[static_cast<size_t>(i)].x();
+  }
+  if (!h.allFinite() || !z.allFinite()) return;
+  const Eigen::Matrix3d& p = track->covariance;
+  Eigen::Matrix<double, kPoints, kPoints> s = h * p * h.transpose();
+  for (int i = 0; i < kPoints; ++i) {
+    const double e = sd + sd_per_m * std::max(0.0, h(i, 1));
+    s(i, i) += e * e;
+  }
+  const Eigen::Matrix<double, 3, kPoints> gain = p * h.transpose() * s.inverse();
+  track->curve.coefficients += gain * (z - h * track->curve.coefficients);
+  track->covariance = (Eigen::Matrix3d::Identity() - gain * h) * p;
+}
+
+LaneIdentity IdentityOf(const Track& track) {
+  LaneIdentity out;
+  out.id = track.id;
+  out.confirmed = track.confirmed;
+  out.curve = track.curve;
+  out.covariance = track.covariance;
+  const std::array<double, 5>& v = track.type_votes;
+  const double solid = v[static_cast<size_t>(MarkingType::kSolid)];
+  const double dashed = v[static_cast<size_t>(MarkingType::kDashed)];
+  size_t best = 0;
+  for (size_t k = 1; k < v.size(); ++k) {
+    if (v[k] > v[best]) best = k;
+  }
+  out.type = v[best] > 0 ? static_cast<MarkingType>(best) : MarkingType::kUnknown;
+  if ((out.type == MarkingType::kSolid || out.type == MarkingType::kDashed) && dashed > 0 &&
+      dashed >= 0.3 * (solid + dashed)) {
+    out.type = MarkingType::kDashed;
+  }
+  if (track.yellow_votes > track.white_votes) {
+    out.color = MarkingColor::kYellow;
+  } else if (track.white_votes > track.yellow_votes) {
+    out.color = MarkingColor::kWhite;
+  }
+  return out;
+}
+
 }  // namespace
 
 std::optional<GroundCurve> FitGroundCurve(const Lane& lane) {
@@ -179,9 +231,11 @@ std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
     track_of[j] = static_cast<int>(i);
   }
 
-  const Eigen::Vector3d r(options_.measured_offset_sd, options_.measured_heading_sd,
-                          options_.measured_curvature_sd);
-  const Eigen::Matrix3d measurement_noise = r.cwiseProduct(r).asDiagonal();
+  // Type votes fade, so that a dashed line turning solid is followed.
+  const double fade = std::exp(-dt / std::max(1e-3, options_.type_memory_s));
+  for (Track& track : tracks_) {
+    for (double& v : track.type_votes) v *= fade;
+  }
   auto vote = [&](Track& track, size_t j) {
     if (j < types.size() && types[j] != MarkingType::kUnknown) {
       track.type_votes[static_cast<size_t>(types[j])] += 1;
@@ -193,11 +247,7 @@ std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
   for (size_t j = 0; j < lanes.size(); ++j) {
     if (track_of[j] < 0) continue;
     Track& track = tracks_[static_cast<size_t>(track_of[j])];
-    // Kalman update with H = I: the lane's fitted coefficients are measured.
-    const Eigen::Matrix3d s = track.covariance + measurement_noise;
-    const Eigen::Matrix3d gain = track.covariance * s.inverse();
-    track.curve.coefficients += gain * (curves[j]->coefficients - track.curve.coefficients);
-    track.covariance = (Eigen::Matrix3d::Identity() - gain) * track.covariance;
+    KalmanUpdate(lanes[j], options_.measured_x_sd, options_.measured_x_sd_per_m, &track);
     track.curve.y_near = curves[j]->y_near;
     track.curve.y_far = curves[j]->y_far;
     ++track.hits;
@@ -216,38 +266,62 @@ std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
     track.id = next_id_++;
     track.hits = 1;
     track.confirmed = options_.confirm_frames <= 1;
+    // The prior: the lane's fitted offset and heading, loosely, and a
+    // straight road; the first measurement then sets what it shows.
     track.curve = *curves[j];
-    track.covariance = measurement_noise;
+    track.curve.coefficients(2) = 0.0;
+    const Eigen::Vector3d prior(options_.prior_offset_sd, options_.prior_heading_sd,
+                                options_.prior_curvature_sd);
+    track.covariance = prior.cwiseProduct(prior).asDiagonal();
+    KalmanUpdate(lanes[j], options_.measured_x_sd, options_.measured_x_sd_per_m, &track);
     vote(track, j);
     born.push_back(j);
     tracks_.push_back(track);
     track_of[j] = static_cast<int>(tracks_.size()) - 1;
   }
 
+  // Two tracks on one boundary (a detection that left the gate for a frame
+  // started a second one, or it was missed): the one seen less often ends,
+  // and a lane it holds this frame passes to the other, which has none.
+  for (size_t a = 0; a < tracks_.size(); ++a) {
+    for (size_t b = 0; b < tracks_.size(); ++b) {
+      if (a == b || tracks_[a].misses >= options_.max_misses ||
+          tracks_[b].misses >= options_.max_misses) {
+        continue;
+      }
+      const bool b_weaker = tracks_[b].hits < tracks_[a].hits ||
+                            (tracks_[b].hits == tracks_[a].hits && tracks_[b].id > tracks_[a].id);
+      if (!b_weaker ||
+          LateralDistance(tracks_[a].curve, tracks_[b].curve) >= options_.duplicate_m) {
+        continue;
+      }
+      const auto ia = static_cast<int>(a), ib = static_cast<int>(b);
+      const bool a_has_lane = std::find(track_of.begin(), track_of.end(), ia) != track_of.end();
+      const bool b_has_lane = std::find(track_of.begin(), track_of.end(), ib) != track_of.end();
+      // Both found in this frame: two boundaries close together (a lane
+      // ending, a double line), not one boundary twice.
+      if (a_has_lane && b_has_lane) continue;
+      for (size_t j = 0; j < track_of.size(); ++j) {
+        if (track_of[j] != ib) continue;
+        track_of[j] = ia;
+        Track& kept = tracks_[a];
+        KalmanUpdate(lanes[j], options_.measured_x_sd, options_.measured_x_sd_per_m, &kept);
+        kept.curve.y_near = curves[j]->y_near;
+        kept.curve.y_far = curves[j]->y_far;
+        ++kept.hits;
+        kept.misses = 0;
+        kept.confirmed = kept.confirmed || kept.hits >= options_.confirm_frames;
+        vote(kept, j);
+      }
+      tracks_[b].misses = options_.max_misses;  // ends below
+    }
+  }
+
   std::vector<LaneIdentity> out(lanes.size());
   for (size_t j = 0; j < lanes.size(); ++j) {
     if (track_of[j] < 0) continue;
     const Track& track = tracks_[static_cast<size_t>(track_of[j])];
-    out[j].id = track.id;
-    out[j].confirmed = track.confirmed;
-    out[j].curve = track.curve;
-    const std::array<double, 5>& v = track.type_votes;
-    const double solid = v[static_cast<size_t>(MarkingType::kSolid)];
-    const double dashed = v[static_cast<size_t>(MarkingType::kDashed)];
-    size_t best = 0;
-    for (size_t k = 1; k < v.size(); ++k) {
-      if (v[k] > v[best]) best = k;
-    }
-    out[j].type = v[best] > 0 ? static_cast<MarkingType>(best) : MarkingType::kUnknown;
-    if ((out[j].type == MarkingType::kSolid || out[j].type == MarkingType::kDashed) && dashed > 0 &&
-        dashed >= (solid + dashed) / 3.0) {
-      out[j].type = MarkingType::kDashed;
-    }
-    if (track.yellow_votes > track.white_votes) {
-      out[j].color = MarkingColor::kYellow;
-    } else if (track.white_votes > track.yellow_votes) {
-      out[j].color = MarkingColor::kWhite;
-    }
+    out[j] = IdentityOf(track);
   }
   // Tracks missed max_misses frames in a row end.
   tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
@@ -270,9 +344,38 @@ std::optional<EgoLane> ComputeEgoLane(const std::vector<Lane>& lanes, const Came
   return EgoLaneOfCurves(curves, ids, camera, options);
 }
 
-std::optional<EgoLane> EgoLaneOfCurves(const std::vector<std::optional<GroundCurve>>& curves,
+std::optional<EgoLane> EgoLaneOfCurves(const std::vector<std::optional<GroundCurve>>& given,
                                        const std::vector<int>& ids, const CameraModel& camera,
-                                       const EgoOptions& options) {
+                                       const EgoOptions& options,
+                                       const std::vector<Eigen::Matrix3d>* covariances) {
+  std::vector<std::optional<GroundCurve>> curves = given;
+  if (covariances != nullptr && covariances->size() == curves.size()) {
+    // Shared heading and curvature: the information-weighted mean of the
+    // lanes' (heading, curvature) ...
+    Eigen::Matrix2d info = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d weighted = Eigen::Vector2d::Zero();
+    for (size_t i = 0; i < curves.size(); ++i) {
+      if (!curves[i]) continue;
+      const Eigen::Matrix2d p = (*covariances)[i].bottomRightCorner<2, 2>();
+      if (std::abs(p.determinant()) < 1e-30) continue;
+      const Eigen::Matrix2d w = p.inverse();
+      info += w;
+      weighted += w * curves[i]->coefficients.tail<2>();
+    }
+    if (std::abs(info.determinant()) > 1e-30) {
+      const Eigen::Vector2d shared = info.inverse() * weighted;
+      // ... and each offset given them (Gaussian conditioning).
+      for (size_t i = 0; i < curves.size(); ++i) {
+        if (!curves[i]) continue;
+        const Eigen::Matrix3d& p = (*covariances)[i];
+        const Eigen::Matrix2d pss = p.bottomRightCorner<2, 2>();
+        if (std::abs(pss.determinant()) < 1e-30) continue;
+        const Eigen::Vector2d delta = shared - curves[i]->coefficients.tail<2>();
+        curves[i]->coefficients(0) += (p.block<1, 2>(0, 1) * pss.inverse() * delta)(0);
+        curves[i]->coefficients.tail<2>() = shared;
+      }
+    }
+  }
   int left = -1, right = -1;
   double xl = -1e9, xr = 1e9;
   for (size_t i = 0; i < curves.size(); ++i) {
@@ -296,7 +399,7 @@ std::optional<EgoLane> EgoLaneOfCurves(const std::vector<std::optional<GroundCur
   ego.width_m = width;
   ego.offset_m = -0.5 * (xl + xr);
   ego.heading_deg =
-      std::atan(0.5 * (l.coefficients(1) + r.coefficients(1))) * kRadToDeg + camera.yaw_deg;
+      std::atan(0.5 * (l.coefficients(1) + r.coefficients(1))) * kRadToDeg - camera.yaw_deg;
   ego.curvature_per_m = 0.5 * (l.coefficients(2) + r.coefficients(2));
   ego.left_index = left;
   ego.right_index = right;
@@ -310,17 +413,33 @@ std::optional<EgoLane> EgoLaneOfCurves(const std::vector<std::optional<GroundCur
 void EgoTracker::Reset() { history_.clear(); }
 
 void EgoTracker::Update(std::optional<EgoLane>& ego, double time_s) {
-  if (!ego) {
-    Reset();
-    return;
+  // A frame without the ego lane keeps the history: the window drops what
+  // is too old.
+  if (!ego) return;
+  if (!history_.empty() && time_s <= history_.back().first) history_.clear();
+  if (!history_.empty()) {
+    // A lane change: the new lane's left boundary is the old one's right
+    // (moving right), or its right the old left (moving left). The offset
+    // jumps by the width; the history shifts with it, so that the rate
+    // goes on. Other pairs of boundaries (or, without ids, a jump of half a
+    // lane) start the rate again.
+    const bool ids = ego->left_id >= 0 && ego->right_id >= 0;
+    double shift = 0;
+    bool keep = true;
+    if (ids) {
+      if (ego->left_id == right_id_ && ego->left_id != left_id_) {
+        shift = -ego->width_m;
+      } else if (ego->right_id == left_id_ && ego->right_id != right_id_) {
+        shift = ego->width_m;
+      } else {
+        keep = ego->left_id == left_id_ && ego->right_id == right_id_;
+      }
+    } else {
+      keep = std::abs(ego->offset_m - history_.back().second) < 0.5 * ego->width_m;
+    }
+    if (!keep) history_.clear();
+    for (auto& entry : history_) entry.second += shift;
   }
-  // A new pair of boundaries (a lane change, or other lanes found): the
-  // rate starts again. Without ids, a jump of half a lane says the same.
-  const bool ids = ego->left_id >= 0 && ego->right_id >= 0;
-  const bool same = !history_.empty() &&
-                    (ids ? ego->left_id == left_id_ && ego->right_id == right_id_
-                         : std::abs(ego->offset_m - history_.back().second) < 0.5 * ego->width_m);
-  if (!same || time_s <= history_.back().first) history_.clear();
   history_.emplace_back(time_s, ego->offset_m);
   while (history_.front().first < time_s - options_.rate_window_s) history_.pop_front();
   left_id_ = ego->left_id;
@@ -555,8 +674,50 @@ MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraMo
   return MarkingType::kUnknown;
 }
 
+void ReadMarkings(const cv::Mat& frame, const CameraModel& camera, std::vector<Lane>& lanes,
+                  int top_row, int bottom_row) {
+  for (Lane& lane : lanes) {
+    lane.color = MarkingColorOf(frame, lane, camera, top_row, bottom_row);
+    lane.type = MarkingTypeOf(frame, lane, camera, top_row, bottom_row);
+  }
+}
+
+namespace {
+
+// A lane drawn from a track's curve over its last extent: ground, image and
+// top-view Beziers (none when it does not project into the image).
+std::optional<Lane> LaneFromCurve(const GroundCurve& curve, const CameraModel& camera,
+                                  const IpmMapping& ipm) {
+  constexpr int kSamples = 12;
+  std::vector<Eigen::Vector2d> ground, image, top;
+  const double horizon = camera.HorizonRow();
+  for (int i = 0; i < kSamples; ++i) {
+    const double y = curve.y_near + (curve.y_far - curve.y_near) * i / (kSamples - 1);
+    const Eigen::Vector2d g(curve.X(y), y);
+    const Eigen::Vector2d p = camera.GroundToImage(g);
+    if (!p.allFinite() || p.y() <= horizon) continue;
+    ground.push_back(g);
+    image.push_back(p);
+    top.push_back(ipm.GroundToIpm(g));
+  }
+  if (ground.size() < 4) return std::nullopt;
+  // Image order as the detector's: from the bottom of the frame up.
+  const auto g = FitBezier(ground);
+  const auto m = FitBezier(image);
+  const auto t = FitBezier(top);
+  if (!g || !m || !t) return std::nullopt;
+  Lane lane;
+  lane.ground = g->p;
+  lane.image = m->p;
+  lane.ipm = t->p;
+  lane.predicted = true;
+  return lane;
+}
+
+}  // namespace
+
 std::optional<EgoLane> SequenceTracker::Track(std::vector<Lane>& lanes,
-                                              std::optional<double> time_s) {
+                                              std::optional<double> time_s, const IpmMapping* ipm) {
   std::vector<MarkingColor> colors;
   std::vector<MarkingType> types;
   for (const Lane& lane : lanes) {
@@ -570,17 +731,63 @@ std::optional<EgoLane> SequenceTracker::Track(std::vector<Lane>& lanes,
     lanes[i].color = ids[i].color;
     lanes[i].type = ids[i].type;
   }
+  std::vector<LaneIdentity> all = ids;
+  if (ipm != nullptr) {
+    // Confirmed tracks missed for a few frames: their prediction.
+    for (const lane::Track& track : lanes_.tracks()) {
+      if (!track.confirmed || track.misses < 1 || track.misses > lanes_.options().coast_frames) {
+        continue;
+      }
+      // Not when a lane of this frame lies near it: the boundary was found
+      // (by another track); reporting both would draw it twice.
+      bool found = false;
+      for (size_t i = 0; i < lanes.size() && !found; ++i) {
+        found = all[i].id >= 0 &&
+                LateralDistance(track.curve, all[i].curve) < lanes_.options().coast_clearance_m;
+      }
+      if (found) continue;
+      std::optional<Lane> lane = LaneFromCurve(track.curve, camera_, *ipm);
+      if (!lane) continue;
+      const LaneIdentity identity = IdentityOf(track);
+      lane->id = identity.id;
+      lane->confirmed = true;
+      lane->color = identity.color;
+      lane->type = identity.type;
+      lanes.push_back(*lane);
+      all.push_back(identity);
+    }
+    // Left to right, as the detector sorts.
+    std::vector<size_t> order(lanes.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    auto key = [&](size_t i) {
+      return all[i].id >= 0 ? all[i].curve.X(0.5 * (all[i].curve.y_near + all[i].curve.y_far))
+                            : 0.5 * (lanes[i].ground[0].x() + lanes[i].ground[3].x());
+    };
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return key(a) < key(b); });
+    std::vector<Lane> sorted_lanes;
+    std::vector<LaneIdentity> sorted_ids;
+    for (size_t i : order) {
+      sorted_lanes.push_back(lanes[i]);
+      sorted_ids.push_back(all[i]);
+    }
+    lanes = std::move(sorted_lanes);
+    all = std::move(sorted_ids);
+  }
   // The ego lane from the confirmed lanes' filtered curves only: a
   // one-frame streak on a car does not bound it, and the filter steadies
   // the offset whose rate warns of a departure.
   std::vector<std::optional<GroundCurve>> curves(lanes.size());
   std::vector<int> track_ids(lanes.size(), -1);
+  std::vector<Eigen::Matrix3d> covariances(lanes.size(), Eigen::Matrix3d::Identity());
   for (size_t i = 0; i < lanes.size(); ++i) {
-    if (!ids[i].confirmed) continue;
-    curves[i] = ids[i].curve;
-    track_ids[i] = ids[i].id;
+    if (!all[i].confirmed) continue;
+    curves[i] = all[i].curve;
+    track_ids[i] = all[i].id;
+    covariances[i] = all[i].covariance;
   }
-  std::optional<EgoLane> ego = EgoLaneOfCurves(curves, track_ids, camera_, ego_options_);
+  std::optional<EgoLane> ego =
+      EgoLaneOfCurves(curves, track_ids, camera_, ego_options_, &covariances);
   if (lanes_.resets() != resets_seen_) {
     ego_.Reset();
     resets_seen_ = lanes_.resets();

@@ -86,9 +86,23 @@ std::string RenderLabelsJson(const std::string& frame_name, const SyntheticFrame
     e["dashed"] = b.dashed;
     e["color"] = b.yellow ? "yellow" : "white";
     e["ego"] = i == frame.ego_left ? "left" : (i == frame.ego_right ? "right" : "none");
+    e["id"] = b.id;
+    if (frame.ego) e["type_changes"] = b.type_changes;
     list.push_back(e);
   }
   j["boundaries"] = list;
+  if (frame.ego) {
+    auto round4 = [](double v) { return std::round(v * 1e4) / 1e4; };
+    j["time_s"] = round4(frame.time_s);
+    nlohmann::ordered_json ego;
+    ego["lane"] = frame.ego->lane;
+    ego["offset_m"] = round4(frame.ego->offset_m);
+    ego["width_m"] = round4(frame.ego->width_m);
+    ego["heading_deg"] = round4(frame.ego->heading_deg);
+    ego["curvature_per_m"] = std::round(frame.ego->curvature_per_m * 1e7) / 1e7;
+    ego["offset_rate_mps"] = round4(frame.ego->offset_rate_mps);
+    j["ego"] = ego;
+  }
   return j.dump();
 }
 

@@ -115,19 +115,22 @@ void RenderGround(const CameraModel& cam, const Road& road, const Look& look,
       const double foot = std::sqrt(area);
       const double ext_x = std::abs(jux) + std::abs(jvx);
 
-      // Asphalt: low-frequency patches, mid-scale mottling and fine grain,
-      // each attenuated once the pixel averages over many cells.
-      double grey = look.asphalt + look.patch_amp * ValueNoise(x, y, 1.0 / 7.0, salt + 1);
-      const double mid = look.mid_amp * std::min(1.0, 1.2 / foot);
-      if (mid > 0.2) grey += mid * ValueNoise(x, y, 1.0 / 1.2, salt + 2);
-      const double grain = look.grain_amp * std::min(1.0, 0.07 / foot);
-      if (grain > 0.2) grey += grain * ValueNoise(x, y, 1.0 / 0.07, salt + 3);
-      const double fine = look.grain_amp * std::min(1.0, 0.02 / foot);
-      if (fine > 0.2) grey += fine * ValueNoise(x, y, 1.0 / 0.02, salt + 6);
-      // Darker tyre tracks in every lane.
       const double slope = road.Slope(y);
       const double inv_norm = 1.0 / std::sqrt(1.0 + slope * slope);
       const double lane_pos = (x - road.X(b0.offset, y)) * inv_norm;
+      // Texture coordinates.
+      const double gx = road.world_texture ? lane_pos : x;
+      const double gy = road.world_texture ? y + road.s0 : y;
+      // Asphalt: low-frequency patches, mid-scale mottling and fine grain,
+      // each attenuated once the pixel averages over many cells.
+      double grey = look.asphalt + look.patch_amp * ValueNoise(gx, gy, 1.0 / 7.0, salt + 1);
+      const double mid = look.mid_amp * std::min(1.0, 1.2 / foot);
+      if (mid > 0.2) grey += mid * ValueNoise(gx, gy, 1.0 / 1.2, salt + 2);
+      const double grain = look.grain_amp * std::min(1.0, 0.07 / foot);
+      if (grain > 0.2) grey += grain * ValueNoise(gx, gy, 1.0 / 0.07, salt + 3);
+      const double fine = look.grain_amp * std::min(1.0, 0.02 / foot);
+      if (fine > 0.2) grey += fine * ValueNoise(gx, gy, 1.0 / 0.02, salt + 6);
+      // Darker tyre tracks in every lane.
       const double in_lane = lane_pos - road.lane_width * std::floor(lane_pos / road.lane_width);
       const double track = std::min(std::abs(in_lane - 0.5 * road.lane_width + 0.85),
                                     std::abs(in_lane - 0.5 * road.lane_width - 0.85));
@@ -141,9 +144,9 @@ void RenderGround(const CameraModel& cam, const Road& road, const Look& look,
       const double er = (road.X(road.edge_right, y) - x) * inv_norm;
       const double on_road = SoftStep(el, fd0) * SoftStep(er, fd0);
       if (on_road < 1.0) {
-        const double vt = look.verge_amp *
-                          (0.6 * ValueNoise(x, y, 1.0 / 0.8, salt + 4) +
-                           0.4 * std::min(1.0, 0.1 / foot) * ValueNoise(x, y, 1.0 / 0.1, salt + 5));
+        const double vt = look.verge_amp * (0.6 * ValueNoise(gx, gy, 1.0 / 0.8, salt + 4) +
+                                            0.4 * std::min(1.0, 0.1 / foot) *
+                                                ValueNoise(gx, gy, 1.0 / 0.1, salt + 5));
         const cv::Vec3f verge = look.verge + cv::Vec3f::all(static_cast<float>(vt));
         colour = Lerp(verge, colour, on_road);
       }
@@ -171,7 +174,7 @@ void RenderGround(const CameraModel& cam, const Road& road, const Look& look,
         if (cover <= 0) continue;
         double alpha = m->alpha;
         if (m->wear > 0) {
-          alpha *= 1.0 - m->wear * std::max(0.0, ValueNoise(x, y, 1.0 / 0.4, m->salt));
+          alpha *= 1.0 - m->wear * std::max(0.0, ValueNoise(gx, gy, 1.0 / 0.4, m->salt));
         }
         colour = Lerp(colour, m->colour, alpha * cover);
       }
@@ -286,33 +289,22 @@ void DrawObjects(const CameraModel& cam, std::vector<Object> objects, cv::Mat& i
   }
 }
 
-}  // namespace synthetic_internal
+double BottomDistance(const CameraModel& cam) {
+  const int w = cam.image_width;
+  const int h = cam.image_height;
+  if (!(h - 1 > cam.HorizonRow() + 0.5)) return 0.5;
+  const double yb = cam.ImageToGround({0.5 * (w - 1), h - 1.0}).y();
+  return std::isfinite(yb) && yb > 0 ? yb : 0.5;
+}
 
-using namespace synthetic_internal;  // NOLINT: this file's own helpers
-
-absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
-                                                    const SyntheticOptions& options,
-                                                    uint64_t seed) {
-  if (absl::Status s = camera.Validate(); !s.ok()) return s;
-  if (absl::Status s = ValidateOptions(options); !s.ok()) return s;
+SyntheticFrame RenderScene(const CameraModel& camera, const SyntheticOptions& options,
+                           Scene& scene) {
   const int w = camera.image_width;
   const int h = camera.image_height;
-  const double horizon = camera.HorizonRow();
-  Rng rng(seed);
-
-  Road road = SampleRoad(options, rng);
-  const Look look = SampleLook(rng, h);
-
-  // Nearest visible ground distance (bottom row, centre column).
-  double y_bottom = 0.5;
-  const bool ground_visible = h - 1 > horizon + 0.5;
-  if (ground_visible) {
-    const double yb = camera.ImageToGround({0.5 * (w - 1), h - 1.0}).y();
-    if (std::isfinite(yb) && yb > 0) y_bottom = yb;
-  }
-  const std::vector<Shadow> shadows = SampleShadows(options, road, y_bottom, rng);
-  const std::vector<Object> objects = SampleObjects(options, road, y_bottom, rng);
-  const uint64_t noise_seed = rng();
+  Road& road = scene.road;
+  const Look& look = scene.look;
+  const bool ground_visible = h - 1 > camera.HorizonRow() + 0.5;
+  const double y_bottom = BottomDistance(camera);
 
   // Ground truth decides which boundaries exist in the frame.
   SyntheticFrame frame;
@@ -329,15 +321,16 @@ absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
     out.dashed = m.dashed;
     out.yellow = m.yellow;
     out.lateral_offset_m = m.offset;
+    out.id = i;
     frame.boundaries.push_back(out);
   }
 
   cv::Mat3f canvas(h, w, cv::Vec3f(look.haze));
   RenderSky(camera, look, canvas);
-  RenderGround(camera, road, look, shadows, canvas);
+  RenderGround(camera, road, look, scene.shadows, canvas);
   cv::Mat img;
   canvas.convertTo(img, CV_8UC3);
-  DrawObjects(camera, objects, img);
+  DrawObjects(camera, scene.objects, img);
   cv::GaussianBlur(img, img, cv::Size(3, 3), look.blur_sigma);
 
   // Exposure and sensor noise.
@@ -345,7 +338,7 @@ absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
   img.convertTo(f, CV_32FC3, look.gain);
   if (options.noise_sigma > 0) {
     cv::Mat noise(f.size(), CV_32FC3);
-    cv::RNG cvrng(noise_seed);
+    cv::RNG cvrng(scene.noise_seed);
     cvrng.fill(noise, cv::RNG::NORMAL, 0.0, options.noise_sigma);
     f += noise;
   }
@@ -357,6 +350,26 @@ absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
   }
   frame.bgr = img;
   return frame;
+}
+
+}  // namespace synthetic_internal
+
+using namespace synthetic_internal;  // NOLINT: this file's own helpers
+
+absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
+                                                    const SyntheticOptions& options,
+                                                    uint64_t seed) {
+  if (absl::Status s = camera.Validate(); !s.ok()) return s;
+  if (absl::Status s = ValidateOptions(options); !s.ok()) return s;
+  Rng rng(seed);
+  Scene scene;
+  scene.road = SampleRoad(options, rng);
+  scene.look = SampleLook(rng, camera.image_height);
+  const double y_bottom = BottomDistance(camera);
+  scene.shadows = SampleShadows(options, scene.road, y_bottom, rng);
+  scene.objects = SampleObjects(options, scene.road, y_bottom, rng);
+  scene.noise_seed = rng();
+  return RenderScene(camera, options, scene);
 }
 
 }  // namespace lane

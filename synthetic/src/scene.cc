@@ -314,7 +314,8 @@ double ShadowFactor(const std::vector<Shadow>& shadows, double x, double y, doub
     }
     const double width = s.soft + foot;
     if (dist < -width - s.ragged) continue;
-    if (s.ragged > 0) dist += s.ragged * ValueNoise(x, y, 1.0 / 0.7, s.salt);
+    if (s.ragged > 0)
+      dist += s.ragged * ValueNoise(x + s.noise_dx, y + s.noise_dy, 1.0 / 0.7, s.salt);
     const double cover = SoftStep(dist, width);
     f = std::min(f, 1.0 - (1.0 - s.factor) * cover);
   }
@@ -324,9 +325,13 @@ double ShadowFactor(const std::vector<Shadow>& shadows, double x, double y, doub
 // Painted length of a dashed boundary in [0, s] (cumulative).
 double PaintedUpTo(const Boundary& m, double s) {
   const double period = m.dash + m.gap;
-  const double t = s - m.phase;
-  const double k = std::floor(t / period);
-  return k * m.dash + std::min(t - k * period, m.dash);
+  auto dashed = [&](double y) {
+    const double t = y - m.phase;
+    const double k = std::floor(t / period);
+    return k * m.dash + std::min(t - k * period, m.dash);
+  };
+  if (s <= m.solid_from) return dashed(s);
+  return dashed(m.solid_from) + (s - m.solid_from);
 }
 
 // Ground truth of one boundary: the visible projected centre line, fitted.
@@ -403,50 +408,52 @@ std::vector<Object> SampleObjects(const SyntheticOptions& o, const Road& road, d
     v.colour2 = cv::Scalar(win + 10, win + 5, win);
     out.push_back(v);
   }
-  // Roadside objects beyond the asphalt.
+  // Roadside objects beyond the asphalt, denser near the car.
   const int nr = UniformInt(rng, 3, 16);
   for (int i = 0; i < nr; ++i) {
-    Object r;
-    const double pick = Uniform(rng, 0.0, 1.0);
-    r.kind = pick < 0.5 ? Object::kTree : (pick < 0.75 ? Object::kBuilding : Object::kPole);
-    const bool left = Chance(rng, 0.5);
-    // Denser near the car.
-    const double near = std::max(y_min + 2.0, 10.0);
-    r.y = near + (150.0 - near) * std::pow(Uniform(rng, 0.0, 1.0), 2.0);
-    const double clearance =
-        r.kind == Object::kPole ? Uniform(rng, 0.8, 3.0) : Uniform(rng, 3.0, 14.0);
-    const double edge = left ? road.edge_left : road.edge_right;
-    r.x = road.X(edge, r.y) + (left ? -clearance : clearance);
-    switch (r.kind) {
-      case Object::kTree: {
-        r.size = Uniform(rng, 1.5, 3.5);
-        r.height = Uniform(rng, 4.0, 11.0);
-        r.colour = cv::Scalar(Uniform(rng, 25, 60), Uniform(rng, 55, 100), Uniform(rng, 30, 60));
-        r.colour2 = cv::Scalar(Uniform(rng, 30, 50), Uniform(rng, 40, 60), Uniform(rng, 50, 70));
-        break;
-      }
-      case Object::kBuilding: {
-        r.size = Uniform(rng, 8.0, 30.0);
-        r.height = Uniform(rng, 5.0, 20.0);
-        r.extra = (left ? -1.0 : 1.0) * Uniform(rng, 6.0, 15.0);
-        const double g = Uniform(rng, 90, 200);
-        r.colour = cv::Scalar(g * Uniform(rng, 0.85, 1.05), g, g * Uniform(rng, 0.95, 1.15));
-        r.colour2 = r.colour * Uniform(rng, 0.65, 0.85);
-        break;
-      }
-      case Object::kPole: {
-        r.height = Uniform(rng, 6.0, 10.0);
-        r.size = 0.12;
-        const double g = Uniform(rng, 80, 160);
-        r.colour = cv::Scalar(g, g, g);
-        break;
-      }
-      case Object::kVehicle:
-        break;
-    }
-    out.push_back(r);
+    out.push_back(SampleRoadsideObject(road, std::max(y_min + 2.0, 10.0), 150.0, 2.0, rng));
   }
   return out;
+}
+
+Object SampleRoadsideObject(const Road& road, double near, double far, double power, Rng& rng) {
+  Object r;
+  const double pick = Uniform(rng, 0.0, 1.0);
+  r.kind = pick < 0.5 ? Object::kTree : (pick < 0.75 ? Object::kBuilding : Object::kPole);
+  const bool left = Chance(rng, 0.5);
+  r.y = near + (far - near) * std::pow(Uniform(rng, 0.0, 1.0), power);
+  const double clearance =
+      r.kind == Object::kPole ? Uniform(rng, 0.8, 3.0) : Uniform(rng, 3.0, 14.0);
+  const double edge = left ? road.edge_left : road.edge_right;
+  r.x = road.X(edge, r.y) + (left ? -clearance : clearance);
+  switch (r.kind) {
+    case Object::kTree: {
+      r.size = Uniform(rng, 1.5, 3.5);
+      r.height = Uniform(rng, 4.0, 11.0);
+      r.colour = cv::Scalar(Uniform(rng, 25, 60), Uniform(rng, 55, 100), Uniform(rng, 30, 60));
+      r.colour2 = cv::Scalar(Uniform(rng, 30, 50), Uniform(rng, 40, 60), Uniform(rng, 50, 70));
+      break;
+    }
+    case Object::kBuilding: {
+      r.size = Uniform(rng, 8.0, 30.0);
+      r.height = Uniform(rng, 5.0, 20.0);
+      r.extra = (left ? -1.0 : 1.0) * Uniform(rng, 6.0, 15.0);
+      const double g = Uniform(rng, 90, 200);
+      r.colour = cv::Scalar(g * Uniform(rng, 0.85, 1.05), g, g * Uniform(rng, 0.95, 1.15));
+      r.colour2 = r.colour * Uniform(rng, 0.65, 0.85);
+      break;
+    }
+    case Object::kPole: {
+      r.height = Uniform(rng, 6.0, 10.0);
+      r.size = 0.12;
+      const double g = Uniform(rng, 80, 160);
+      r.colour = cv::Scalar(g, g, g);
+      break;
+    }
+    case Object::kVehicle:
+      break;
+  }
+  return r;
 }
 
 }  // namespace lane::synthetic_internal

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <random>
 #include <vector>
@@ -49,6 +50,9 @@ struct Boundary {
   double wear = 0.0;   // 0 = fresh paint
   cv::Vec3f colour;
   uint64_t salt = 0;
+  // A dashed boundary is solid from this far ahead on (metres; a drive's
+  // dashed-to-solid change).
+  double solid_from = std::numeric_limits<double>::infinity();
   bool visible = false;
   Bezier truth;
 };
@@ -62,6 +66,11 @@ struct Road {
   double edge_right = 0;
   int ego_left = -1;
   int ego_right = -1;
+  // A drive (drive.cc): the asphalt and verge texture is fixed to the road,
+  // at (lateral position from the first boundary, y + s0), so that it moves
+  // past the camera; single frames texture (x, y).
+  bool world_texture = false;
+  double s0 = 0;
 
   double X(double offset, double y) const { return offset + heading * y + 0.5 * curvature * y * y; }
   double Slope(double y) const { return heading + curvature * y; }
@@ -77,6 +86,7 @@ struct Shadow {
   double soft = 0.2;     // penumbra, metres
   double ragged = 0.0;   // amplitude of the leafy edge, metres
   uint64_t salt = 0;
+  double noise_dx = 0, noise_dy = 0;  // the leafy edge's noise is read at (x + dx, y + dy)
 };
 
 struct Look {
@@ -138,8 +148,26 @@ std::vector<Shadow> SampleShadows(const SyntheticOptions& o, const Road& road, d
                                   Rng& rng);
 std::vector<Object> SampleObjects(const SyntheticOptions& o, const Road& road, double y_min,
                                   Rng& rng);
+// One tree, building or pole beside the road at y in [near, far] (denser
+// near `near` for power > 1).
+Object SampleRoadsideObject(const Road& road, double near, double far, double power, Rng& rng);
 double ShadowFactor(const std::vector<Shadow>& shadows, double x, double y, double foot);
 double PaintedUpTo(const Boundary& m, double s);
+// Everything random of one frame, then drawn by RenderScene.
+struct Scene {
+  Road road;
+  Look look;
+  std::vector<Shadow> shadows;
+  std::vector<Object> objects;
+  uint64_t noise_seed = 0;
+};
+// The ground distance of the bottom row's centre (0.5 when the ground is not
+// visible there).
+double BottomDistance(const CameraModel& cam);
+// Draws the scene and fits its truth (the boundaries' `visible` and `truth`
+// are set). The options' noise, JPEG and truth range apply.
+SyntheticFrame RenderScene(const CameraModel& cam, const SyntheticOptions& options, Scene& scene);
+
 // Fits the boundary's image-space Bezier truth between y_near and y_far;
 // false when too little of it is visible.
 bool FitTruth(const CameraModel& cam, const Road& road, double y_near, double y_far, Boundary* m);

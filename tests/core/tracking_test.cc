@@ -135,10 +135,14 @@ TEST(TrackingTest, EgoLaneGeometryAndDeparture) {
   EXPECT_EQ(ego->left_index, 0);
   EXPECT_EQ(ego->right_index, 1);
   EXPECT_NEAR(ego->right_distance_m, 2.0, 1e-6);
-  // Yaw: the lane's direction is measured from the optical axis.
+  // Yaw: the lane's direction is measured from the optical axis, which a
+  // camera yawed 3 degrees points 3 degrees right of the road (its ground
+  // point lies at x > 0).
   camera.yaw_deg = 3.0;
+  const Eigen::Vector2d axis = camera.ImageToGround({camera.cu, camera.cv});
+  ASSERT_GT(axis.x(), 0.0);
   EXPECT_NEAR(ComputeEgoLane({GroundLane(-1.6, 0, 0), GroundLane(2.0, 0, 0)}, camera)->heading_deg,
-              3.0, 1e-6);
+              -std::atan2(axis.x(), axis.y()) * 180 / M_PI, 1e-6);
   // No lane on one side, or an implausible width: none.
   EXPECT_FALSE(ComputeEgoLane({GroundLane(1.0, 0, 0), GroundLane(4.6, 0, 0)}, camera));
   EXPECT_FALSE(ComputeEgoLane({GroundLane(-0.5, 0, 0), GroundLane(0.6, 0, 0)}, camera));

@@ -166,7 +166,10 @@ def ground_offsets(response):
 
 
 def lanes_of(response):
-    return [[(p.x, p.y) for p in lane.image.control_points] for lane in response.lanes]
+    """The detected lanes' image control points (a tracked stream also
+    reports predicted lanes: the tracks of earlier frames)."""
+    return [[(p.x, p.y) for p in lane.image.control_points]
+            for lane in response.lanes if not lane.predicted]
 
 
 # ---------------------------------------------------------------------------

@@ -24,8 +24,9 @@ struct CameraModel {
   // Pitch in degrees, positive when the camera looks down at the road. The
   // horizon lies at v = cv - fv * tan(pitch).
   double pitch_deg = 14.0;
-  // Yaw in degrees, positive when the camera looks to the left of the road
-  // direction. The vanishing point lies at u = cu - fu * tan(yaw) / cos(pitch).
+  // Yaw in degrees, positive when the camera looks to the right of the road
+  // direction (ground x, right +): the road's vanishing point then lies left
+  // of the optical centre. The vanishing point lies at u = cu - fu * tan(yaw) / cos(pitch).
   double yaw_deg = 0.0;
   // Height of the optical centre above the road, metres.
   double height_m = 2.1798;

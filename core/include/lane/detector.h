@@ -85,6 +85,10 @@ struct Lane {
   // its type. -1, false, unknown, unknown without.
   int id = -1;
   bool confirmed = false;
+  // With tracking: not detected in this frame; the confirmed track's
+  // prediction, reported for a few frames after it was last seen
+  // (LaneTrackingOptions::coast_frames).
+  bool predicted = false;
   MarkingColor color = MarkingColor::kUnknown;
   MarkingType type = MarkingType::kUnknown;
 };

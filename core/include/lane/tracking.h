@@ -26,6 +26,7 @@
 
 #include "lane/camera.h"
 #include "lane/detector.h"
+#include "lane/ipm.h"
 
 namespace lane {
 
@@ -59,14 +60,33 @@ struct LaneTrackingOptions {
   // Process noise (standard deviation per sqrt(second)) of the random walk
   // of offset (m), heading (rad) and curvature (1/m): a car weaving in its
   // lane, steering, entering a bend.
-  double offset_noise = 0.5;
-  double heading_noise = 0.05;
-  double curvature_noise = 0.002;
-  // Measurement noise (standard deviation) of a detected lane's offset,
-  // heading and curvature.
-  double measured_offset_sd = 0.10;
-  double measured_heading_sd = 0.01;
-  double measured_curvature_sd = 0.002;
+  double offset_noise = 0.3;
+  double heading_noise = 0.03;
+  double curvature_noise = 0.001;
+  // Measurement noise: a detected lane's lateral position (m) at each of
+  // the points it is measured at (6 over its extent), growing with the
+  // distance y ahead (a pixel covers more road farther away):
+  // measured_x_sd + measured_x_sd_per_m * y.
+  double measured_x_sd = 0.04;
+  double measured_x_sd_per_m = 0.005;
+  // A new track's prior (standard deviations around the first lane's fit,
+  // and a straight road): the first measurement then sets what it shows.
+  double prior_offset_sd = 1.0;
+  double prior_heading_sd = 0.1;
+  double prior_curvature_sd = 0.004;
+  // Two tracks closer than this (mean lateral distance, m) are one
+  // boundary's: the one seen less often ends.
+  double duplicate_m = 0.45;
+  // Type votes fade with this time constant (s), so that a dashed line that
+  // turns solid reads solid about this long after the change.
+  double type_memory_s = 1.0;
+  // A confirmed track missed for at most this many frames in a row is still
+  // reported, from its prediction (Lane::predicted), when SequenceTracker
+  // is given the top view to draw it in.
+  int coast_frames = 3;
+  // ... unless a lane of the frame lies closer than this (mean lateral
+  // distance, m: a third of a narrow lane).
+  double coast_clearance_m = 1.0;
 };
 
 struct Track {
@@ -88,10 +108,11 @@ struct LaneIdentity {
   int id = -1;
   bool confirmed = false;
   MarkingColor color = MarkingColor::kUnknown;  // voted over the track's frames
-  // Voted too; dashed once a third of the solid/dashed votes say dashed (a
+  // Voted too; dashed once 30 % of the (fading) solid/dashed votes say dashed (a
   // dash can fill the whole view for a frame, a gap never looks solid).
   MarkingType type = MarkingType::kUnknown;
   GroundCurve curve;  // the track's filtered curve after this frame
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();  // of curve.coefficients
 };
 
 class LaneTracker {
@@ -140,10 +161,16 @@ struct EgoOptions {
 std::optional<EgoLane> ComputeEgoLane(const std::vector<Lane>& lanes, const CameraModel& camera,
                                       const EgoOptions& options = {});
 // The same from ground curves (one per lane, none for a lane that has
-// none); `ids` (may be empty) fill left_id and right_id.
+// none); `ids` (may be empty) fill left_id and right_id. With
+// `covariances` (one per curve, a tracker's), the lanes are taken to be
+// parallel: their heading and curvature are combined, each weighted by
+// what it knows (the inverse of its covariance), and each lane's offset is
+// then conditioned on the shared values, so that a long solid line steadies
+// the dashed line beside it.
 std::optional<EgoLane> EgoLaneOfCurves(const std::vector<std::optional<GroundCurve>>& curves,
                                        const std::vector<int>& ids, const CameraModel& camera,
-                                       const EgoOptions& options = {});
+                                       const EgoOptions& options = {},
+                                       const std::vector<Eigen::Matrix3d>* covariances = nullptr);
 
 // Follows the ego lane over frames for its lateral speed and departure
 // warnings; a change of bounding lanes (a lane change) restarts the rate.
@@ -181,6 +208,11 @@ MarkingColor MarkingColorOf(const cv::Mat& bgr, const Lane& lane, const CameraMo
 MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraModel& camera,
                           int top_row = 0, int bottom_row = -1);
 
+// Sets every lane's colour and type in this frame (MarkingColorOf,
+// MarkingTypeOf), reading rows [top_row, bottom_row) only.
+void ReadMarkings(const cv::Mat& frame, const CameraModel& camera, std::vector<Lane>& lanes,
+                  int top_row = 0, int bottom_row = -1);
+
 // Everything video-aware for one camera, frame after frame: each lane's
 // colour and type in the frame must already be in Lane::color and
 // Lane::type (MarkingColorOf, MarkingTypeOf); Track replaces them by the
@@ -192,7 +224,11 @@ class SequenceTracker {
                            EgoOptions ego = {})
       : camera_(camera), lanes_(lanes), ego_options_(ego), ego_(ego) {}
 
-  std::optional<EgoLane> Track(std::vector<Lane>& lanes, std::optional<double> time_s);
+  // With `ipm` (the detector's top view), confirmed tracks missed for up to
+  // coast_frames frames are added to `lanes` from their prediction
+  // (Lane::predicted); `lanes` stays sorted left to right.
+  std::optional<EgoLane> Track(std::vector<Lane>& lanes, std::optional<double> time_s,
+                               const IpmMapping* ipm = nullptr);
   void Reset();
   const LaneTracker& lane_tracker() const { return lanes_; }
 

