@@ -117,16 +117,17 @@ cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
     DrawBezier(canvas, lane.image, LaneColour(static_cast<int>(i)),
                [](const Eigen::Vector2d& p) { return p; });
     if (lane.id >= 0) {
-      // Tracked: "#id colour" at the lane's lower end, '?' until confirmed.
+      // Tracked: "#id colour type" at the lane's lower end, '?' until
+      // confirmed, "predicted" for a track's prediction (not detected).
       const Eigen::Vector2d& low =
           lane.image[0].y() > lane.image[3].y() ? lane.image[0] : lane.image[3];
       const int x = std::clamp(static_cast<int>(low.x()), 0, std::max(0, canvas.cols - 80));
       const int y = std::clamp(static_cast<int>(low.y()) - canvas.rows / 12, 0, canvas.rows - 1);
-      DrawCaption(
-          canvas,
-          absl::StrCat("#", lane.id, lane.confirmed ? " " : "? ",
-                       lane::MarkingColorName(lane.color), " ", lane::MarkingTypeName(lane.type)),
-          x, y, LaneColour(static_cast<int>(i)));
+      DrawCaption(canvas,
+                  absl::StrCat(
+                      "#", lane.id, lane.confirmed ? " " : "? ", lane::MarkingColorName(lane.color),
+                      " ", lane::MarkingTypeName(lane.type), lane.predicted ? " predicted" : ""),
+                  x, y, LaneColour(static_cast<int>(i)));
     }
   }
   // Caption: the frame's name; the mode, the lane count and the lanes'
