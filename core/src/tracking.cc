@@ -244,9 +244,8 @@ std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
     if (colors[j] == MarkingColor::kWhite) track.white_votes += 1;
     if (colors[j] == MarkingColor::kYellow) track.yellow_votes += 1;
   };
-  for (size_t j = 0; j < lanes.size(); ++j) {
-    if (track_of[j] < 0) continue;
-    Track& track = tracks_[static_cast<size_t>(track_of[j])];
+  // A track takes lane j of this frame.
+  auto take = [&](Track& track, size_t j) {
     KalmanUpdate(lanes[j], options_.measured_x_sd, options_.measured_x_sd_per_m, &track);
     track.curve.y_near = curves[j]->y_near;
     track.curve.y_far = curves[j]->y_far;
@@ -254,12 +253,14 @@ std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
     track.misses = 0;
     track.confirmed = track.confirmed || track.hits >= options_.confirm_frames;
     vote(track, j);
+  };
+  for (size_t j = 0; j < lanes.size(); ++j) {
+    if (track_of[j] >= 0) take(tracks_[static_cast<size_t>(track_of[j])], j);
   }
   for (size_t i = 0; i < tracks_.size(); ++i) {
     if (!matched[i]) ++tracks_[i].misses;
   }
   // New tracks for the lanes no track took.
-  std::vector<size_t> born;
   for (size_t j = 0; j < lanes.size(); ++j) {
     if (track_of[j] >= 0 || !curves[j]) continue;
     Track track;
@@ -275,7 +276,6 @@ std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
     track.covariance = prior.cwiseProduct(prior).asDiagonal();
     KalmanUpdate(lanes[j], options_.measured_x_sd, options_.measured_x_sd_per_m, &track);
     vote(track, j);
-    born.push_back(j);
     tracks_.push_back(track);
     track_of[j] = static_cast<int>(tracks_.size()) - 1;
   }
@@ -304,14 +304,7 @@ std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
       for (size_t j = 0; j < track_of.size(); ++j) {
         if (track_of[j] != ib) continue;
         track_of[j] = ia;
-        Track& kept = tracks_[a];
-        KalmanUpdate(lanes[j], options_.measured_x_sd, options_.measured_x_sd_per_m, &kept);
-        kept.curve.y_near = curves[j]->y_near;
-        kept.curve.y_far = curves[j]->y_far;
-        ++kept.hits;
-        kept.misses = 0;
-        kept.confirmed = kept.confirmed || kept.hits >= options_.confirm_frames;
-        vote(kept, j);
+        take(tracks_[a], j);
       }
       tracks_[b].misses = options_.max_misses;  // ends below
     }
