@@ -4,6 +4,8 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "cli/tracking_json.h"
+
 namespace lane_tools {
 namespace {
 
@@ -37,6 +39,16 @@ Json Header(const std::string& frame, int width, int height, lane::Mode mode) {
 // Invalid UTF-8 (file names) would make dump() throw: replace it.
 std::string Dump(const Json& j) { return j.dump(-1, ' ', false, Json::error_handler_t::replace); }
 
+}  // namespace
+
+void AddLaneTrackingFields(const lane::Lane& lane, Json& l) {
+  l["id"] = lane.id;
+  l["confirmed"] = lane.confirmed;
+  l["predicted"] = lane.predicted;
+  l["color"] = lane::MarkingColorName(lane.color);
+  l["type"] = lane::MarkingTypeName(lane.type);
+}
+
 Json EgoJson(const std::optional<lane::EgoLane>& ego) {
   if (!ego) return nullptr;
   Json e = Json::object();
@@ -53,8 +65,6 @@ Json EgoJson(const std::optional<lane::EgoLane>& ego) {
   return e;
 }
 
-}  // namespace
-
 std::string DetectionJsonLine(const std::string& frame, int width, int height, lane::Mode mode,
                               const lane::Detection& detection, double decode_ms, bool tracked) {
   Json out = Header(frame, width, height, mode);
@@ -65,13 +75,7 @@ std::string DetectionJsonLine(const std::string& frame, int width, int height, l
     l["ipm"] = Points(lane.ipm, 1e3);
     l["ground"] = Points(lane.ground, 1e4);
     l["score"] = Round(lane.score, 1e4);
-    if (tracked) {
-      l["id"] = lane.id;
-      l["confirmed"] = lane.confirmed;
-      l["predicted"] = lane.predicted;
-      l["color"] = lane::MarkingColorName(lane.color);
-      l["type"] = lane::MarkingTypeName(lane.type);
-    }
+    if (tracked) AddLaneTrackingFields(lane, l);
     lanes.push_back(std::move(l));
   }
   out["lanes"] = std::move(lanes);

@@ -5,6 +5,8 @@
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "cli/tracking_json.h"
+#include "wire/detection_proto.h"
 
 namespace lane_client {
 namespace {
@@ -64,49 +66,20 @@ std::string ResponseJsonLine(const std::string& frame_name, const v1::FrameRespo
   // writes them (docs/results-format.md).
   bool tracked = response.has_ego();
   for (const v1::Lane& lane : response.lanes()) tracked = tracked || lane.id() > 0;
+  const std::vector<lane::Lane> decoded = lane::wire::LanesFromProto(response);
   Json lanes = Json::array();
-  for (const v1::Lane& lane : response.lanes()) {
+  for (int i = 0; i < response.lanes_size(); ++i) {
+    const v1::Lane& lane = response.lanes(i);
     Json l = Json::object();
     l["image"] = Points(lane.image(), 1e3);
     l["ipm"] = Points(lane.ipm(), 1e3);
     l["ground"] = Points(lane.ground(), 1e4);
     l["score"] = Round(lane.score(), 1e4);
-    if (tracked) {
-      l["id"] = lane.id() > 0 ? lane.id() : -1;
-      l["confirmed"] = lane.confirmed();
-      l["predicted"] = lane.predicted();
-      // The proto enums' order is lane::MarkingColor's and MarkingType's.
-      const int color = static_cast<int>(lane.color());
-      const int type = static_cast<int>(lane.type());
-      l["color"] =
-          lane::MarkingColorName(color >= 0 && color <= 2 ? static_cast<lane::MarkingColor>(color)
-                                                          : lane::MarkingColor::kUnknown);
-      l["type"] =
-          lane::MarkingTypeName(type >= 0 && type <= 4 ? static_cast<lane::MarkingType>(type)
-                                                       : lane::MarkingType::kUnknown);
-    }
+    if (tracked) lane_tools::AddLaneTrackingFields(decoded[static_cast<size_t>(i)], l);
     lanes.push_back(std::move(l));
   }
   out["lanes"] = std::move(lanes);
-  if (tracked) {
-    if (response.has_ego()) {
-      const v1::EgoLane& ego = response.ego();
-      Json e = Json::object();
-      e["offset_m"] = Round(ego.offset_m(), 1e3);
-      e["width_m"] = Round(ego.width_m(), 1e3);
-      e["heading_deg"] = Round(ego.heading_deg(), 1e3);
-      e["curvature_per_m"] = Round(ego.curvature_per_m(), 1e6);
-      e["left_id"] = ego.left_lane_id() > 0 ? ego.left_lane_id() : -1;
-      e["right_id"] = ego.right_lane_id() > 0 ? ego.right_lane_id() : -1;
-      e["left_distance_m"] = Round(ego.left_distance_m(), 1e3);
-      e["right_distance_m"] = Round(ego.right_distance_m(), 1e3);
-      e["offset_rate_mps"] = Round(ego.offset_rate_mps(), 1e3);
-      e["departing"] = ego.departing();
-      out["ego"] = std::move(e);
-    } else {
-      out["ego"] = nullptr;
-    }
-  }
+  if (tracked) out["ego"] = lane_tools::EgoJson(lane::wire::EgoFromProto(response));
   const v1::StageTimings& t = response.timings();
   Json timing = Json::object();
   timing["queue_wait"] = Round(t.queue_wait_ms(), 1e3);

@@ -108,6 +108,23 @@ std::vector<lane::Lane> LanesFromProto(const v1::FrameResponse& response) {
   return lanes;
 }
 
+std::optional<lane::EgoLane> EgoFromProto(const v1::FrameResponse& response) {
+  if (!response.has_ego()) return std::nullopt;
+  const v1::EgoLane& e = response.ego();
+  lane::EgoLane ego;
+  ego.offset_m = e.offset_m();
+  ego.width_m = e.width_m();
+  ego.heading_deg = e.heading_deg();
+  ego.curvature_per_m = e.curvature_per_m();
+  ego.left_id = e.left_lane_id() > 0 ? e.left_lane_id() : -1;
+  ego.right_id = e.right_lane_id() > 0 ? e.right_lane_id() : -1;
+  ego.left_distance_m = e.left_distance_m();
+  ego.right_distance_m = e.right_distance_m();
+  ego.offset_rate_mps = e.offset_rate_mps();
+  ego.departing = e.departing();
+  return ego;
+}
+
 void TrackingToProto(const std::vector<lane::Lane>& lanes, const std::optional<lane::EgoLane>& ego,
                      v1::FrameResponse* out) {
   // The tracker may have added predicted lanes and re-sorted: all anew.
