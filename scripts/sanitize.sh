@@ -37,19 +37,21 @@ run_asan() {
   echo "== sanitize: ASan+UBSan build with clang (build-asan)"
   fresh_if_not build-asan clang
   CC=clang CXX=clang++ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DLANE_FUZZ=ON -DLANE_BUILD_TESTS=ON -DLANE_BUILD_BENCH=OFF -DLANE_BUILD_SERVICE=ON >/dev/null
+    -DLANE_FUZZ=ON -DLANE_BUILD_TESTS=ON -DLANE_BUILD_BENCH=OFF -DLANE_BUILD_SERVICE=ON \
+    -DLANE_LINE_TABLES=ON >/dev/null
   cmake --build build-asan -j "$jobs"
-  # Tests labelled slow (the 300-frame rendered drive) and the two longest
-  # accuracy runs (all of cordova1; 4 random cameras x 50 rendered frames)
-  # run in the plain build only: under ASan they add minutes of code paths
-  # that shorter tests (CULane clip, cordova1 fast decode, the 180-frame
-  # drift) already cover.
+  # Tests labelled slow (the 300-frame rendered drive) and the four longest
+  # accuracy runs (all of cordova1; 4 random cameras x 50 rendered frames;
+  # the 180-frame pitch drift; cordova1's vanishing point) run in the plain
+  # build only: under ASan they add minutes of code paths that shorter tests
+  # (CULane clip, cordova1 fast decode, the HTTP endpoint's auto-calibrating
+  # session, the CULane clip's vanishing point) already cover.
   echo "== sanitize: ASan+UBSan tests (label slow and the two longest accuracy runs left out)"
   (cd build-asan &&
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:strict_string_checks=1:detect_stack_use_after_return=1 \
       UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
       ctest --output-on-failure -j "$(nproc)" --timeout 1800 -LE slow \
-        -E 'EvalRegressionTest.CaltechCordova1AllLanes|CalibrationTest.RandomCamerasAreRecoveredFromRenderedDrives')
+        -E 'EvalRegressionTest.CaltechCordova1AllLanes|CalibrationTest.RandomCamerasAreRecoveredFromRenderedDrives|CalibrationTest.OnlineRefinementFollowsAPitchDrift|CalibrationTest.CaltechCordova1VanishingPoint')
   echo "== sanitize: fuzzers, ${FUZZ_SECONDS:-20} s each"
   FUZZ_BUILD_DIR=build-asan ./scripts/fuzz.sh "${FUZZ_SECONDS:-20}"
 }
@@ -58,7 +60,8 @@ run_tsan() {
   echo "== sanitize: TSan build of the server and client tests with gcc (build-tsan)"
   fresh_if_not build-tsan "g++"
   cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLANE_SANITIZE=thread \
-    -DLANE_WERROR=ON -DLANE_BUILD_TESTS=ON -DLANE_BUILD_BENCH=OFF -DLANE_BUILD_SERVICE=ON >/dev/null
+    -DLANE_WERROR=ON -DLANE_BUILD_TESTS=ON -DLANE_BUILD_BENCH=OFF -DLANE_BUILD_SERVICE=ON \
+    -DLANE_LINE_TABLES=ON >/dev/null
   cmake --build build-tsan -j "$jobs" --target server_test client_test tsan_canary
   # First the canary: a deliberate race between a gRPC callback thread and a
   # worker must be reported, or the model and the suppressions hide races.

@@ -16,6 +16,7 @@ case "${1:-}" in
   *) echo "usage: $0 [--quick]" >&2; exit 2 ;;
 esac
 ./scripts/install-deps.sh
-BUILD_DIR=${BUILD_DIR:-build} ./scripts/build.sh -DLANE_WERROR=ON -DLANE_BUILD_TESTS=ON -DLANE_BUILD_BENCH=ON -DLANE_BUILD_SERVICE=ON
+BUILD_DIR=${BUILD_DIR:-build} ./scripts/build.sh -DLANE_WERROR=ON -DLANE_BUILD_TESTS=ON -DLANE_BUILD_BENCH=ON -DLANE_BUILD_SERVICE=ON \
+  -DLANE_LINE_TABLES=ON
 (cd "${BUILD_DIR:-build}" && ctest --output-on-failure -j "$(nproc)" --timeout 900)
 [ "$quick" -eq 1 ] || ./scripts/sanitize.sh all
