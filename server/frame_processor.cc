@@ -40,7 +40,7 @@ void StartResponse(const v1::FrameRequest& request, const std::string& camera_id
 
 absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& session,
                           const FrameLimits& limits, const Arrival& arrival, Metrics& metrics,
-                          v1::FrameResponse* response, bool colors) {
+                          v1::FrameResponse* response, bool tracked) {
   const SteadyTime start = std::chrono::steady_clock::now();
   const double queue_wait_ms = MillisecondsBetween(arrival.steady, start);
   metrics.ObserveQueueWait(queue_wait_ms * 1e-3);
@@ -70,10 +70,13 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
     if (!frame.ok()) {
       status = frame.status();
     } else {
-      absl::StatusOr<lane::Detection> detection = detector->Detect(*frame);
+      // A tracked session's predicted lanes are searched too.
+      lane::DetectionPrior prior;
+      if (tracked) prior = session.Prior(*detector);
+      absl::StatusOr<lane::Detection> detection = detector->Detect(*frame, tracked ? &prior : nullptr);
       if (detection.ok()) {
         session.ObserveLanes(detection->lanes);
-        if (colors) {
+        if (tracked) {
           const lane::FrameNeeds& needs = detector->Needs();
           lane::ReadMarkings(*frame, detector->ipm().camera(), detection->lanes, needs.top,
                              needs.bottom);

@@ -46,11 +46,12 @@ struct FrameLimits {
 // not an error of the call: its status goes into the response and is also
 // returned. Records queue wait, stage durations, frame latency and the
 // frame's result in `metrics`.
-// With `colors` (a tracked frame), each lane's paint colour in this frame
-// goes into the response for TrackFrame's vote.
+// With `tracked` (a tracked session's frame), the detector also searches the
+// tracker's predicted lanes (Session::Prior), and each lane's paint colour
+// and type in this frame go into the response for TrackFrame's vote.
 absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& session,
                           const FrameLimits& limits, const Arrival& arrival, Metrics& metrics,
-                          v1::FrameResponse* response, bool colors = false);
+                          v1::FrameResponse* response, bool tracked = false);
 
 // In frame order, after ProcessFrame: an OK frame's lanes through the
 // session's tracker: ids, confirmed flags, voted colours and the ego lane

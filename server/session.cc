@@ -40,6 +40,11 @@ std::optional<lane::EgoLane> Session::Track(std::vector<lane::Lane>& lanes,
   return tracker_.Track(lanes, time_s, &detector->ipm());
 }
 
+lane::DetectionPrior Session::Prior(const lane::Detector& detector) const {
+  std::lock_guard<std::mutex> lock(track_mu_);
+  return tracker_.Prior(detector.ipm());
+}
+
 CalibrationSnapshot Session::Calibration() const {
   std::lock_guard<std::mutex> lock(refine_mu_);
   CalibrationSnapshot s;

@@ -145,6 +145,12 @@ struct Session {
   // the ego lane returned. `time_s`: the capture time, if the frame had one.
   std::optional<lane::EgoLane> Track(std::vector<lane::Lane>& lanes,
                                      std::optional<double> time_s) const;
+  // The tracker's prediction in `detector`'s top view, for the frame about
+  // to be detected (lane::SequenceTracker::Prior). Frames of a stream are
+  // detected concurrently and tracked in order, so this is the state after
+  // the last frame tracked: with k frames in flight, up to k frames old.
+  // It only adds search windows, which still need evidence in the frame.
+  lane::DetectionPrior Prior(const lane::Detector& detector) const;
 
  private:
   mutable std::mutex refine_mu_;

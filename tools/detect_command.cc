@@ -140,7 +140,10 @@ class DetectRun {
     }
     if (error.empty()) {
       try {
-        detection = detector_.Detect(frame.bgr);
+        // Tracked: the tracker's predicted lanes are searched too.
+        lane::DetectionPrior prior;
+        if (tracker_) prior = tracker_->Prior(detector_.ipm());
+        detection = detector_.Detect(frame.bgr, tracker_ ? &prior : nullptr);
         if (!detection.ok()) error = std::string(detection.status().message());
       } catch (const std::exception& e) {  // e.g. a cv::Exception: this frame fails, not the run
         error = absl::StrCat("detector error: ", e.what());

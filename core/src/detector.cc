@@ -282,14 +282,68 @@ std::vector<IpmLine> Detector::FindLines(const cv::Mat& thresholded, std::mt1993
   return lines;
 }
 
+std::vector<IpmLine> Detector::FindPriorLines(const cv::Mat& thresholded,
+                                              const DetectionPrior& prior,
+                                              const std::vector<IpmLine>& lines,
+                                              std::vector<double>* half_widths_px,
+                                              std::mt19937_64& rng) const {
+  const DetectorOptions& opt = options_;
+  const double mpp_x = ipm_.metres_per_px_x();
+  const double mid_row = 0.5 * (thresholded.rows - 1);
+  // A predicted lane counts as found when a line of this frame runs inside
+  // its window at mid height. The Hough keeps only the stronger of two
+  // peaks closer than group_distance_m, so a line beside a stronger edge
+  // (a yellow line 0.5 m from the asphalt's edge) is searched for in its
+  // window, which is narrower.
+  auto found_near = [&](const IpmLine& p, double half_px, const std::vector<IpmLine>& in) {
+    return std::any_of(in.begin(), in.end(), [&](const IpmLine& l) {
+      return std::abs(l.XAt(mid_row) - p.XAt(mid_row)) < half_px;
+    });
+  };
+  // 2-lanes: only for a side of the camera that has no line yet, the
+  // predicted lane nearest the camera on that side.
+  const double camera = CameraColumn();
+  std::vector<const DetectionPrior::Window*> todo;
+  if (opt.mode == Mode::kTwo) {
+    for (const int side : {-1, 1}) {
+      const bool have = std::any_of(lines.begin(), lines.end(), [&](const IpmLine& l) {
+        return (l.bottom.x() - camera) * side > 0;
+      });
+      if (have) continue;
+      const DetectionPrior::Window* nearest = nullptr;
+      for (const auto& w : prior.windows) {
+        const double d = (w.line.bottom.x() - camera) * side;
+        if (d > 0 && (nearest == nullptr || d < (nearest->line.bottom.x() - camera) * side)) {
+          nearest = &w;
+        }
+      }
+      if (nearest != nullptr) todo.push_back(nearest);
+    }
+  } else {
+    for (const auto& w : prior.windows) todo.push_back(&w);
+  }
+  std::vector<IpmLine> added;
+  for (const DetectionPrior::Window* w : todo) {
+    const double half_px = std::clamp(w->half_width_m, 0.05, opt.line_ransac.window_half_width_m) /
+                           mpp_x;
+    if (found_near(w->line, half_px, lines) || found_near(w->line, half_px, added)) continue;
+    if (auto line = FitLineAlong(thresholded, w->line, half_px, opt.line_ransac, rng)) {
+      added.push_back(*line);
+      half_widths_px->push_back(half_px);
+    }
+  }
+  return added;
+}
+
 std::vector<SplineCandidate> Detector::FitSplines(const cv::Mat& thresholded,
                                                   const std::vector<IpmLine>& lines,
+                                                  const std::vector<double>& half_widths_px,
                                                   std::mt19937_64& rng) const {
   const SplineRansacOptions& so = options_.spline_ransac;
   std::vector<SplineCandidate> candidates;
-  for (const auto& line : lines) {
-    auto fit = FitSplineAroundLine(thresholded, line,
-                                   so.window_half_width_m / ipm_.metres_per_px_x(), so, rng);
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const IpmLine& line = lines[i];
+    auto fit = FitSplineAroundLine(thresholded, line, half_widths_px[i], so, rng);
     if (!fit) continue;
     candidates.push_back({line, TopDown(fit->spline), Bezier{}, fit->score});
   }
@@ -333,7 +387,8 @@ std::vector<Lane> Detector::ToLanes(const std::vector<SplineCandidate>& done) co
   return lanes;
 }
 
-absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
+absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
+                                           const DetectionPrior* prior) const {
   if (absl::Status s = CheckFrame(frame); !s.ok()) return s;
   const DetectorOptions& opt = options_;
   Detection det;
@@ -363,10 +418,23 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
   lap(time.threshold_ms);
   // 4-5. Column-sum Hough (2-lanes: the ego pair), then RANSAC lines.
   std::vector<ColumnPeak> peaks;
-  const std::vector<IpmLine> lines = FindLines(thresholded, rng, &peaks);
+  std::vector<IpmLine> lines = FindLines(thresholded, rng, &peaks);
+  // 4b. A tracker's predicted lanes that the Hough missed: their windows.
+  const double spline_window_px = opt.spline_ransac.window_half_width_m / ipm_.metres_per_px_x();
+  std::vector<double> spline_half_px(lines.size(), spline_window_px);
+  int prior_lines = 0;
+  if (prior != nullptr && !prior->windows.empty()) {
+    std::vector<double> prior_half_px;
+    const std::vector<IpmLine> more =
+        FindPriorLines(thresholded, *prior, lines, &prior_half_px, rng);
+    for (double h : prior_half_px) spline_half_px.push_back(std::min(spline_window_px, h));
+    prior_lines = static_cast<int>(more.size());
+    lines.insert(lines.end(), more.begin(), more.end());
+  }
   lap(time.lines_ms);
   // 6. RANSAC splines around each line.
-  const std::vector<SplineCandidate> candidates = FitSplines(thresholded, lines, rng);
+  const std::vector<SplineCandidate> candidates =
+      FitSplines(thresholded, lines, spline_half_px, rng);
   lap(time.splines_ms);
   // 7. Post-processing in the top view and the image; 8. the three frames.
   const PostprocessFrame images{ipm_, top_view, filtered, channel, frame};
@@ -384,6 +452,7 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame) const {
     in.threshold = threshold;
     in.peaks = peaks;
     in.lines = lines;
+    in.prior_lines = prior_lines;
     for (const auto& c : candidates) in.ipm_splines.push_back(c.ipm);
     det.debug = std::move(in);
   }

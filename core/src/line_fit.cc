@@ -157,11 +157,11 @@ std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> FitLineTls(
   return std::make_pair(mean, dir);
 }
 
-std::optional<IpmLine> FitLineInWindow(const cv::Mat& thresholded, double x_center,
-                                       double half_width_px, const LineRansacOptions& options,
-                                       std::mt19937_64& rng) {
-  const WeightedPoints pts = CollectWindow(
-      thresholded, [x_center](double) { return x_center; }, half_width_px);
+namespace {
+
+// RANSAC line among the points of a window, refitted on its inliers.
+std::optional<IpmLine> FitLineAmong(const cv::Mat& thresholded, const WeightedPoints& pts,
+                                    const LineRansacOptions& options, std::mt19937_64& rng) {
   if (static_cast<int>(pts.points.size()) < options.min_inliers) return std::nullopt;
   const LineEstimator estimator(pts, thresholded.rows, options);
   const auto report =
@@ -184,6 +184,24 @@ std::optional<IpmLine> FitLineInWindow(const cv::Mat& thresholded, double x_cent
   if (AngleFromVerticalDeg(line) > options.max_angle_from_vertical_deg) return std::nullopt;
   line.score = estimator.Score(line);
   return line;
+}
+
+}  // namespace
+
+std::optional<IpmLine> FitLineInWindow(const cv::Mat& thresholded, double x_center,
+                                       double half_width_px, const LineRansacOptions& options,
+                                       std::mt19937_64& rng) {
+  const WeightedPoints pts = CollectWindow(
+      thresholded, [x_center](double) { return x_center; }, half_width_px);
+  return FitLineAmong(thresholded, pts, options, rng);
+}
+
+std::optional<IpmLine> FitLineAlong(const cv::Mat& thresholded, const IpmLine& center,
+                                    double half_width_px, const LineRansacOptions& options,
+                                    std::mt19937_64& rng) {
+  const WeightedPoints pts = CollectWindow(
+      thresholded, [&center](double y) { return center.XAt(y); }, half_width_px);
+  return FitLineAmong(thresholded, pts, options, rng);
 }
 
 }  // namespace lane

@@ -789,6 +789,34 @@ std::optional<EgoLane> SequenceTracker::Track(std::vector<Lane>& lanes,
   return ego;
 }
 
+DetectionPrior SequenceTracker::Prior(const IpmMapping& ipm) const {
+  DetectionPrior prior;
+  const LaneTrackingOptions& o = lanes_.options();
+  const double dt = 1.0 / std::max(1e-3, o.default_fps);
+  const double rows = ipm.height();
+  for (const lane::Track& track : lanes_.tracks()) {
+    if (!track.confirmed) continue;
+    const double y0 = std::max(track.curve.y_near, ipm.y_min());
+    const double y1 = std::min(track.curve.y_far, ipm.y_max());
+    if (y1 - y0 < 1.0) continue;  // hardly in the view
+    const Eigen::Vector2d a = ipm.GroundToIpm({track.curve.X(y0), y0});
+    const Eigen::Vector2d b = ipm.GroundToIpm({track.curve.X(y1), y1});
+    if (!a.allFinite() || !b.allFinite() || std::abs(a.y() - b.y()) < 1.0) continue;
+    const double dxdy = (b.x() - a.x()) / (b.y() - a.y());
+    DetectionPrior::Window w;
+    w.line.top = {a.x() + (0.0 - a.y()) * dxdy, 0.0};
+    w.line.bottom = {a.x() + (rows - 1.0 - a.y()) * dxdy, rows - 1.0};
+    // The predicted lateral position's sd at mid extent, one frame on.
+    const double ym = 0.5 * (y0 + y1);
+    const Eigen::Vector3d j(1.0, ym, 0.5 * ym * ym);
+    const double var = j.dot(track.covariance * j) + o.offset_noise * o.offset_noise * dt *
+                                                          (1 + track.misses);
+    w.half_width_m = 0.3 + 2.5 * std::sqrt(std::max(0.0, var));
+    prior.windows.push_back(w);
+  }
+  return prior;
+}
+
 void SequenceTracker::Reset() {
   lanes_.Reset();
   ego_.Reset();

@@ -24,8 +24,9 @@ struct DriveRun {
   std::vector<eval::DriveOutput> tracked;
 };
 
-// Renders the drive and runs the detector on every frame, once per frame
-// for both outputs (tracking reads the same detection).
+// Renders the drive and runs the detector on every frame: alone, and with
+// the tracker's prior (its predicted lanes' search windows) for the tracked
+// output.
 DriveRun RunDrive(const Config& config, const SyntheticDriveOptions& options, uint64_t seed) {
   DriveRun run;
   absl::StatusOr<Detector> detector = Detector::Create(config.camera, config.ipm, config.detector);
@@ -43,7 +44,12 @@ DriveRun RunDrive(const Config& config, const SyntheticDriveOptions& options, ui
     ReadMarkings(frame->bgr, config.camera, detection->lanes);
     eval::DriveOutput untracked{detection->lanes, ComputeEgoLane(detection->lanes, config.camera)};
     eval::DriveOutput tracked;
-    tracked.lanes = detection->lanes;
+    const DetectionPrior prior = tracker.Prior(detector->ipm());
+    absl::StatusOr<Detection> with_prior = detector->Detect(frame->bgr, &prior);
+    EXPECT_TRUE(with_prior.ok()) << with_prior.status();
+    if (!with_prior.ok()) return run;
+    ReadMarkings(frame->bgr, config.camera, with_prior->lanes);
+    tracked.lanes = with_prior->lanes;
     tracked.ego = tracker.Track(tracked.lanes, frame->time_s, &detector->ipm());
     run.truth.push_back(eval::DriveTruthOf(*frame));
     run.untracked.push_back(std::move(untracked));

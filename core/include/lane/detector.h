@@ -130,7 +130,8 @@ struct Intermediates {
   cv::Mat thresholded;  // CV_32F after the quantile threshold
   float threshold = 0;
   std::vector<ColumnPeak> peaks;
-  std::vector<IpmLine> lines;
+  std::vector<IpmLine> lines;        // from the column peaks, then from the prior
+  int prior_lines = 0;               // how many of `lines` the prior's windows gave
   std::vector<Bezier> ipm_splines;  // after RANSAC, before post-processing
 };
 
@@ -159,6 +160,23 @@ struct FrameNeeds {
   Pixels pixels = Pixels::kBgr;
 };
 
+// What a tracker expects in the next frame (lane/tracking.h,
+// SequenceTracker::Prior): each confirmed lane's predicted line in the top
+// view, with a search window around it. Detect fits a RANSAC line in the
+// window of each predicted lane that the column-sum Hough did not find this
+// frame, as if a peak had been there, so that a lane whose column sum fell
+// short (a worn or occluded marking, a dashed line between its dashes) is
+// found again. The window still needs evidence: the line and spline RANSAC
+// and the post-processing checks decide on it as on any other candidate,
+// and nothing is added where the window is empty.
+struct DetectionPrior {
+  struct Window {
+    IpmLine line;  // top on row 0, bottom on the last row of the top view
+    double half_width_m = 0.5;
+  };
+  std::vector<Window> windows;
+};
+
 // Immutable after Create; Detect is const and safe to call from many threads.
 class Detector {
  public:
@@ -168,7 +186,9 @@ class Detector {
   // `frame` must be CV_8UC3 (BGR) or CV_8UC1 (the detector's channel, or grey)
   // of the camera's size; only rows Needs().top .. Needs().bottom - 1 are
   // read, the others may hold anything. INVALID_ARGUMENT otherwise.
-  absl::StatusOr<Detection> Detect(const cv::Mat& frame) const;
+  // `prior` (may be null): a tracker's prediction for this frame.
+  absl::StatusOr<Detection> Detect(const cv::Mat& frame,
+                                   const DetectionPrior* prior = nullptr) const;
 
   const IpmMapping& ipm() const { return ipm_; }
   const DetectorOptions& options() const { return options_; }
@@ -194,8 +214,17 @@ class Detector {
   cv::Mat Threshold(const cv::Mat& filtered, float* threshold) const;
   std::vector<IpmLine> FindLines(const cv::Mat& thresholded, std::mt19937_64& rng,
                                  std::vector<ColumnPeak>* peaks) const;
+  // Lines in the prior's windows that `lines` does not already hold, with
+  // their windows' half widths (px) in `half_widths_px`.
+  std::vector<IpmLine> FindPriorLines(const cv::Mat& thresholded, const DetectionPrior& prior,
+                                      const std::vector<IpmLine>& lines,
+                                      std::vector<double>* half_widths_px,
+                                      std::mt19937_64& rng) const;
+  // `half_widths_px`: each line's spline window (the prior's lines keep
+  // their narrower windows).
   std::vector<SplineCandidate> FitSplines(const cv::Mat& thresholded,
                                           const std::vector<IpmLine>& lines,
+                                          const std::vector<double>& half_widths_px,
                                           std::mt19937_64& rng) const;
   std::vector<Lane> ToLanes(const std::vector<SplineCandidate>& done) const;
   // The camera's column in the top view (x = 0 at its near edge).

@@ -75,6 +75,11 @@ std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> FitLineTls(
 std::optional<IpmLine> FitLineInWindow(const cv::Mat& thresholded, double x_center,
                                        double half_width_px, const LineRansacOptions& options,
                                        std::mt19937_64& rng);
+// The same in the window around a slanted line (a tracker's prediction,
+// DetectionPrior): the window follows `center` row by row.
+std::optional<IpmLine> FitLineAlong(const cv::Mat& thresholded, const IpmLine& center,
+                                    double half_width_px, const LineRansacOptions& options,
+                                    std::mt19937_64& rng);
 
 }  // namespace lane
 

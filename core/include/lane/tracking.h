@@ -232,6 +232,14 @@ class SequenceTracker {
   void Reset();
   const LaneTracker& lane_tracker() const { return lanes_; }
 
+  // What the tracker expects in the next frame, for the detector
+  // (Detector::Detect's prior): each confirmed track's line in the top view
+  // `ipm`, through its curve over the part of its extent inside the view,
+  // with a window of 0.3 m + 2.5 standard deviations of its predicted
+  // lateral position (DetectorOptions cap it at the line window). Empty
+  // before the first frame and after a reset.
+  DetectionPrior Prior(const IpmMapping& ipm) const;
+
  private:
   CameraModel camera_;
   LaneTracker lanes_;
