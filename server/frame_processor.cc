@@ -73,7 +73,8 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
       // A tracked session's predicted lanes are searched too.
       lane::DetectionPrior prior;
       if (tracked) prior = session.Prior(*detector);
-      absl::StatusOr<lane::Detection> detection = detector->Detect(*frame, tracked ? &prior : nullptr);
+      absl::StatusOr<lane::Detection> detection =
+          detector->Detect(*frame, tracked ? &prior : nullptr);
       if (detection.ok()) {
         session.ObserveLanes(detection->lanes);
         if (tracked) {

@@ -324,8 +324,8 @@ std::vector<IpmLine> Detector::FindPriorLines(const cv::Mat& thresholded,
   }
   std::vector<IpmLine> added;
   for (const DetectionPrior::Window* w : todo) {
-    const double half_px = std::clamp(w->half_width_m, 0.05, opt.line_ransac.window_half_width_m) /
-                           mpp_x;
+    const double half_px =
+        std::clamp(w->half_width_m, 0.05, opt.line_ransac.window_half_width_m) / mpp_x;
     if (found_near(w->line, half_px, lines) || found_near(w->line, half_px, added)) continue;
     if (auto line = FitLineAlong(thresholded, w->line, half_px, opt.line_ransac, rng)) {
       added.push_back(*line);

@@ -124,7 +124,7 @@ void KalmanUpdate(const Lane& lane, double sd, double sd_per_m, Track* track) {
 LaneIdentity IdentityOf(const Track& track) {
   LaneIdentity out;
   out.id = track.id;
-  out.confirmed = track.confirmed;
+  out.confirmed = track.Reported();
   out.curve = track.curve;
   out.covariance = track.covariance;
   const std::array<double, 5>& v = track.type_votes;
@@ -187,6 +187,37 @@ void LaneTracker::Reset() {
   tracks_.clear();
   started_ = false;
   ++resets_;
+}
+
+void LaneTracker::MarkParallel() {
+  constexpr double kPi = 3.14159265358979323846;
+  constexpr double kMinExtentM = 4.0;  // shorter pieces say little of a direction
+  for (Track& t : tracks_) t.parallel = true;
+  if (options_.parallel_max_deg <= 0) return;
+  const double max_rad = options_.parallel_max_deg * kPi / 180.0;
+  auto slope_at = [](const Track& t, double y) {
+    return t.curve.coefficients(1) + t.curve.coefficients(2) * y;
+  };
+  std::vector<bool> parallel(tracks_.size(), true);
+  for (size_t i = 0; i < tracks_.size(); ++i) {
+    const Track& t = tracks_[i];
+    const double ym = 0.5 * (t.curve.y_near + t.curve.y_far);
+    std::vector<double> others;
+    for (size_t k = 0; k < tracks_.size(); ++k) {
+      const Track& o = tracks_[k];
+      if (k == i || !o.confirmed || o.misses > 0 || o.curve.y_far - o.curve.y_near < kMinExtentM) {
+        continue;
+      }
+      others.push_back(std::atan(slope_at(o, ym)));
+    }
+    if (others.size() < 2) continue;
+    const auto mid = others.begin() + static_cast<std::ptrdiff_t>(others.size() / 2);
+    std::nth_element(others.begin(), mid, others.end());
+    double median = *mid;
+    if (others.size() % 2 == 0) median = 0.5 * (median + *std::max_element(others.begin(), mid));
+    parallel[i] = std::abs(std::atan(slope_at(t, ym)) - median) <= max_rad;
+  }
+  for (size_t i = 0; i < tracks_.size(); ++i) tracks_[i].parallel = parallel[i];
 }
 
 void LaneTracker::Predict(double dt) {
@@ -309,6 +340,8 @@ std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
       tracks_[b].misses = options_.max_misses;  // ends below
     }
   }
+
+  MarkParallel();
 
   std::vector<LaneIdentity> out(lanes.size());
   for (size_t j = 0; j < lanes.size(); ++j) {
@@ -728,7 +761,7 @@ std::optional<EgoLane> SequenceTracker::Track(std::vector<Lane>& lanes,
   if (ipm != nullptr) {
     // Confirmed tracks missed for a few frames: their prediction.
     for (const lane::Track& track : lanes_.tracks()) {
-      if (!track.confirmed || track.misses < 1 || track.misses > lanes_.options().coast_frames) {
+      if (!track.Reported() || track.misses < 1 || track.misses > lanes_.options().coast_frames) {
         continue;
       }
       // Not when a lane of this frame lies near it: the boundary was found
@@ -795,7 +828,7 @@ DetectionPrior SequenceTracker::Prior(const IpmMapping& ipm) const {
   const double dt = 1.0 / std::max(1e-3, o.default_fps);
   const double rows = ipm.height();
   for (const lane::Track& track : lanes_.tracks()) {
-    if (!track.confirmed) continue;
+    if (!track.Reported()) continue;
     const double y0 = std::max(track.curve.y_near, ipm.y_min());
     const double y1 = std::min(track.curve.y_far, ipm.y_max());
     if (y1 - y0 < 1.0) continue;  // hardly in the view
@@ -809,8 +842,8 @@ DetectionPrior SequenceTracker::Prior(const IpmMapping& ipm) const {
     // The predicted lateral position's sd at mid extent, one frame on.
     const double ym = 0.5 * (y0 + y1);
     const Eigen::Vector3d j(1.0, ym, 0.5 * ym * ym);
-    const double var = j.dot(track.covariance * j) + o.offset_noise * o.offset_noise * dt *
-                                                          (1 + track.misses);
+    const double var =
+        j.dot(track.covariance * j) + o.offset_noise * o.offset_noise * dt * (1 + track.misses);
     w.half_width_m = 0.3 + 2.5 * std::sqrt(std::max(0.0, var));
     prior.windows.push_back(w);
   }

@@ -77,6 +77,9 @@ DriveScore ScoreDrive(const std::vector<DriveTruthFrame>& truth,
         ++score.type_scored;
         if (lane.type == (b.dashed ? MarkingType::kDashed : MarkingType::kSolid)) {
           ++score.type_right;
+        } else {
+          ++score.type_errors[{b.id, absl::StrFormat("%s read %s", b.dashed ? "dashed" : "solid",
+                                                     MarkingTypeName(lane.type))}];
         }
       }
       if (lane.id >= 0) {
@@ -152,6 +155,13 @@ std::string DriveScore::Summary() const {
     }
   }
   s += absl::StrFormat("departing frames away from any lane change: %d\n", false_departure_frames);
+  if (!type_errors.empty()) {
+    s += "type errors:";
+    for (const auto& [key, count] : type_errors) {
+      s += absl::StrFormat(" boundary %d %s x%d;", key.first, key.second, count);
+    }
+    s += "\n";
+  }
   return s;
 }
 

@@ -8,6 +8,8 @@
 #include <random>
 #include <vector>
 
+#include "lane/config.h"
+#include "lane/detector.h"
 #include "lane/synthetic.h"
 
 namespace lane {
@@ -271,6 +273,96 @@ TEST(TrackingTest, TypeVotesFavourDashedOnceSeen) {
     last = solid.Update({GroundLane(1.8, 0, 0)}, f / 30.0, {}, {MarkingType::kSolid})[0].type;
   }
   EXPECT_EQ(last, MarkingType::kSolid);
+}
+
+}  // namespace
+}  // namespace lane
+
+namespace lane {
+namespace {
+
+// The tracker's prior (DetectionPrior): with the column-sum Hough unable to
+// find anything (its peak threshold out of reach), the lanes are still found
+// in windows around where they are, and a window over bare road adds none.
+TEST(TrackingPriorTest, PredictedWindowsFindLanesTheHoughMissedAndNothingElse) {
+  absl::StatusOr<Config> config = LoadConfigFile(LANE_SOURCE_DIR "/configs/caltech.json");
+  ASSERT_TRUE(config.ok()) << config.status();
+  SyntheticDriveOptions drive;
+  absl::StatusOr<SyntheticFrame> frame = RenderSyntheticDriveFrame(config->camera, drive, 7, 0);
+  ASSERT_TRUE(frame.ok()) << frame.status();
+  absl::StatusOr<Detector> normal = Detector::Create(config->camera, config->ipm, config->detector);
+  ASSERT_TRUE(normal.ok()) << normal.status();
+  absl::StatusOr<Detection> reference = normal->Detect(frame->bgr);
+  ASSERT_TRUE(reference.ok());
+  ASSERT_GE(reference->lanes.size(), 2u);
+
+  DetectorOptions blind = config->detector;
+  blind.hough.min_peak = 1e6;
+  absl::StatusOr<Detector> detector = Detector::Create(config->camera, config->ipm, blind);
+  ASSERT_TRUE(detector.ok()) << detector.status();
+  absl::StatusOr<Detection> alone = detector->Detect(frame->bgr);
+  ASSERT_TRUE(alone.ok());
+  EXPECT_TRUE(alone->lanes.empty());
+
+  // A window along each reference lane (its top-view chord, extended to the
+  // view's first and last rows).
+  const IpmMapping& ipm = detector->ipm();
+  auto window_at = [&](const Lane& lane, double shift_m) {
+    const Eigen::Vector2d a = lane.ipm[0], b = lane.ipm[3];
+    const double dxdy = (b.x() - a.x()) / (b.y() - a.y());
+    const double shift_px = shift_m / ipm.metres_per_px_x();
+    DetectionPrior::Window w;
+    w.line.top = {a.x() + shift_px + (0.0 - a.y()) * dxdy, 0.0};
+    w.line.bottom = {a.x() + shift_px + (ipm.height() - 1.0 - a.y()) * dxdy, ipm.height() - 1.0};
+    w.half_width_m = 0.5;
+    return w;
+  };
+  DetectionPrior prior;
+  for (const Lane& lane : reference->lanes) prior.windows.push_back(window_at(lane, 0.0));
+  absl::StatusOr<Detection> found = detector->Detect(frame->bgr, &prior);
+  ASSERT_TRUE(found.ok());
+  ASSERT_EQ(found->lanes.size(), reference->lanes.size());
+  for (size_t i = 0; i < found->lanes.size(); ++i) {
+    const double mid = 0.5 * (found->lanes[i].ground[0].x() + found->lanes[i].ground[3].x());
+    const double want =
+        0.5 * (reference->lanes[i].ground[0].x() + reference->lanes[i].ground[3].x());
+    EXPECT_NEAR(mid, want, 0.3) << "lane " << i;
+  }
+
+  // Windows over the middle of the lanes (1.8 m from each boundary): bare
+  // road, nothing found.
+  DetectionPrior bare;
+  bare.windows.push_back(window_at(reference->lanes[0], 1.8));
+  absl::StatusOr<Detection> none = detector->Detect(frame->bgr, &bare);
+  ASSERT_TRUE(none.ok());
+  EXPECT_TRUE(none->lanes.empty());
+}
+
+// Lanes of one road are parallel: among three parallel confirmed lanes, a
+// fourth running 10 degrees off them (the verge, a curb at a slant) is
+// tracked but not reported as confirmed, and the parallel ones are.
+TEST(TrackingPriorTest, ATrackThatIsNotParallelToTheOthersIsNotConfirmed) {
+  LaneTracker tracker;
+  std::vector<LaneIdentity> out;
+  for (int f = 0; f < 8; ++f) {
+    out = tracker.Update({GroundLane(-5.4, 0.0, 0.0), GroundLane(-1.8, 0.0, 0.0),
+                          GroundLane(1.8, 0.0, 0.0), GroundLane(7.0, std::tan(0.175), 0.0)},
+                         f / 30.0);
+  }
+  ASSERT_EQ(out.size(), 4u);
+  EXPECT_TRUE(out[0].confirmed);
+  EXPECT_TRUE(out[1].confirmed);
+  EXPECT_TRUE(out[2].confirmed);
+  EXPECT_FALSE(out[3].confirmed);
+  EXPECT_GE(out[3].id, 1);
+  // 3 degrees off is within the tolerance (4): confirmed.
+  LaneTracker tolerant;
+  for (int f = 0; f < 8; ++f) {
+    out = tolerant.Update({GroundLane(-5.4, 0.0, 0.0), GroundLane(-1.8, 0.0, 0.0),
+                           GroundLane(1.8, 0.0, 0.0), GroundLane(5.4, std::tan(0.052), 0.0)},
+                          f / 30.0);
+  }
+  EXPECT_TRUE(out[3].confirmed);
 }
 
 }  // namespace

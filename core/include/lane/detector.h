@@ -130,8 +130,8 @@ struct Intermediates {
   cv::Mat thresholded;  // CV_32F after the quantile threshold
   float threshold = 0;
   std::vector<ColumnPeak> peaks;
-  std::vector<IpmLine> lines;        // from the column peaks, then from the prior
-  int prior_lines = 0;               // how many of `lines` the prior's windows gave
+  std::vector<IpmLine> lines;       // from the column peaks, then from the prior
+  int prior_lines = 0;              // how many of `lines` the prior's windows gave
   std::vector<Bezier> ipm_splines;  // after RANSAC, before post-processing
 };
 

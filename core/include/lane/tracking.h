@@ -84,6 +84,13 @@ struct LaneTrackingOptions {
   // reported, from its prediction (Lane::predicted), when SequenceTracker
   // is given the top view to draw it in.
   int coast_frames = 3;
+  // Lanes of one road are parallel: a track whose direction at the middle
+  // of its extent differs from the median direction of the other confirmed
+  // tracks (at the same distance ahead, at least two of them seen this
+  // frame) by more than this is not reported as confirmed, nor predicted,
+  // nor searched for: the verge or a curb seen at a slant, a car's side.
+  // Degrees; 0 turns the check off.
+  double parallel_max_deg = 4.0;
   // ... unless a lane of the frame lies closer than this (mean lateral
   // distance, m: a third of a narrow lane).
   double coast_clearance_m = 1.0;
@@ -96,6 +103,10 @@ struct Track {
   int misses = 0;     // frames in a row without a match
   GroundCurve curve;  // the filtered estimate
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  // Parallel to the other confirmed tracks (parallel_max_deg) this frame.
+  bool parallel = true;
+  // Reported as confirmed: seen in confirm_frames frames, and parallel.
+  bool Reported() const { return confirmed && parallel; }
   // Colour votes over the frames (MarkingColorOf): white and yellow.
   double white_votes = 0;
   double yellow_votes = 0;
@@ -136,6 +147,8 @@ class LaneTracker {
 
  private:
   void Predict(double dt);
+  // Sets each track's `parallel` flag (parallel_max_deg).
+  void MarkParallel();
 
   LaneTrackingOptions options_;
   std::vector<Track> tracks_;

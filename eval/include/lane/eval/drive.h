@@ -8,6 +8,7 @@
 #ifndef LANE_EVAL_DRIVE_H_
 #define LANE_EVAL_DRIVE_H_
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -66,6 +67,9 @@ struct DriveScore {
   // and type right (solid/dashed, boundaries whose pattern is not changing).
   int colour_scored = 0, colour_right = 0;
   int type_scored = 0, type_right = 0;
+  // The type's errors by true boundary id: (true dashed, reported type
+  // name) -> count.
+  std::map<std::pair<int, std::string>, int> type_errors;
   // A true boundary matched by a lane whose id differs from the id that
   // last matched it.
   int id_switches = 0;
