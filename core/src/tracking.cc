@@ -618,10 +618,24 @@ MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraMo
     const int u = b->u, half = b->half, off = b->off, span = b->span;
     const double w = b->width_px;
     ++n;
-    const double paint = GreyMean(frame, row, u - half, u + half);
-    const double left = GreyMean(frame, row, u - off - span, u - off);
-    const double right = GreyMean(frame, row, u + off, u + off + span);
-    const bool bar = std::min(paint - left, paint - right) >= 12.0;
+    // The paint against the road on both sides, at the spline's column or,
+    // when that fails, up to half a marking width either side: the spline
+    // is placed to a pixel or so, and far away a marking is 2-3 pixels wide
+    // (a solid line read off its paint would show gaps).
+    auto contrast_at = [&](int c, double* paint, double* left, double* right) {
+      *paint = GreyMean(frame, row, c - half, c + half);
+      *left = GreyMean(frame, row, c - off - span, c - off);
+      *right = GreyMean(frame, row, c + off, c + off + span);
+      return std::min(*paint - *left, *paint - *right);
+    };
+    double paint = 0, left = 0, right = 0;
+    bool bar = contrast_at(u, &paint, &left, &right) >= 12.0;
+    const int reach = std::max(1, static_cast<int>(std::lround(0.5 * w)));
+    for (int d = -reach; d <= reach && !bar; ++d) {
+      if (d == 0 || u + d - off - span < 0 || u + d + off + span >= frame.cols) continue;
+      double p2 = 0, l2 = 0, r2 = 0;
+      bar = contrast_at(u + d, &p2, &l2, &r2) >= 12.0;
+    }
     // Two bars side by side: the profile across +-0.3 m has two peaks
     // 0.1..0.45 m apart with the road showing between them. A double
     // line's centre (where its lane runs) is that dip, not a bar, so the

@@ -17,6 +17,7 @@ DriveTruthFrame DriveTruthOf(const SyntheticFrame& frame) {
   for (const SyntheticBoundary& b : frame.boundaries) {
     t.boundaries.push_back({Curve::FromBezier(b.image), b.id, b.yellow, b.dashed, b.type_changes});
   }
+  for (const auto& e : frame.road_edges) t.road_edges.push_back(Curve::FromBezier(e));
   t.ego = frame.ego;
   return t;
 }
@@ -51,13 +52,32 @@ DriveScore ScoreDrive(const std::vector<DriveTruthFrame>& truth,
     std::vector<Curve> labels;
     for (const DriveTruthBoundary& b : t.boundaries) labels.push_back(b.curve);
     const Matching m = MatchPaperRule(curves, labels, t.width, options.rule);
+    // Lanes on no boundary: on an asphalt edge, or false positives.
+    std::vector<Curve> unmatched;
+    std::vector<size_t> unmatched_index;
+    for (size_t d = 0; d < counted.size(); ++d) {
+      if (m.detection_label[d] >= 0) continue;
+      unmatched.push_back(curves[d]);
+      unmatched_index.push_back(d);
+    }
+    std::vector<bool> on_edge(counted.size(), false);
+    if (!unmatched.empty() && !t.road_edges.empty()) {
+      const Matching e = MatchPaperRule(unmatched, t.road_edges, t.width, options.rule);
+      for (size_t u = 0; u < unmatched.size(); ++u) {
+        on_edge[unmatched_index[u]] = e.detection_label[u] >= 0;
+      }
+    }
     score.reported += static_cast<int>(counted.size());
     score.matched += m.MatchedLabels();
-    score.false_positives += m.FalsePositives();
     for (size_t d = 0; d < counted.size(); ++d) {
       const bool predicted = out.lanes[static_cast<size_t>(counted[d])].predicted;
       score.predicted += predicted ? 1 : 0;
       if (m.detection_label[d] >= 0) continue;
+      if (on_edge[d]) {
+        ++score.on_road_edges;
+        continue;
+      }
+      ++score.false_positives;
       score.false_positive_frames.push_back(static_cast<int>(f));
       score.predicted_false_positives += predicted ? 1 : 0;
     }
@@ -135,16 +155,16 @@ DriveScore ScoreDrive(const std::vector<DriveTruthFrame>& truth,
 
 std::string DriveScore::Summary() const {
   std::string s = absl::StrFormat(
-      "frames %d, boundaries %d: recall %.3f, lanes reported %d, false positives %d (%.3f per "
-      "frame; predicted lanes %d, of which false positives %d)\n"
+      "frames %d, boundaries %d: recall %.3f, lanes reported %d, on asphalt edges %d, false "
+      "positives %d (%.3f per frame; predicted lanes %d, of which false positives %d)\n"
       "colour right %d/%d (%.3f), type right %d/%d (%.3f), id switches %d (%.2f per 100 "
       "boundary-frames)\n"
       "ego: %d/%d frames bounded by the true lanes; RMS offset %.3f m, heading %.3f deg, width "
       "%.3f m, curvature %.5f 1/m\n",
-      frames, labels, Recall(), reported, false_positives, FalsePositivesPerFrame(), predicted,
-      predicted_false_positives, colour_right, colour_scored, ColourAccuracy(), type_right,
-      type_scored, TypeAccuracy(), id_switches, IdSwitchesPer100BoundaryFrames(), ego_matched,
-      ego_frames, offset_rms_m, heading_rms_deg, width_rms_m, curvature_rms_per_m);
+      frames, labels, Recall(), reported, on_road_edges, false_positives, FalsePositivesPerFrame(),
+      predicted, predicted_false_positives, colour_right, colour_scored, ColourAccuracy(),
+      type_right, type_scored, TypeAccuracy(), id_switches, IdSwitchesPer100BoundaryFrames(),
+      ego_matched, ego_frames, offset_rms_m, heading_rms_deg, width_rms_m, curvature_rms_per_m);
   for (size_t i = 0; i < departure_leads_s.size(); ++i) {
     if (departure_leads_s[i]) {
       s += absl::StrFormat("lane change %d: departure warned %.2f s before the crossing\n",

@@ -324,6 +324,13 @@ SyntheticFrame RenderScene(const CameraModel& camera, const SyntheticOptions& op
     out.id = i;
     frame.boundaries.push_back(out);
   }
+  for (const double edge : {road.edge_left, road.edge_right}) {
+    Boundary e;
+    e.offset = edge;
+    if (ground_visible && y_near < y_far && FitTruth(camera, road, y_near, y_far, &e)) {
+      frame.road_edges.push_back(e.truth.p);
+    }
+  }
 
   cv::Mat3f canvas(h, w, cv::Vec3f(look.haze));
   RenderSky(camera, look, canvas);

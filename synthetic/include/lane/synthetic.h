@@ -75,6 +75,9 @@ struct SyntheticFrame {
   std::vector<SyntheticBoundary> boundaries;
   int ego_left = -1;   // index of the ego lane's left boundary, or -1
   int ego_right = -1;  // index of the ego lane's right boundary, or -1
+  // The asphalt's edges in view (unpainted boundaries, which the detector
+  // may report as road edges): Bezier control points, image pixels.
+  std::vector<std::array<Eigen::Vector2d, 4>> road_edges;
   // A drive's frame only.
   double time_s = 0;
   std::optional<SyntheticEgo> ego;

@@ -33,6 +33,9 @@ struct DriveTruthFrame {
   int height = 0;
   double time_s = 0;
   std::vector<DriveTruthBoundary> boundaries;
+  // The asphalt's edges: a lane on one (by the paper's rule) that matched
+  // no boundary is a road edge found, not a false positive, nor a hit.
+  std::vector<Curve> road_edges;
   std::optional<SyntheticEgo> ego;
 };
 
@@ -62,6 +65,7 @@ struct DriveScore {
   int false_positives = 0;
   int predicted = 0;  // of the lanes counted, predicted ones (Lane::predicted)
   int predicted_false_positives = 0;
+  int on_road_edges = 0;                   // lanes on no boundary but on an asphalt edge
   std::vector<int> false_positive_frames;  // one entry per false positive
   // Of the matched lanes: colour right (white/yellow; unknown is wrong),
   // and type right (solid/dashed, boundaries whose pattern is not changing).
