@@ -289,6 +289,7 @@ std::vector<IpmLine> Detector::FindPriorLines(const cv::Mat& thresholded,
                                               std::mt19937_64& rng) const {
   const DetectorOptions& opt = options_;
   const double mpp_x = ipm_.metres_per_px_x();
+  const double spline_window_px = opt.spline_ransac.window_half_width_m / mpp_x;
   const double mid_row = 0.5 * (thresholded.rows - 1);
   // A predicted lane counts as found when a line of this frame runs inside
   // its window at mid height. The Hough keeps only the stronger of two
@@ -329,7 +330,7 @@ std::vector<IpmLine> Detector::FindPriorLines(const cv::Mat& thresholded,
     if (found_near(w->line, half_px, lines) || found_near(w->line, half_px, added)) continue;
     if (auto line = FitLineAlong(thresholded, w->line, half_px, opt.line_ransac, rng)) {
       added.push_back(*line);
-      half_widths_px->push_back(half_px);
+      half_widths_px->push_back(std::min(half_px, spline_window_px));
     }
   }
   return added;
@@ -422,13 +423,9 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
   // 4b. A tracker's predicted lanes that the Hough missed: their windows.
   const double spline_window_px = opt.spline_ransac.window_half_width_m / ipm_.metres_per_px_x();
   std::vector<double> spline_half_px(lines.size(), spline_window_px);
-  int prior_lines = 0;
   if (prior != nullptr && !prior->windows.empty()) {
-    std::vector<double> prior_half_px;
     const std::vector<IpmLine> more =
-        FindPriorLines(thresholded, *prior, lines, &prior_half_px, rng);
-    for (double h : prior_half_px) spline_half_px.push_back(std::min(spline_window_px, h));
-    prior_lines = static_cast<int>(more.size());
+        FindPriorLines(thresholded, *prior, lines, &spline_half_px, rng);
     lines.insert(lines.end(), more.begin(), more.end());
   }
   lap(time.lines_ms);
@@ -452,7 +449,6 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
     in.threshold = threshold;
     in.peaks = peaks;
     in.lines = lines;
-    in.prior_lines = prior_lines;
     for (const auto& c : candidates) in.ipm_splines.push_back(c.ipm);
     det.debug = std::move(in);
   }

@@ -7,9 +7,7 @@
 #include "lane/ransac.h"
 
 namespace lane {
-namespace {
 
-// A line through `point` with unit `dir`, clipped to rows 0 and rows-1.
 std::optional<IpmLine> MakeIpmLine(const Eigen::Vector2d& point, const Eigen::Vector2d& dir,
                                    int rows) {
   if (std::abs(dir.y()) < 1e-9) return std::nullopt;  // horizontal
@@ -19,6 +17,8 @@ std::optional<IpmLine> MakeIpmLine(const Eigen::Vector2d& point, const Eigen::Ve
   line.bottom = {point.x() + (rows - 1 - point.y()) * dxdy, rows - 1.0};
   return line;
 }
+
+namespace {
 
 double AngleFromVerticalDeg(const IpmLine& line) {
   return lane::AngleFromVerticalDeg(line.bottom - line.top);

@@ -622,19 +622,20 @@ MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraMo
     // when that fails, up to half a marking width either side: the spline
     // is placed to a pixel or so, and far away a marking is 2-3 pixels wide
     // (a solid line read off its paint would show gaps).
-    auto contrast_at = [&](int c, double* paint, double* left, double* right) {
-      *paint = GreyMean(frame, row, c - half, c + half);
-      *left = GreyMean(frame, row, c - off - span, c - off);
-      *right = GreyMean(frame, row, c + off, c + off + span);
-      return std::min(*paint - *left, *paint - *right);
+    auto road_left = [&](int c) { return GreyMean(frame, row, c - off - span, c - off); };
+    auto road_right = [&](int c) { return GreyMean(frame, row, c + off, c + off + span); };
+    auto bar_at = [&](int c, double left_road, double right_road) {
+      return GreyMean(frame, row, c - half, c + half) - std::max(left_road, right_road) >= 12.0;
     };
-    double paint = 0, left = 0, right = 0;
-    bool bar = contrast_at(u, &paint, &left, &right) >= 12.0;
+    const double left = road_left(u);
+    const double right = road_right(u);
+    bool bar = bar_at(u, left, right);
     const int reach = std::max(1, static_cast<int>(std::lround(0.5 * w)));
     for (int d = -reach; d <= reach && !bar; ++d) {
-      if (d == 0 || u + d - off - span < 0 || u + d + off + span >= frame.cols) continue;
-      double p2 = 0, l2 = 0, r2 = 0;
-      bar = contrast_at(u + d, &p2, &l2, &r2) >= 12.0;
+      const int c = u + d;
+      if (d != 0 && c - off - span >= 0 && c + off + span < frame.cols) {
+        bar = bar_at(c, road_left(c), road_right(c));
+      }
     }
     // Two bars side by side: the profile across +-0.3 m has two peaks
     // 0.1..0.45 m apart with the road showing between them. A double
@@ -840,7 +841,6 @@ DetectionPrior SequenceTracker::Prior(const IpmMapping& ipm) const {
   DetectionPrior prior;
   const LaneTrackingOptions& o = lanes_.options();
   const double dt = 1.0 / std::max(1e-3, o.default_fps);
-  const double rows = ipm.height();
   for (const lane::Track& track : lanes_.tracks()) {
     if (!track.Reported()) continue;
     const double y0 = std::max(track.curve.y_near, ipm.y_min());
@@ -849,10 +849,10 @@ DetectionPrior SequenceTracker::Prior(const IpmMapping& ipm) const {
     const Eigen::Vector2d a = ipm.GroundToIpm({track.curve.X(y0), y0});
     const Eigen::Vector2d b = ipm.GroundToIpm({track.curve.X(y1), y1});
     if (!a.allFinite() || !b.allFinite() || std::abs(a.y() - b.y()) < 1.0) continue;
-    const double dxdy = (b.x() - a.x()) / (b.y() - a.y());
+    const std::optional<IpmLine> line = MakeIpmLine(a, b - a, ipm.height());
+    if (!line) continue;
     DetectionPrior::Window w;
-    w.line.top = {a.x() + (0.0 - a.y()) * dxdy, 0.0};
-    w.line.bottom = {a.x() + (rows - 1.0 - a.y()) * dxdy, rows - 1.0};
+    w.line = *line;
     // The predicted lateral position's sd at mid extent, one frame on.
     const double ym = 0.5 * (y0 + y1);
     const Eigen::Vector3d j(1.0, ym, 0.5 * ym * ym);

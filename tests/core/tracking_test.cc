@@ -308,12 +308,9 @@ TEST(TrackingPriorTest, PredictedWindowsFindLanesTheHoughMissedAndNothingElse) {
   // view's first and last rows).
   const IpmMapping& ipm = detector->ipm();
   auto window_at = [&](const Lane& lane, double shift_m) {
-    const Eigen::Vector2d a = lane.ipm[0], b = lane.ipm[3];
-    const double dxdy = (b.x() - a.x()) / (b.y() - a.y());
-    const double shift_px = shift_m / ipm.metres_per_px_x();
+    const Eigen::Vector2d shift(shift_m / ipm.metres_per_px_x(), 0.0);
     DetectionPrior::Window w;
-    w.line.top = {a.x() + shift_px + (0.0 - a.y()) * dxdy, 0.0};
-    w.line.bottom = {a.x() + shift_px + (ipm.height() - 1.0 - a.y()) * dxdy, ipm.height() - 1.0};
+    w.line = *MakeIpmLine(lane.ipm[0] + shift, lane.ipm[3] - lane.ipm[0], ipm.height());
     w.half_width_m = 0.5;
     return w;
   };

@@ -131,7 +131,6 @@ struct Intermediates {
   float threshold = 0;
   std::vector<ColumnPeak> peaks;
   std::vector<IpmLine> lines;       // from the column peaks, then from the prior
-  int prior_lines = 0;              // how many of `lines` the prior's windows gave
   std::vector<Bezier> ipm_splines;  // after RANSAC, before post-processing
 };
 
@@ -214,8 +213,9 @@ class Detector {
   cv::Mat Threshold(const cv::Mat& filtered, float* threshold) const;
   std::vector<IpmLine> FindLines(const cv::Mat& thresholded, std::mt19937_64& rng,
                                  std::vector<ColumnPeak>* peaks) const;
-  // Lines in the prior's windows that `lines` does not already hold, with
-  // their windows' half widths (px) in `half_widths_px`.
+  // Lines in the prior's windows that `lines` does not already hold; the
+  // half width (px) of the spline window around each is appended to
+  // `half_widths_px`: its prior window, at most the usual spline window.
   std::vector<IpmLine> FindPriorLines(const cv::Mat& thresholded, const DetectionPrior& prior,
                                       const std::vector<IpmLine>& lines,
                                       std::vector<double>* half_widths_px,

@@ -41,6 +41,11 @@ struct IpmLine {
   double XAt(double y) const;
 };
 
+// The line through `point` along `dir` (any length), clipped to rows 0 and
+// rows - 1 of a top view; none when it runs horizontally.
+std::optional<IpmLine> MakeIpmLine(const Eigen::Vector2d& point, const Eigen::Vector2d& dir,
+                                   int rows);
+
 // Non-zero pixels of a CV_32F image within |x - center(y)| <= half_width,
 // with their values as weights. center_at maps a row to a column.
 struct WeightedPoints {
