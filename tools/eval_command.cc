@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <set>
@@ -88,6 +89,23 @@ bool WriteFile(const fs::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   out << text;
   return static_cast<bool>(out);
+}
+
+// One line of DIR/frames.jsonl: which label each detection matched under both
+// rules (-1: a false positive) and which detection found each scored label
+// (-1: a miss). Label numbers are indices into the frame's label list.
+std::string FrameMatchJsonLine(const std::string& name, const lane::eval::FrameScore& score) {
+  using Json = nlohmann::ordered_json;
+  auto matching = [&score](const lane::eval::Matching& m) {
+    Json det = Json::array();
+    for (int l : m.detection_label) det.push_back(l < 0 ? -1 : score.scored_labels[l]);
+    return Json{{"detection_label", det}, {"label_detection", m.label_detection}};
+  };
+  Json out{{"frame", name},
+           {"labels", score.scored_labels},
+           {"paper", matching(score.paper)},
+           {"culane", matching(score.culane)}};
+  return out.dump();
 }
 
 // Creates `dir` (and its parents); an error message or "".
@@ -266,6 +284,8 @@ class EvalOutputs {
       }
       txt_.open(out_dir_ / "results.txt", std::ios::binary | std::ios::trunc);
       if (!txt_) return absl::StrCat("cannot write ", (out_dir_ / "results.txt").string());
+      frames_.open(out_dir_ / "frames.jsonl", std::ios::binary | std::ios::trunc);
+      if (!frames_) return absl::StrCat("cannot write ", (out_dir_ / "frames.jsonl").string());
     }
     if (const auto& overlays = flags.overlays) {
       overlay_dir_ = *overlays;
@@ -288,6 +308,8 @@ class EvalOutputs {
              << '\n';
     }
     if (txt_.is_open()) txt_ << lane::eval::ResultsTxtFrame(o.index, o.lanes);
+    if (frames_.is_open() && o.score)
+      frames_ << FrameMatchJsonLine(o.frame->name, *o.score) << '\n';
     if (!overlay_dir_.empty()) WriteOverlay(o, options, roi);
     progress_.Update(o.index + 1, o.total, o.frame->name);
   }
@@ -302,7 +324,7 @@ class EvalOutputs {
     // stream that never opened (results.jsonl when scoring --results) sets
     // its failbit, which used to fail every --results --output run.
     bool streams_ok = true;
-    for (std::ofstream* stream : {&jsonl_, &txt_}) {
+    for (std::ofstream* stream : {&jsonl_, &txt_, &frames_}) {
       if (!stream->is_open()) continue;
       stream->close();
       streams_ok = streams_ok && !stream->fail();
@@ -350,7 +372,7 @@ class EvalOutputs {
   }
 
   ProgressBar progress_;
-  std::ofstream jsonl_, txt_;
+  std::ofstream jsonl_, txt_, frames_;
   fs::path out_dir_;
   fs::path overlay_dir_;
   std::set<std::string> used_stems_;
@@ -474,9 +496,11 @@ Command AddEvalCommand(CLI::App& lane, const std::vector<std::string>& args) {
               "score FILE instead of running the detector: lane detect JSON Lines, or the "
               "original tool's results (.txt)")
       ->type_name("FILE");
-  AddOptional(app, "--output,--out", &flags->out,
-              "write DIR/table.md, DIR/table.json, DIR/results.txt (original format) and, when "
-              "the detector ran, DIR/results.jsonl")
+  AddOptional(
+      app, "--output,--out", &flags->out,
+      "write DIR/table.md, DIR/table.json, DIR/results.txt (original format), DIR/frames.jsonl "
+      "(per frame: the label each detection matched, -1 = false positive) and, when "
+      "the detector ran, DIR/results.jsonl")
       ->type_name("DIR");
   AddOptional(app, "--overlay,--overlays", &flags->overlays,
               "write DIR/STEM.png per frame like the paper's Fig. 12: labels green, correct "

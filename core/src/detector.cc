@@ -98,6 +98,11 @@ DetectorOptions DetectorOptions::ForMode(Mode mode) {
     // The ego lane's band (+-2.9 m) holds its two boundaries: 2 x 0.25 m of
     // kept pixels in 5.8 m is 8.6 % of a row (threshold.h).
     o.threshold.transverse_max_fraction = 0.15;
+    // The band seldom reaches a curb, the stricter contrast's target in
+    // all-lanes mode; the paper's-era 0.015 keeps more of the ego lane's
+    // worn boundaries (cordova1 2-lanes: 96.57 % correct / 2.49 % FP against
+    // 96.09 % / 2.49 % at 0.027; docs/accuracy-log.md entry 35).
+    o.postprocess.min_side_contrast = 0.015;
   }
   return o;
 }

@@ -52,6 +52,7 @@ absl::Status PostprocessOptions::Validate() const {
       {"min_image_length_px", min_image_length_px, 0, 1e5},
       {"side_offset_m", side_offset_m, 0, 10},
       {"min_side_contrast", min_side_contrast, 0, 1},
+      {"min_bar_fraction", min_bar_fraction, 0.01, 1},
       {"extend_search_m", extend_search_m, 0.01, 10},
       {"min_ray_angle_deg", min_ray_angle_deg, 0, 90},
       {"max_ray_bend_m", max_ray_bend_m, 0, 10},
@@ -196,7 +197,7 @@ std::optional<Bezier> LocalizeSpline(const Bezier& spline, const ChannelView& im
 }
 
 double BarContrast(const Bezier& spline, const ChannelView& image, double side_offset_px,
-                   int samples) {
+                   double bar_fraction, int samples) {
   std::vector<double> values;
   values.reserve(samples);
   for (int i = 0; i < samples; ++i) {
@@ -217,9 +218,10 @@ double BarContrast(const Bezier& spline, const ChannelView& image, double side_o
         std::min(centre - Bilinear(image, l.x(), l.y()), centre - Bilinear(image, r.x(), r.y())));
   }
   if (values.empty()) return 0.0;
-  // The upper quartile: a dashed marking is a bar along a quarter of its
-  // length or more, while a step (curb, asphalt edge) is never one.
-  const size_t k = (values.size() * 3) / 4;
+  // A high quantile: a dashed marking is a bar along a fifth to a quarter of
+  // its length or more, while a step (curb, asphalt edge) is never one.
+  const size_t k =
+      std::min(values.size() - 1, static_cast<size_t>(values.size() * (1.0 - bar_fraction)));
   std::nth_element(values.begin(), values.begin() + k, values.end());
   return values[k];
 }
@@ -292,8 +294,8 @@ bool PostprocessInTopView(SplineCandidate& c, const PostprocessFrame& f,
     if (!PassesShapeChecks(c.ipm, ipm_min_len, pp.min_straightness)) c.ipm = ipm_line;
   }
   if (ChordAngleFromVerticalDeg(c.ipm) > pp.ipm_max_angle_from_vertical_deg) return false;
-  if (pp.min_side_contrast > 0 &&
-      BarContrast(c.ipm, f.top_view, pp.side_offset_m / mpp_x) < pp.min_side_contrast) {
+  if (pp.min_side_contrast > 0 && BarContrast(c.ipm, f.top_view, pp.side_offset_m / mpp_x,
+                                              pp.min_bar_fraction) < pp.min_side_contrast) {
     return false;  // a step (curb, road edge), not a bright marking
   }
   return PassesTopViewChecks(c.ipm, f.top_view, f.ipm, pp, context);

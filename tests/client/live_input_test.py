@@ -145,15 +145,40 @@ with tempfile.TemporaryDirectory() as tmp:
     files_out = lines_of(r.stdout)
     # The frames decode through FFmpeg's MJPEG decoder instead of libjpeg:
     # pixels differ by a grey level here and there, which changes what RANSAC
-    # draws (control points move, a weak lane comes or goes). The lanes must
-    # still be the files' lanes: per frame the count within one, and 80 % of
-    # the lanes start (first control point) within 10 px of one of the file's.
-    def starts_near(a, lanes):
-        return any(abs(a["image"][0][0] - b["image"][0][0]) + abs(a["image"][0][1] - b["image"][0][1])
-                   < 10 for b in lanes)
+    # draws (control points move, a weak lane comes or goes, an extension
+    # stops a step earlier). The lanes must still be the files' lanes: per
+    # frame the count within one, and 80 % of the lanes run within 10 px (mean
+    # horizontal distance over the image rows both cover, at least 20 rows)
+    # of one of the file's.
+    def polyline(lane, n=40):
+        p = lane["image"]
+        pts = []
+        for i in range(n + 1):
+            t = i / n
+            w = [(1 - t) ** 3, 3 * t * (1 - t) ** 2, 3 * t * t * (1 - t), t ** 3]
+            pts.append((sum(w[k] * p[k][0] for k in range(4)), sum(w[k] * p[k][1] for k in range(4))))
+        return sorted(pts, key=lambda q: q[1])
+
+    def x_at(pts, y):
+        for (x0, y0), (x1, y1) in zip(pts, pts[1:]):
+            if y0 <= y <= y1:
+                return x0 if y1 == y0 else x0 + (x1 - x0) * (y - y0) / (y1 - y0)
+        return None
+
+    def same_lane(a, b):
+        pa, pb = polyline(a), polyline(b)
+        lo, hi = max(pa[0][1], pb[0][1]), min(pa[-1][1], pb[-1][1])
+        if hi - lo < 20:
+            return False
+        ys = [lo + (hi - lo) * k / 10 for k in range(11)]
+        d = [abs(x_at(pa, y) - x_at(pb, y)) for y in ys]
+        return sum(d) / len(d) < 10
+
+    def near_lane(a, lanes):
+        return any(same_lane(a, b) for b in lanes)
 
     counts_ok = all(abs(len(a["lanes"]) - len(b["lanes"])) <= 1 for a, b in zip(live, files_out))
-    near = sum(starts_near(x, b["lanes"]) for a, b in zip(live, files_out) for x in a["lanes"])
+    near = sum(near_lane(x, b["lanes"]) for a, b in zip(live, files_out) for x in a["lanes"])
     total = sum(len(a["lanes"]) for a in live)
     check(counts_ok and len(files_out) == len(live) and near >= 0.8 * total,
           "lane detect URL: %d of %d lanes near the files' (counts within one: %s)"

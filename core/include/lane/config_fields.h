@@ -118,6 +118,7 @@ LANE_FIELDS(PostprocessOptions) {
   v.Field("min_length_fraction", s.min_length_fraction);
   v.Field("side_offset_m", s.side_offset_m);
   v.Field("min_side_contrast", s.min_side_contrast);
+  v.Field("min_bar_fraction", s.min_bar_fraction);
   v.Field("min_ray_angle_deg", s.min_ray_angle_deg);
   v.Field("max_ray_bend_m", s.max_ray_bend_m);
   v.Field("max_bright_side_fraction", s.max_bright_side_fraction);

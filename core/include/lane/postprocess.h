@@ -32,11 +32,19 @@ struct PostprocessOptions {
   // Along the top-view spline, the IPM intensity must exceed the intensity
   // `side_offset_m` to the left and to the right by at least
   // `min_side_contrast` (IPM intensity units, 1 = full scale) along at least
-  // a quarter of its length (so dashed markings pass).
+  // `min_bar_fraction` of its length (so dashed markings pass).
   // 0 disables the check. The paper lists curbs as its main source of false
   // positives (section IV).
   double side_offset_m = 0.3;
-  double min_side_contrast = 0.015;
+  double min_side_contrast = 0.027;
+  // A dashed line is paint along a quarter of its length on US roads (3 m
+  // dashes, 9 m gaps; 2 m / 4 m, a third, on Chinese urban roads), and a
+  // top view about one dash cycle deep shows a dash cut by its edge as less.
+  // A quarter, the old fixed value, lost dashed lines on about half their
+  // frames; a fifth keeps them. The contrast above went up with it, from
+  // 0.015, to keep the false-positive rate (cordova1, docs/accuracy-log.md
+  // entry 35).
+  double min_bar_fraction = 0.2;
   // Vertical objects (lane/vehicle_check.h): a top-view spline closer in
   // direction to the ray from the camera's foot point through it than to the
   // road's direction is dropped, where the two directions differ by at
@@ -237,12 +245,13 @@ std::optional<Bezier> LocalizeSpline(const Bezier& spline, const ChannelView& im
                                      double search_px, double sigma_px, double min_cos,
                                      double* mean_contrast);
 
-// Upper quartile over samples of `spline` of min(I(p) - I(p - d n), I(p) -
-// I(p + d n)) where n is the normal, d = side_offset_px and I(p) is the
-// brightest value within 1 px of p along n: how much brighter the curve is
-// than both of its sides (the quartile lets dashed markings pass).
+// The (1 - bar_fraction) quantile over samples of `spline` of min(I(p) -
+// I(p - d n), I(p) - I(p + d n)) where n is the normal, d = side_offset_px
+// and I(p) is the brightest value within 1 px of p along n: how much
+// brighter the curve is than both of its sides along bar_fraction of its
+// length (a high quantile lets dashed markings pass).
 double BarContrast(const Bezier& spline, const ChannelView& image, double side_offset_px,
-                   int samples = 20);
+                   double bar_fraction = 0.25, int samples = 20);
 
 struct ExtendOptions {
   double step_px = 10;
