@@ -91,14 +91,14 @@ TEST(DriveTest, TrackingOnARenderedDriveMeetsTheTargets) {
       std::printf("\n");
     }
   }
-  // Issue 15's targets, with the tracker's prior searched and the
-  // parallel check (docs/tracking.md has seeds 1-4). Seed 7: colour 0.996,
-  // type 0.958, id switches 0.50 per 100 boundary-frames, offset RMS
-  // 0.080 m, heading RMS 0.58 degrees, recall 0.952 against 0.936, false
-  // positives 0.027 per frame against 0.040 (lanes on the asphalt's edges
-  // count as neither). Two targets are not reached and are held as
-  // regression bounds instead: heading (0.5 degrees) and false positives
-  // (half the untracked detector's).
+  // Issue 15's targets, with the tracker's prior searched, the parallel
+  // check and confirmed lanes drawn from their filtered curves
+  // (docs/tracking.md has seeds 1-4). Seed 7: colour 0.996, type 0.958, id
+  // switches 0.42 per 100 boundary-frames, offset RMS 0.083 m, heading RMS
+  // 0.59 degrees, recall 0.966 against 0.936, false positives 0 per frame
+  // against 0.040 (lanes on the asphalt's edges count as neither). The
+  // heading target (0.5 degrees) is not reached and is held as a
+  // regression bound instead.
   EXPECT_GE(tracked.ColourAccuracy(), 0.95);
   EXPECT_GE(tracked.TypeAccuracy(), 0.92);  // target 0.90
   EXPECT_LE(tracked.IdSwitchesPer100BoundaryFrames(), 1.0);
@@ -109,13 +109,12 @@ TEST(DriveTest, TrackingOnARenderedDriveMeetsTheTargets) {
   // lanes the Hough missed, predicted lanes fill the frames where a
   // confirmed lane was missed.
   EXPECT_GE(tracked.Recall(), untracked.Recall());
-  // False positives: at most the untracked detector's; the target (half of
-  // them) is not reached: 0.027 against 0.040 per frame, the rest are
-  // skewed fits of single frames.
-  EXPECT_LE(tracked.FalsePositivesPerFrame(), untracked.FalsePositivesPerFrame());
-  // An absolute bound with room: a clang build draws other RANSAC samples
-  // and gives 0.053 on both.
-  EXPECT_LE(tracked.FalsePositivesPerFrame(), 0.08);
+  // False positives: at most half the untracked detector's (the target; a
+  // skewed single-frame fit of a confirmed lane moves it by the filter's
+  // gain only), and an absolute bound with room for another compiler's
+  // RANSAC draws (clang gave 0.053 untracked).
+  EXPECT_LE(tracked.FalsePositivesPerFrame(), 0.5 * untracked.FalsePositivesPerFrame());
+  EXPECT_LE(tracked.FalsePositivesPerFrame(), 0.04);
   // The lane change is warned before the crossing, and nothing else is.
   ASSERT_EQ(tracked.departure_leads_s.size(), 1u);
   EXPECT_TRUE(tracked.departure_leads_s[0].has_value()) << "no departure before the crossing";

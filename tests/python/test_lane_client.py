@@ -165,6 +165,11 @@ def ground_offsets(response):
     return [round(lane.ground.control_points[0].x, 1) for lane in response.lanes]
 
 
+def scores_of(response):
+    """The detected lanes' scores, left to right (without predicted lanes)."""
+    return [round(lane.score, 6) for lane in response.lanes if not lane.predicted]
+
+
 def lanes_of(response):
     """The detected lanes' image control points (a tracked stream also
     reports predicted lanes: the tracks of earlier frames)."""
@@ -361,8 +366,12 @@ class ClientTest(unittest.TestCase):
         self.assertEqual([r.frame_id for r in responses], list(range(len(frames))))
         for response in responses:
             self.assert_lanes(response)
-        # The same frame gives the same lanes whenever it is sent.
-        self.assertEqual(lanes_of(responses[0]), lanes_of(responses[5]))
+        # The same frame gives the same detections whenever it is sent: the
+        # same lanes with the same scores. (Their control points may differ:
+        # a stream is tracked, and a confirmed lane is drawn from its track's
+        # filtered curve, which the frames in between moved.)
+        self.assertEqual(scores_of(responses[0]), scores_of(responses[5]))
+        self.assertTrue(scores_of(responses[0]))
         self.assertEqual((stream.frames, stream.connections, stream.resent), (len(frames), 1, 0))
 
     def test_stream_frame_ids_and_arrays(self):

@@ -84,6 +84,14 @@ struct LaneTrackingOptions {
   // reported, from its prediction (Lane::predicted), when SequenceTracker
   // is given the top view to draw it in.
   int coast_frames = 3;
+  // A confirmed lane found this frame is reported as its track's filtered
+  // curve (after this frame's update, over the track's extent), drawn like
+  // a predicted lane, when SequenceTracker is given the top view: one
+  // frame's skewed spline fit (a RANSAC draw across a dash and a stain)
+  // then moves the lane by the Kalman gain's share, not all the way. false:
+  // the detection's own spline, as untracked. Unconfirmed lanes are always
+  // the detection's.
+  bool report_filtered = true;
   // Lanes of one road are parallel: a track whose direction at the middle
   // of its extent differs from the median direction of the other confirmed
   // tracks (at the same distance ahead, at least two of them seen this
@@ -239,7 +247,9 @@ class SequenceTracker {
 
   // With `ipm` (the detector's top view), confirmed tracks missed for up to
   // coast_frames frames are added to `lanes` from their prediction
-  // (Lane::predicted); `lanes` stays sorted left to right.
+  // (Lane::predicted), confirmed lanes of the frame are drawn from their
+  // filtered curves (LaneTrackingOptions::report_filtered); `lanes` stays
+  // sorted left to right.
   std::optional<EgoLane> Track(std::vector<Lane>& lanes, std::optional<double> time_s,
                                const IpmMapping* ipm = nullptr);
   void Reset();
