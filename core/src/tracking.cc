@@ -773,8 +773,9 @@ std::optional<EgoLane> SequenceTracker::Track(std::vector<Lane>& lanes,
     lanes[i].type = ids[i].type;
   }
   std::vector<LaneIdentity> all = ids;
-  if (ipm != nullptr && lanes_.options().report_filtered) {
-    for (size_t i = 0; i < lanes.size(); ++i) {
+  if (ipm != nullptr) {
+    // Confirmed lanes of this frame: their track's filtered curve.
+    for (size_t i = 0; i < lanes.size() && lanes_.options().report_filtered; ++i) {
       if (!ids[i].confirmed) continue;
       const std::optional<Lane> filtered = LaneFromCurve(ids[i].curve, camera_, *ipm);
       if (!filtered) continue;
@@ -782,8 +783,6 @@ std::optional<EgoLane> SequenceTracker::Track(std::vector<Lane>& lanes,
       lanes[i].ground = filtered->ground;
       lanes[i].ipm = filtered->ipm;
     }
-  }
-  if (ipm != nullptr) {
     // Confirmed tracks missed for a few frames: their prediction.
     for (const lane::Track& track : lanes_.tracks()) {
       if (!track.Reported() || track.misses < 1 || track.misses > lanes_.options().coast_frames) {

@@ -251,7 +251,7 @@ std::optional<Bezier> LocalizeSpline(const Bezier& spline, const ChannelView& im
 // brighter the curve is than both of its sides along bar_fraction of its
 // length (a high quantile lets dashed markings pass).
 double BarContrast(const Bezier& spline, const ChannelView& image, double side_offset_px,
-                   double bar_fraction = 0.25, int samples = 20);
+                   double bar_fraction, int samples = 20);
 
 struct ExtendOptions {
   double step_px = 10;
