@@ -97,9 +97,14 @@ double LateralDistance(const GroundCurve& a, const GroundCurve& b) {
 
 // Kalman update of a track with a detected lane: the measurement is the
 // lane's lateral position at points spread over its extent, each with
-// standard deviation `sd`, so that a short lane says little of the
-// curvature and the heading it implies at the camera.
-void KalmanUpdate(const Lane& lane, double sd, double sd_per_m, Track* track) {
+// standard deviation measured_x_sd + measured_x_sd_per_m * y, so that a
+// short lane says little of the curvature and the heading it implies at
+// the camera. Robust (Huber): a point whose innovation lies more than
+// huber_k standard deviations from the prediction has its variance scaled
+// by |r| / huber_k, so that it pulls the track as if it lay huber_k
+// standard deviations off (one pass, the points taken one by one: a
+// spline that runs off at its far end, across a dash and a stain).
+void KalmanUpdate(const Lane& lane, const LaneTrackingOptions& options, Track* track) {
   constexpr int kPoints = 6;
   const std::vector<Eigen::Vector2d> pts = GroundBezier(lane).Sample(kPoints);
   Eigen::Matrix<double, kPoints, 3> h;
@@ -111,13 +116,19 @@ void KalmanUpdate(const Lane& lane, double sd, double sd_per_m, Track* track) {
   }
   if (!h.allFinite() || !z.allFinite()) return;
   const Eigen::Matrix3d& p = track->covariance;
+  const Eigen::Matrix<double, kPoints, 1> innovation = z - h * track->curve.coefficients;
   Eigen::Matrix<double, kPoints, kPoints> s = h * p * h.transpose();
   for (int i = 0; i < kPoints; ++i) {
-    const double e = sd + sd_per_m * std::max(0.0, h(i, 1));
-    s(i, i) += e * e;
+    const double e = options.measured_x_sd + options.measured_x_sd_per_m * std::max(0.0, h(i, 1));
+    double variance = e * e;
+    if (options.huber_k > 0) {
+      const double r = std::abs(innovation(i)) / std::sqrt(s(i, i) + variance);
+      if (r > options.huber_k) variance *= r / options.huber_k;
+    }
+    s(i, i) += variance;
   }
   const Eigen::Matrix<double, 3, kPoints> gain = p * h.transpose() * s.inverse();
-  track->curve.coefficients += gain * (z - h * track->curve.coefficients);
+  track->curve.coefficients += gain * innovation;
   track->covariance = (Eigen::Matrix3d::Identity() - gain * h) * p;
 }
 
@@ -277,7 +288,7 @@ std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
   };
   // A track takes lane j of this frame.
   auto take = [&](Track& track, size_t j) {
-    KalmanUpdate(lanes[j], options_.measured_x_sd, options_.measured_x_sd_per_m, &track);
+    KalmanUpdate(lanes[j], options_, &track);
     track.curve.y_near = curves[j]->y_near;
     track.curve.y_far = curves[j]->y_far;
     ++track.hits;
@@ -305,7 +316,7 @@ std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
     const Eigen::Vector3d prior(options_.prior_offset_sd, options_.prior_heading_sd,
                                 options_.prior_curvature_sd);
     track.covariance = prior.cwiseProduct(prior).asDiagonal();
-    KalmanUpdate(lanes[j], options_.measured_x_sd, options_.measured_x_sd_per_m, &track);
+    KalmanUpdate(lanes[j], options_, &track);
     vote(track, j);
     tracks_.push_back(track);
     track_of[j] = static_cast<int>(tracks_.size()) - 1;

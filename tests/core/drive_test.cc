@@ -92,18 +92,19 @@ TEST(DriveTest, TrackingOnARenderedDriveMeetsTheTargets) {
     }
   }
   // Issue 15's targets, with the tracker's prior searched, the parallel
-  // check and confirmed lanes drawn from their filtered curves
-  // (docs/tracking.md has seeds 1-4). Seed 7: colour 0.996, type 0.958, id
-  // switches 0.42 per 100 boundary-frames, offset RMS 0.083 m, heading RMS
-  // 0.59 degrees, recall 0.966 against 0.936, false positives 0 per frame
-  // against 0.040 (lanes on the asphalt's edges count as neither). The
-  // heading target (0.5 degrees) is not reached and is held as a
-  // regression bound instead.
+  // check, confirmed lanes drawn from their filtered curves and the robust
+  // (Huber) update (docs/tracking.md has seeds 1-4). Seed 7: colour 0.994,
+  // type 0.958, id switches 0.33 per 100 boundary-frames, offset RMS
+  // 0.062 m, heading RMS 0.495 degrees, recall 0.955 against 0.936, false
+  // positives 0 per frame against 0.040 (lanes on the asphalt's edges count
+  // as neither). The heading meets its target (0.5 degrees) on this seed
+  // only narrowly and not on seeds 2-4 (0.52-0.59): the bound below is a
+  // regression bound with room for another compiler's RANSAC draws.
   EXPECT_GE(tracked.ColourAccuracy(), 0.95);
   EXPECT_GE(tracked.TypeAccuracy(), 0.92);  // target 0.90
   EXPECT_LE(tracked.IdSwitchesPer100BoundaryFrames(), 1.0);
-  EXPECT_LE(tracked.offset_rms_m, 0.10);
-  EXPECT_LE(tracked.heading_rms_deg, 0.75);  // target 0.5: not reached
+  EXPECT_LE(tracked.offset_rms_m, 0.08);    // target 0.10
+  EXPECT_LE(tracked.heading_rms_deg, 0.6);  // target 0.5: met on seeds 7 and 1, not 2-4
   EXPECT_GE(tracked.ego_matched, 0.9 * tracked.ego_frames);
   // Recall at least the untracked detector's: the prior's windows find
   // lanes the Hough missed, predicted lanes fill the frames where a
