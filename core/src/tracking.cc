@@ -249,6 +249,7 @@ std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
     dt = frame_dt;
   }
   started_ = true;
+  ++frame_;
   time_s_ = t;
   Predict(dt);
 
@@ -292,6 +293,7 @@ std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
     track.curve.y_near = curves[j]->y_near;
     track.curve.y_far = curves[j]->y_far;
     ++track.hits;
+    track.last_hit_frame = frame_;
     track.misses = 0;
     track.confirmed = track.confirmed || track.hits >= options_.confirm_frames;
     vote(track, j);
@@ -307,6 +309,8 @@ std::vector<LaneIdentity> LaneTracker::Update(const std::vector<Lane>& lanes,
     if (track_of[j] >= 0 || !curves[j]) continue;
     Track track;
     track.id = next_id_++;
+    track.born_frame = frame_;
+    track.last_hit_frame = frame_;
     track.hits = 1;
     track.confirmed = options_.confirm_frames <= 1;
     // The prior: the lane's fitted offset and heading, loosely, and a
@@ -800,11 +804,21 @@ std::optional<EgoLane> SequenceTracker::Track(std::vector<Lane>& lanes,
         continue;
       }
       // Not when a lane of this frame lies near it: the boundary was found
-      // (by another track); reporting both would draw it twice.
+      // (by another track); reporting both would draw it twice. A lane
+      // farther than duplicate_m whose track was already there when this
+      // one was last seen is another boundary (the asphalt's edge beside a
+      // solid line) and does not stand in for it.
       bool found = false;
       for (size_t i = 0; i < lanes.size() && !found; ++i) {
-        found = all[i].id >= 0 &&
-                LateralDistance(track.curve, all[i].curve) < lanes_.options().coast_clearance_m;
+        if (all[i].id < 0) continue;
+        const double distance = LateralDistance(track.curve, all[i].curve);
+        if (distance >= lanes_.options().coast_clearance_m) continue;
+        const lane::Track* other = nullptr;
+        for (const lane::Track& t : lanes_.tracks()) {
+          if (t.id == all[i].id) other = &t;
+        }
+        const bool coexisted = other != nullptr && other->born_frame <= track.last_hit_frame;
+        found = !(coexisted && distance >= lanes_.options().duplicate_m);
       }
       if (found) continue;
       std::optional<Lane> lane = LaneFromCurve(track.curve, camera_, *ipm);

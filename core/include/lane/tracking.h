@@ -92,6 +92,14 @@ struct LaneTrackingOptions {
   // reported, from its prediction (Lane::predicted), when SequenceTracker
   // is given the top view to draw it in.
   int coast_frames = 3;
+  // A predicted lane (coast_frames) is not reported when a lane of the
+  // frame lies closer than this (mean lateral distance, m: a third of a
+  // narrow lane), the boundary found again by another track, unless that
+  // lane lies farther than duplicate_m and its track was already there when
+  // the predicted one was last seen: then it is another boundary (the
+  // asphalt's edge 0.4-1 m outside a solid line) and must not hide the
+  // line's prediction.
+  double coast_clearance_m = 1.0;
   // A confirmed lane found this frame is reported as its track's filtered
   // curve (after this frame's update, over the track's extent), drawn like
   // a predicted lane, when SequenceTracker is given the top view: one
@@ -107,9 +115,6 @@ struct LaneTrackingOptions {
   // nor searched for: the verge or a curb seen at a slant, a car's side.
   // Degrees; 0 turns the check off.
   double parallel_max_deg = 4.0;
-  // ... unless a lane of the frame lies closer than this (mean lateral
-  // distance, m: a third of a narrow lane).
-  double coast_clearance_m = 1.0;
 };
 
 struct Track {
@@ -117,6 +122,10 @@ struct Track {
   bool confirmed = false;
   int hits = 0;       // frames matched
   int misses = 0;     // frames in a row without a match
+  // The tracker's frame count when the track started, and when it was
+  // last matched.
+  int64_t born_frame = 0;
+  int64_t last_hit_frame = 0;
   GroundCurve curve;  // the filtered estimate
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
   // Parallel to the other confirmed tracks (parallel_max_deg) this frame.
@@ -172,6 +181,7 @@ class LaneTracker {
   bool started_ = false;
   double time_s_ = 0;
   int resets_ = 0;
+  int64_t frame_ = 0;  // frames seen, for Track::born_frame
 };
 
 struct EgoOptions {
