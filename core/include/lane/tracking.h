@@ -120,8 +120,8 @@ struct LaneTrackingOptions {
 struct Track {
   int id = 0;
   bool confirmed = false;
-  int hits = 0;       // frames matched
-  int misses = 0;     // frames in a row without a match
+  int hits = 0;    // frames matched
+  int misses = 0;  // frames in a row without a match
   // The tracker's frame count when the track started, and when it was
   // last matched.
   int64_t born_frame = 0;
