@@ -365,10 +365,7 @@ void BM_TrackClip(benchmark::State& state) {
     const size_t k = i++ % detections.size();
     if (k == 0) tracker.Reset();
     std::vector<lane::Lane> lanes = detections[k].lanes;
-    for (lane::Lane& lane : lanes) {
-      lane.color = lane::MarkingColorOf(set->frames[k], lane, camera);
-      lane.type = lane::MarkingTypeOf(set->frames[k], lane, camera);
-    }
+    lane::ReadMarkings(set->frames[k], camera, lanes);  // as the service and lane detect --track
     // With the top view, as the service and lane detect --track: predicted
     // lanes and the confirmed lanes' filtered curves are drawn.
     auto ego = tracker.Track(lanes, t += 1.0 / 15, &set->detector->ipm());

@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <tuple>
@@ -509,10 +510,11 @@ void EgoTracker::Update(std::optional<EgoLane>& ego, double time_s) {
 // ---------------------------------------------------------------------------
 // Colour
 
-MarkingColor MarkingColorOf(const cv::Mat& bgr, const Lane& lane, const CameraModel& camera,
-                            int top_row, int bottom_row) {
+namespace {
+
+MarkingColor ColorWithMaps(const cv::Mat& bgr, const Lane& lane, const CameraModel& camera,
+                           const PlaneMaps& maps, int top_row, int bottom_row) {
   if (bgr.type() != CV_8UC3) return MarkingColor::kUnknown;
-  const PlaneMaps maps(camera);
   const int bottom = bottom_row < 0 ? bgr.rows : std::min(bottom_row, bgr.rows);
   Bezier image;
   for (int k = 0; k < 4; ++k) image.p[k] = lane.image[k];
@@ -557,6 +559,14 @@ MarkingColor MarkingColorOf(const cv::Mat& bgr, const Lane& lane, const CameraMo
   return MarkingColor::kUnknown;
 }
 
+}  // namespace
+
+MarkingColor MarkingColorOf(const cv::Mat& bgr, const Lane& lane, const CameraModel& camera,
+                            int top_row, int bottom_row) {
+  if (bgr.type() != CV_8UC3) return MarkingColor::kUnknown;
+  return ColorWithMaps(bgr, lane, camera, PlaneMaps(camera), top_row, bottom_row);
+}
+
 }  // namespace lane
 
 namespace lane {
@@ -591,14 +601,13 @@ double GreyMean(const cv::Mat& frame, int row, int c0, int c1) {
   return sum / n;
 }
 
-}  // namespace
+bool ReadableForType(const cv::Mat& frame) {
+  return !frame.empty() && (frame.type() == CV_8UC3 || frame.type() == CV_8UC1);
+}
 
-MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraModel& camera,
-                          int top_row, int bottom_row) {
-  if (frame.empty() || (frame.type() != CV_8UC3 && frame.type() != CV_8UC1)) {
-    return MarkingType::kUnknown;
-  }
-  const PlaneMaps maps(camera);
+MarkingType TypeWithMaps(const cv::Mat& frame, const Lane& lane, const CameraModel& camera,
+                         const PlaneMaps& maps, int top_row, int bottom_row) {
+  if (!ReadableForType(frame)) return MarkingType::kUnknown;
   const int bottom = bottom_row < 0 ? frame.rows : std::min(bottom_row, frame.rows);
   Bezier image;
   for (int k = 0; k < 4; ++k) image.p[k] = lane.image[k];
@@ -608,6 +617,7 @@ MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraMo
   constexpr double kStep = 0.4;
   const std::vector<Eigen::Vector2d> dense = image.Sample(120);
   std::vector<Eigen::Vector2d> samples;
+  samples.reserve(dense.size());
   double run = kStep;
   Eigen::Vector2d previous = Eigen::Vector2d::Zero();
   bool have_previous = false;
@@ -625,6 +635,9 @@ MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraMo
   }
   int n = 0, on = 0, steps = 0, resolvable = 0, doubles = 0;
   std::vector<bool> pattern;  // bar or not, near to far
+  pattern.reserve(samples.size());
+  std::vector<int> peaks;  // a twin check's peaks (reused)
+  peaks.reserve(10);
   for (const Eigen::Vector2d& p : samples) {
     const int row = static_cast<int>(std::lround(p.y()));
     if (row < top_row || row >= bottom) continue;
@@ -661,13 +674,14 @@ MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraMo
     const bool check = w >= 4.0 && (!bar || (n % 2) == 0);
     if (check) {
       // Along the row, 3 cm on the road is 0.2 w pixels (w: 15 cm).
-      std::vector<double> profile;
+      std::array<double, 21> profile;
       for (int k = -10; k <= 10; ++k) {
         const int c = static_cast<int>(std::lround(p.x() + 0.2 * w * k));
-        profile.push_back(c >= 0 && c < frame.cols ? GreyAt(frame, row, c) : 0.0);
+        profile[static_cast<size_t>(k + 10)] =
+            c >= 0 && c < frame.cols ? GreyAt(frame, row, c) : 0.0;
       }
       const double floor = std::min(profile.front(), profile.back());
-      std::vector<int> peaks;
+      peaks.clear();
       for (int k = 1; k + 1 < static_cast<int>(profile.size()); ++k) {
         const double v = profile[static_cast<size_t>(k)];
         if (v >= floor + 12 && v >= profile[static_cast<size_t>(k - 1)] &&
@@ -730,11 +744,21 @@ MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraMo
   return MarkingType::kUnknown;
 }
 
+}  // namespace
+
+MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraModel& camera,
+                          int top_row, int bottom_row) {
+  if (!ReadableForType(frame)) return MarkingType::kUnknown;
+  return TypeWithMaps(frame, lane, camera, PlaneMaps(camera), top_row, bottom_row);
+}
+
 void ReadMarkings(const cv::Mat& frame, const CameraModel& camera, std::vector<Lane>& lanes,
                   int top_row, int bottom_row) {
+  if (lanes.empty()) return;
+  const PlaneMaps maps(camera);  // one per frame, for every lane
   for (Lane& lane : lanes) {
-    lane.color = MarkingColorOf(frame, lane, camera, top_row, bottom_row);
-    lane.type = MarkingTypeOf(frame, lane, camera, top_row, bottom_row);
+    lane.color = ColorWithMaps(frame, lane, camera, maps, top_row, bottom_row);
+    lane.type = TypeWithMaps(frame, lane, camera, maps, top_row, bottom_row);
   }
 }
 
