@@ -14,10 +14,20 @@ struct Trig {
   double c1, s1, c2, s2;  // cos/sin of pitch (1) and yaw (2)
 };
 
+// The transforms run thousands of times per frame for one camera: the last
+// angles' sines and cosines are kept per thread (the same values, computed
+// once; a CameraModel is a plain struct whose angles may change).
 Trig MakeTrig(const CameraModel& cam) {
-  const double a = cam.pitch_deg * kDegToRad;
-  const double b = cam.yaw_deg * kDegToRad;
-  return {std::cos(a), std::sin(a), std::cos(b), std::sin(b)};
+  thread_local double pitch = std::nan(""), yaw = std::nan("");
+  thread_local Trig trig;
+  if (cam.pitch_deg != pitch || cam.yaw_deg != yaw) {
+    const double a = cam.pitch_deg * kDegToRad;
+    const double b = cam.yaw_deg * kDegToRad;
+    trig = {std::cos(a), std::sin(a), std::cos(b), std::sin(b)};
+    pitch = cam.pitch_deg;
+    yaw = cam.yaw_deg;
+  }
+  return trig;
 }
 
 }  // namespace
@@ -83,7 +93,14 @@ Eigen::Vector2d CameraModel::ImageToGround(const Eigen::Vector2d& image) const {
   return {x / w, y / w};
 }
 
-double CameraModel::HorizonRow() const { return cv - fv * std::tan(pitch_deg * kDegToRad); }
+double CameraModel::HorizonRow() const {
+  thread_local double pitch = std::nan(""), tan_pitch = 0;
+  if (pitch_deg != pitch) {
+    tan_pitch = std::tan(pitch_deg * kDegToRad);
+    pitch = pitch_deg;
+  }
+  return cv - fv * tan_pitch;
+}
 
 Eigen::Vector2d CameraModel::VanishingPoint() const {
   const double a = pitch_deg * kDegToRad;

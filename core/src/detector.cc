@@ -234,7 +234,9 @@ cv::Mat Detector::Filter(const cv::Mat& top_view, const cv::Mat& void_mask) cons
   const FilterOptions& fo = options_.filter;
   cv::Mat filtered = FilterTopView(top_view, kernels_, fo);
   if (void_mask.empty()) {
-    filtered.setTo(0, ipm_.invalid_mask());
+    CV_Assert(filtered.isContinuous() && filtered.type() == CV_32FC1);
+    float* f = filtered.ptr<float>(0);
+    for (const int32_t i : ipm_.invalid_pixels()) f[i] = 0.f;
   } else {
     filtered.setTo(0, GrowMask(void_mask, kernels_.kx.rows / 2, fo.void_margin_y_px));
   }

@@ -37,13 +37,10 @@ std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
   const double side = std::max(width_px, 2.5 * sigma);
   const double half = std::clamp(o.search_m * ppm, o.min_search_px, o.max_search_px);
   const int h = static_cast<int>(std::lround(half + side + 3 * sigma));
-  thread_local std::vector<double> raw, smooth;
-  raw.assign(2 * h + 1, 0.0);
-  for (int i = -h; i <= h; ++i) {
-    const Eigen::Vector2d q = p + i * n;
-    if (!InImage(q, image)) return std::nullopt;  // the profile leaves the image
-    raw[i + h] = image.Bilinear(q.x(), q.y());
-  }
+  thread_local std::vector<float> raw;
+  thread_local std::vector<double> smooth;
+  raw.resize(2 * h + 1);
+  if (!image.SampleAlong(p, n, h, raw.data())) return std::nullopt;  // it leaves the image
   SmoothProfile(raw, sigma, smooth);
   // Best bar within +-half of the centre.
   const int s = static_cast<int>(std::lround(side));
@@ -81,7 +78,9 @@ std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& i
     const Eigen::Vector2d normal = Normal(tangent);
     const double sigma = std::max(min_sigma_px, sigma_m * ppm);
     const double half = std::clamp(search_m * ppm, 2.0, max_search_px);
-    const auto peak = FindProfilePeak(SampleProfile(image, p, normal, half), sigma);
+    thread_local std::vector<float> profile;
+    SampleProfileInto(image, p, normal, half, profile);
+    const auto peak = FindProfilePeak(profile, sigma);
     if (!peak) continue;
     const double offset = peak->offset;
     const Eigen::Vector2d q = p + offset * normal;

@@ -289,6 +289,11 @@ void IpmMapping::BuildTaps() {
         {i, (q.y - tap_row0_) * tap_cols_ + q.x - tap_col0_, {q.w[0], q.w[1], q.w[2], q.w[3]}});
   }
   cv::bitwise_not(valid_, invalid_);
+  invalid_pixels_.clear();
+  for (int i = 0; i < n; ++i) {
+    if (invalid_.data[i] != 0) invalid_pixels_.push_back(i);  // valid_ is continuous
+  }
+  invalid_pixels_.shrink_to_fit();
   if (options_.interpolation == Interpolation::kArea) {
     BuildSegments();
     // Area sampling reads the sub-rows alone: the quads only marked validity
@@ -381,6 +386,11 @@ void IpmMapping::BuildSegments() {
     segments_.push_back(
         {(bx.row - seg_row0_) * seg_cols_ + k0, k1 - k0, bx.u0 - k0, bx.u1 - k1, bx.w0, bx.w1});
   }
+  seg_empty_.clear();
+  for (int i = 0; i < n; ++i) {
+    if (seg_start_[i] == seg_start_[i + 1]) seg_empty_.push_back(i);
+  }
+  seg_empty_.shrink_to_fit();
 }
 
 cv::Mat IpmMapping::ApplySegments(const cv::Mat& image, int channel, int channel2) const {
@@ -408,7 +418,9 @@ cv::Mat IpmMapping::ApplySegments(const cv::Mat& image, int channel, int channel
   float* dst = out.ptr<float>(0);
   const int n = width_ * height_;
   const int32_t* base = prefix.data();
-  double sum = 0;
+  // The mean for the empty pixels in four partial sums (the additions do
+  // not wait on each other; the mean, rounded to float, is the same).
+  double part[4] = {0, 0, 0, 0};
   for (int i = 0; i < n; ++i) {
     const int a = seg_start_[i], b = seg_start_[i + 1];
     if (a == b) continue;
@@ -421,12 +433,11 @@ cv::Mat IpmMapping::ApplySegments(const cv::Mat& image, int channel, int channel
     }
     value *= 1.f / 255.f;
     dst[i] = value;
-    sum += value;
+    part[i & 3] += value;
   }
+  const double sum = (part[0] + part[1]) + (part[2] + part[3]);
   const float mean = static_cast<float>(sum / valid_count_);
-  for (int i = 0; i < n; ++i) {
-    if (seg_start_[i] == seg_start_[i + 1]) dst[i] = mean;
-  }
+  for (const int32_t i : seg_empty_) dst[i] = mean;
   return out;
 }
 
@@ -480,10 +491,9 @@ cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel, int channel2) const
   // Invalid pixels (outside the ROI) get the valid ones' mean.
   cv::Mat out(height_, width_, CV_32F, cv::Scalar(0));
   float* dst = out.ptr<float>(0);  // continuous: freshly allocated
-  double sum = 0;
   // A quad's zero weights add an exact 0: the sum equals that of its
   // non-zero taps alone.
-  for (const Quad& q : quads_) {
+  const auto pixel = [&](const Quad& q) {
     const uint8_t* p = base + q.off;
     float v = 0.f;
     v += q.w[0] * p[0];
@@ -492,11 +502,23 @@ cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel, int channel2) const
     v += q.w[3] * p[stride + 1];
     v *= 1.f / 255.f;
     dst[q.pixel] = v;
-    sum += v;
+    return static_cast<double>(v);
+  };
+  // The mean for the invalid pixels in four partial sums (the additions do
+  // not wait on each other; the mean, rounded to float, is the same).
+  double part[4] = {0, 0, 0, 0};
+  const size_t nq = quads_.size();
+  size_t k = 0;
+  for (; k + 4 <= nq; k += 4) {
+    part[0] += pixel(quads_[k]);
+    part[1] += pixel(quads_[k + 1]);
+    part[2] += pixel(quads_[k + 2]);
+    part[3] += pixel(quads_[k + 3]);
   }
-  if (static_cast<int>(quads_.size()) < width_ * height_) {
-    out.setTo(static_cast<float>(sum / valid_count_), invalid_);
-  }
+  for (; k < nq; ++k) part[0] += pixel(quads_[k]);
+  const double sum = (part[0] + part[1]) + (part[2] + part[3]);
+  const float mean = static_cast<float>(sum / valid_count_);
+  for (const int32_t i : invalid_pixels_) dst[i] = mean;
   return out;
 }
 
@@ -523,8 +545,9 @@ std::pair<int, int> IpmMapping::ImageRows() const {
 
 size_t IpmMapping::MemoryBytes() const {
   return quads_.capacity() * sizeof(Quad) + seg_start_.capacity() * sizeof(seg_start_[0]) +
-         segments_.capacity() * sizeof(SubRow) + valid_.total() * valid_.elemSize() +
-         invalid_.total() * invalid_.elemSize();
+         seg_empty_.capacity() * sizeof(seg_empty_[0]) + segments_.capacity() * sizeof(SubRow) +
+         valid_.total() * valid_.elemSize() + invalid_.total() * invalid_.elemSize() +
+         invalid_pixels_.capacity() * sizeof(invalid_pixels_[0]);
 }
 
 }  // namespace lane

@@ -1,6 +1,7 @@
 #include "lane/postprocess.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
@@ -71,22 +72,26 @@ absl::Status PostprocessOptions::Validate() const {
   return absl::OkStatus();
 }
 
+void SampleProfileInto(const ChannelView& image, const Eigen::Vector2d& center,
+                       const Eigen::Vector2d& normal, double half, std::vector<float>& out) {
+  const int h = std::max(0, static_cast<int>(std::lround(half)));
+  out.resize(2 * h + 1);
+  image.SampleAlong(center, normal, h, out.data());
+}
+
 std::vector<float> SampleProfile(const ChannelView& image, const Eigen::Vector2d& center,
                                  const Eigen::Vector2d& normal, double half) {
-  const int h = std::max(0, static_cast<int>(std::lround(half)));
-  std::vector<float> out(2 * h + 1);
-  for (int i = -h; i <= h; ++i) {
-    const Eigen::Vector2d p = center + i * normal;
-    out[i + h] = Bilinear(image, p.x(), p.y());
-  }
+  std::vector<float> out;
+  SampleProfileInto(image, center, normal, half, out);
   return out;
 }
 
 namespace {
 
 // The Gaussian's taps -h..h for one sigma (h = 2.5 sigma, at least 1) and
-// their sum in order, kept per thread for the last sigma asked: a spline's
-// profiles mostly share one.
+// their sum in order, kept per thread for the last 16 sigmas asked: a
+// spline's profiles share a few (the image extension's follow the rows'
+// scale, and repeat from candidate to candidate).
 struct GaussianTaps {
   std::vector<double> w;
   double sum = 0;
@@ -95,17 +100,22 @@ struct GaussianTaps {
 };
 
 const GaussianTaps& TapsFor(double sigma) {
-  thread_local GaussianTaps taps;
-  if (sigma != taps.sigma) {
-    taps.h = std::max(1, static_cast<int>(std::ceil(2.5 * sigma)));
-    taps.w.resize(2 * taps.h + 1);
-    taps.sum = 0;
-    for (int j = -taps.h; j <= taps.h; ++j) {
-      taps.w[j + taps.h] = std::exp(-0.5 * j * j / (sigma * sigma));
-      taps.sum += taps.w[j + taps.h];
-    }
-    taps.sigma = sigma;
+  constexpr size_t kKept = 16;
+  thread_local std::array<GaussianTaps, kKept> kept;
+  thread_local size_t next = 0;  // the slot to reuse next (round robin)
+  for (const GaussianTaps& t : kept) {
+    if (t.sigma == sigma) return t;
   }
+  GaussianTaps& taps = kept[next];
+  next = (next + 1) % kKept;
+  taps.h = std::max(1, static_cast<int>(std::ceil(2.5 * sigma)));
+  taps.w.resize(2 * taps.h + 1);
+  taps.sum = 0;
+  for (int j = -taps.h; j <= taps.h; ++j) {
+    taps.w[j + taps.h] = std::exp(-0.5 * j * j / (sigma * sigma));
+    taps.sum += taps.w[j + taps.h];
+  }
+  taps.sigma = sigma;
   return taps;
 }
 
@@ -179,7 +189,9 @@ std::optional<Bezier> LocalizeSpline(const Bezier& spline, const ChannelView& im
     if (tangent.norm() < 1e-9 || !InBounds(p, image)) continue;
     tangent.normalize();
     const Eigen::Vector2d normal = Normal(tangent);
-    const auto peak = FindProfilePeak(SampleProfile(image, p, normal, search_px), sigma_px);
+    thread_local std::vector<float> profile;
+    SampleProfileInto(image, p, normal, search_px, profile);
+    const auto peak = FindProfilePeak(profile, sigma_px);
     if (!peak) continue;
     const Eigen::Vector2d q = p + peak->offset * normal;
     if (!pts.empty()) {
@@ -239,8 +251,9 @@ Bezier ExtendSpline(const Bezier& spline, const ChannelView& image, const Extend
         break;
       }
       const Eigen::Vector2d normal = Normal(dir);
-      const auto peak =
-          FindProfilePeak(SampleProfile(image, guess, normal, options.search_px), options.sigma_px);
+      thread_local std::vector<float> profile;
+      SampleProfileInto(image, guess, normal, options.search_px, profile);
+      const auto peak = FindProfilePeak(profile, options.sigma_px);
       if (!peak || peak->contrast < options.min_contrast) break;
       const Eigen::Vector2d q = guess + peak->offset * normal;
       const Eigen::Vector2d d = (q - cur).normalized();

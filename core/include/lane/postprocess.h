@@ -181,6 +181,10 @@ struct ChannelView {
   // Bilinear sample; 0 outside the image. Inline: profile sampling calls it
   // tens of thousands of times per frame.
   float Bilinear(double x, double y) const;
+  // Bilinear(x, y) at each point c + i * d, i = -h..h, into out[0 .. 2h],
+  // with the channel's case decided once for the run. Returns whether every
+  // point lies inside.
+  bool SampleAlong(const Eigen::Vector2d& c, const Eigen::Vector2d& d, int h, float* out) const;
 };
 
 namespace internal {
@@ -219,10 +223,41 @@ inline float ChannelView::Bilinear(double x, double y) const {
   return internal::BilinearT<uint8_t>(image, image.channels(), channel, x, y, top(), bottom());
 }
 
+inline bool ChannelView::SampleAlong(const Eigen::Vector2d& c, const Eigen::Vector2d& d, int h,
+                                     float* out) const {
+  bool all_inside = true;
+  const auto run = [&](const auto& sample) {
+    for (int i = -h; i <= h; ++i) {
+      const Eigen::Vector2d p = c + i * d;
+      const bool inside = Inside(p.x(), p.y());
+      all_inside = all_inside && inside;
+      out[i + h] = inside ? sample(p.x(), p.y()) : 0.f;
+    }
+  };
+  if (channel2 != -1) {
+    run([this](double x, double y) { return Bilinear(x, y); });
+  } else {
+    const int cn = image.channels(), t = top(), b = bottom();
+    if (image.depth() == CV_32F) {
+      run([&](double x, double y) {
+        return internal::BilinearT<float>(image, cn, channel, x, y, t, b);
+      });
+    } else {
+      run([&](double x, double y) {
+        return internal::BilinearT<uint8_t>(image, cn, channel, x, y, t, b);
+      });
+    }
+  }
+  return all_inside;
+}
+
 // Samples of one channel along the segment center +- half * normal, one per
 // pixel step, bilinear; positions outside the image read as 0.
 std::vector<float> SampleProfile(const ChannelView& image, const Eigen::Vector2d& center,
                                  const Eigen::Vector2d& normal, double half);
+// The same into `out` (resized; no allocation once it has grown).
+void SampleProfileInto(const ChannelView& image, const Eigen::Vector2d& center,
+                       const Eigen::Vector2d& normal, double half, std::vector<float>& out);
 
 // `in` smoothed with a Gaussian of `sigma` samples (truncated at 2.5 sigma,
 // renormalised where it passes the ends) into `out`. T: float or double.
