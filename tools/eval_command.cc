@@ -20,6 +20,7 @@
 #include "cli/progress_bar.h"
 #include "cli/results_json.h"
 #include "commands.h"
+#include "eval_drive.h"
 #include "eval_overlay.h"
 #include "lane/config.h"
 #include "lane/detector.h"
@@ -65,6 +66,7 @@ struct EvalFlags {
   std::optional<std::string> count;
   std::optional<std::string> write_baseline;
   bool no_progress = false;
+  bool drive = false;
 };
 
 // A file name stem for a frame name: extension dropped, '/', '#', ':' and
@@ -138,6 +140,10 @@ std::string FlagsError(const EvalFlags& flags) {
   if (flags.seeds && (*flags.seeds < 1 || *flags.seeds > 1000))
     return "--seeds must lie in 1..1000";
   if (flags.results && flags.seeds) return "--seeds has no effect with --results";
+  if (flags.drive && (flags.seeds || flags.out || flags.overlays || flags.clip ||
+                      flags.write_baseline || flags.format)) {
+    return "--drive takes --config or --results, --mode, --seed, --rule and --count only";
+  }
   return "";
 }
 
@@ -397,6 +403,16 @@ bool WriteBaseline(const std::string& baseline, const lane::eval::EvalReport& re
 
 int RunEval(const CLI::App& app, const EvalFlags& flags, const std::vector<std::string>& argv) {
   if (const std::string e = FlagsError(flags); !e.empty()) return UsageError(app, e);
+  if (flags.drive) {
+    DriveEvalArgs args;
+    args.dataset = flags.dataset;
+    args.config = flags.config;
+    args.mode = flags.mode;
+    args.seed = flags.seed;
+    args.results = flags.results;
+    args.rule = ScoringOptions(flags).paper;
+    return RunDriveEval(args);
+  }
 
   lane::eval::Dataset dataset;
   if (const absl::Status s = LoadSelectedDataset(flags, &dataset); !s.ok()) {
@@ -524,6 +540,11 @@ Command AddEvalCommand(CLI::App& lane, const std::vector<std::string>& args) {
               "also write the regression baseline (CULane F1 and paper figures of the total) to "
               "FILE")
       ->type_name("FILE");
+  app->add_flag("--drive", flags->drive,
+                "DATASET is one drive (lane render --sequence): score it as one camera's "
+                "sequence, with --config untracked and tracked (the frames in order, the labels' "
+                "times) or the --results of lane detect --track: recall, false positives, colour, "
+                "type, id switches, the ego lane and departure warnings (docs/tracking.md)");
   app->add_flag("--no-progress", flags->no_progress,
                 "no progress bar (it is only drawn when stderr is a terminal anyway)");
   app->add_option("DATASET", flags->dataset, "the data set's folder");

@@ -102,6 +102,15 @@ std::string RenderLabelsJson(const std::string& frame_name, const SyntheticFrame
     ego["curvature_per_m"] = std::round(frame.ego->curvature_per_m * 1e7) / 1e7;
     ego["offset_rate_mps"] = round4(frame.ego->offset_rate_mps);
     j["ego"] = ego;
+    // The asphalt's edges (no paint): a lane found on one is neither a hit
+    // nor a false positive (lane eval --drive).
+    nlohmann::ordered_json edges = nlohmann::ordered_json::array();
+    for (const auto& edge : frame.road_edges) {
+      nlohmann::ordered_json pts = nlohmann::ordered_json::array();
+      for (const auto& p : edge) pts.push_back({round2(p.x()), round2(p.y())});
+      edges.push_back(pts);
+    }
+    j["road_edges"] = edges;
   }
   return j.dump();
 }
