@@ -109,7 +109,10 @@ absl::StatusOr<GroundView> ChooseGroundView(const CameraModel& camera, double la
   g.x_max_m = 2.0 * lane_width_m + 0.5;
   g.x_min_m = -g.x_max_m;
   const double near = camera.ImageToGround({camera.cu, row}).y();
-  g.y_min_m = std::max(0.5, std::round(near * 2.0) / 2.0);
+  // Exactly the last road row's ground, not rounded: rounding to a tidy
+  // figure moved the edge into the hood or off the nearest road (up to
+  // 0.25 m at 0.5 m steps).
+  g.y_min_m = std::max(0.5, near);
   g.y_max_m = g.y_min_m + 10.0;
   g.metres_per_px_x = 0.0625;
   g.metres_per_px_y = 0.125;
