@@ -31,6 +31,27 @@ bool Number(const Json& object, const char* key, double& out) {
   return std::isfinite(out);
 }
 
+// Optional keys: `out` keeps its default when the key is absent; false when
+// it is there with another type (nlohmann's value() would throw).
+bool OptionalBool(const Json& object, const char* key, bool& out) {
+  if (!object.contains(key)) return true;
+  if (!object[key].is_boolean()) return false;
+  out = object[key].get<bool>();
+  return true;
+}
+bool OptionalString(const Json& object, const char* key, std::string& out) {
+  if (!object.contains(key)) return true;
+  if (!object[key].is_string()) return false;
+  out = object[key].get<std::string>();
+  return true;
+}
+bool OptionalInt(const Json& object, const char* key, int& out) {
+  if (!object.contains(key)) return true;
+  if (!object[key].is_number_integer()) return false;
+  out = object[key].get<int>();
+  return true;
+}
+
 }  // namespace
 
 absl::StatusOr<DriveLabels> ParseDriveLabels(absl::string_view text, absl::string_view source) {
@@ -65,9 +86,14 @@ absl::StatusOr<DriveLabels> ParseDriveLabels(absl::string_view text, absl::strin
           DriveTruthBoundary boundary;
           boundary.curve = Curve::FromBezier(points);
           boundary.id = e["id"].get<int>();
-          boundary.yellow = e.value("color", std::string("white")) == "yellow";
-          boundary.dashed = e.value("dashed", false);
-          boundary.type_changes = e.value("type_changes", false);
+          std::string colour = "white";
+          if (!OptionalString(e, "color", colour) || !OptionalBool(e, "dashed", boundary.dashed) ||
+              !OptionalBool(e, "type_changes", boundary.type_changes)) {
+            return error(absl::StrCat("boundaries[", b,
+                                      "]: color must be a string, dashed and type_changes "
+                                      "booleans"));
+          }
+          boundary.yellow = colour == "yellow";
           t.boundaries.push_back(std::move(boundary));
         }
         if (j.contains("road_edges")) {
@@ -134,13 +160,17 @@ absl::StatusOr<DriveResults> ParseDriveResults(absl::string_view text, absl::str
               lane.id = l["id"].get<int>();
               results.tracked = true;
             }
-            lane.confirmed = l.value("confirmed", false);
-            lane.predicted = l.value("predicted", false);
-            const std::string colour = l.value("color", std::string("unknown"));
+            std::string colour = "unknown", type = "unknown";
+            if (!OptionalBool(l, "confirmed", lane.confirmed) ||
+                !OptionalBool(l, "predicted", lane.predicted) ||
+                !OptionalString(l, "color", colour) || !OptionalString(l, "type", type)) {
+              return error(absl::StrCat("lanes[", i,
+                                        "]: confirmed and predicted must be booleans, color and "
+                                        "type strings"));
+            }
             for (MarkingColor c : {MarkingColor::kWhite, MarkingColor::kYellow}) {
               if (colour == MarkingColorName(c)) lane.color = c;
             }
-            const std::string type = l.value("type", std::string("unknown"));
             for (MarkingType t : {MarkingType::kSolid, MarkingType::kDashed, MarkingType::kDouble,
                                   MarkingType::kRoadEdge}) {
               if (type == MarkingTypeName(t)) lane.type = t;
@@ -156,12 +186,14 @@ absl::StatusOr<DriveResults> ParseDriveResults(absl::string_view text, absl::str
                 !Number(e, "curvature_per_m", ego.curvature_per_m)) {
               return error("\"ego\" must hold offset_m, width_m, heading_deg and curvature_per_m");
             }
-            ego.left_id = e.value("left_id", -1);
-            ego.right_id = e.value("right_id", -1);
+            if (!OptionalInt(e, "left_id", ego.left_id) ||
+                !OptionalInt(e, "right_id", ego.right_id) ||
+                !OptionalBool(e, "departing", ego.departing)) {
+              return error("\"ego\": left_id and right_id must be integers, departing a boolean");
+            }
             Number(e, "left_distance_m", ego.left_distance_m);
             Number(e, "right_distance_m", ego.right_distance_m);
             Number(e, "offset_rate_mps", ego.offset_rate_mps);
-            ego.departing = e.value("departing", false);
             for (size_t k = 0; k < out.lanes.size(); ++k) {
               if (out.lanes[k].id < 0) continue;
               if (out.lanes[k].id == ego.left_id) ego.left_index = static_cast<int>(k);

@@ -68,6 +68,13 @@ TEST(DriveLabelsTest, LabelsOfSingleFramesAreNoDrive) {
   ASSERT_FALSE(labels.ok());
   EXPECT_NE(labels.status().message().find("labels.jsonl:1"), std::string::npos);
   EXPECT_NE(labels.status().message().find("time_s"), std::string::npos);
+
+  const std::string typed =
+      R"({"frame":"0.png","width":640,"height":480,"time_s":0,"boundaries":[{"points":)"
+      R"([[1,479],[2,400],[3,300],[4,250]],"dashed":"yes","id":0}]})";
+  const absl::StatusOr<DriveLabels> wrong = ParseDriveLabels(typed + "\n", "labels.jsonl");
+  ASSERT_FALSE(wrong.ok());
+  EXPECT_NE(wrong.status().message().find("boundaries[0]"), std::string::npos) << wrong.status();
 }
 
 TEST(DriveResultsTest, TrackedRecordsKeepIdsAttributesAndTheEgoLanesBoundaries) {
@@ -113,6 +120,21 @@ TEST(DriveResultsTest, UntrackedRecordsAndMalformedLanes) {
   EXPECT_FALSE(plain->tracked);
   EXPECT_EQ(plain->outputs[0].lanes[0].id, -1);
   EXPECT_EQ(plain->outputs[0].lanes[0].color, MarkingColor::kUnknown);
+
+  // Keys of the wrong type are errors, not exceptions.
+  for (const std::string field : {R"("color":5)", R"("confirmed":"yes")", R"("type":[1])"}) {
+    const std::string line =
+        R"({"schema":1,"frame":"1.png","lanes":[{"image":[[1,2],[3,4],[5,6],[7,8]],)" + field +
+        "}]}";
+    const absl::StatusOr<DriveResults> typed = ParseDriveResults(line + "\n", "t.jsonl");
+    ASSERT_FALSE(typed.ok()) << field;
+    EXPECT_NE(typed.status().message().find("t.jsonl:1: lanes[0]"), std::string::npos)
+        << typed.status();
+  }
+  const std::string bad_ego =
+      R"({"schema":1,"frame":"1.png","lanes":[],"ego":{"offset_m":0,"width_m":3.5,)"
+      R"("heading_deg":0,"curvature_per_m":0,"left_id":"a"}})";
+  EXPECT_FALSE(ParseDriveResults(bad_ego + "\n", "t.jsonl").ok());
 
   const std::string bad = R"({"schema":1,"frame":"1.png","lanes":[{"image":[[1,2],[3,4]]}]})";
   const absl::StatusOr<DriveResults> broken =
