@@ -79,7 +79,7 @@ std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& i
     const double sigma = std::max(min_sigma_px, sigma_m * ppm);
     const double half = std::clamp(search_m * ppm, 2.0, max_search_px);
     thread_local std::vector<float> profile;
-    SampleProfileInto(image, p, normal, half, profile);
+    SampleProfile(image, p, normal, half, profile);
     const auto peak = FindProfilePeak(profile, sigma);
     if (!peak) continue;
     const double offset = peak->offset;

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
+#include "four_sums.h"
 #include "lane/postprocess.h"
 
 namespace lane {
@@ -504,19 +505,10 @@ cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel, int channel2) const
     dst[q.pixel] = v;
     return static_cast<double>(v);
   };
-  // The mean for the invalid pixels in four partial sums (the additions do
-  // not wait on each other; the mean, rounded to float, is the same).
-  double part[4] = {0, 0, 0, 0};
-  const size_t nq = quads_.size();
-  size_t k = 0;
-  for (; k + 4 <= nq; k += 4) {
-    part[0] += pixel(quads_[k]);
-    part[1] += pixel(quads_[k + 1]);
-    part[2] += pixel(quads_[k + 2]);
-    part[3] += pixel(quads_[k + 3]);
-  }
-  for (; k < nq; ++k) part[0] += pixel(quads_[k]);
-  const double sum = (part[0] + part[1]) + (part[2] + part[3]);
+  // The mean for the invalid pixels in four partial sums (four_sums.h; the
+  // mean, rounded to float, is the same).
+  const double sum =
+      internal::SumInFourParts(quads_.size(), [&](size_t k) { return pixel(quads_[k]); });
   const float mean = static_cast<float>(sum / valid_count_);
   for (const int32_t i : invalid_pixels_) dst[i] = mean;
   return out;

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
+#include "four_sums.h"
 #include "lane/bezier.h"
 #include "lane/ransac.h"
 
@@ -65,11 +66,9 @@ class LineEstimator {
 
   // Branch-free over the points' coordinates as separate arrays (whether a
   // point is an inlier is a coin toss for the branch predictor), adding an
-  // exact 0 for outliers. Four partial sums, so that the additions do not
-  // wait on each other. The weights are float pixels at or above the
-  // threshold: their sums are exact in double unless the threshold is tiny
-  // against the total (2^-29 of it), so the order does not change the score
-  // (the lanes of cordova1 and driver161 are byte-identical to the one-sum
+  // exact 0 for outliers, in four partial sums (four_sums.h: the weights
+  // are thresholded float pixels, so the order does not change the score;
+  // the lanes of cordova1 and driver161 are byte-identical to the one-sum
   // loop's).
   double Score(const IpmLine& line) const {
     const NormalForm normal(line);
@@ -81,17 +80,7 @@ class LineEstimator {
     const auto term = [&](size_t i) {
       return std::abs(nx * x[i] + ny * y[i] - offset) <= tol ? w[i] : 0.0;
     };
-    double s[4] = {0, 0, 0, 0};
-    const size_t n = xs_.size();
-    size_t i = 0;
-    for (; i + 4 <= n; i += 4) {
-      s[0] += term(i);
-      s[1] += term(i + 1);
-      s[2] += term(i + 2);
-      s[3] += term(i + 3);
-    }
-    for (; i < n; ++i) s[0] += term(i);
-    return (s[0] + s[1]) + (s[2] + s[3]);
+    return internal::SumInFourParts(xs_.size(), term);
   }
 
   // The inliers the refit uses. The same test as Score's, computed as

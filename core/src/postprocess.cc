@@ -72,18 +72,11 @@ absl::Status PostprocessOptions::Validate() const {
   return absl::OkStatus();
 }
 
-void SampleProfileInto(const ChannelView& image, const Eigen::Vector2d& center,
-                       const Eigen::Vector2d& normal, double half, std::vector<float>& out) {
+void SampleProfile(const ChannelView& image, const Eigen::Vector2d& center,
+                   const Eigen::Vector2d& normal, double half, std::vector<float>& out) {
   const int h = std::max(0, static_cast<int>(std::lround(half)));
   out.resize(2 * h + 1);
   image.SampleAlong(center, normal, h, out.data());
-}
-
-std::vector<float> SampleProfile(const ChannelView& image, const Eigen::Vector2d& center,
-                                 const Eigen::Vector2d& normal, double half) {
-  std::vector<float> out;
-  SampleProfileInto(image, center, normal, half, out);
-  return out;
 }
 
 namespace {
@@ -190,7 +183,7 @@ std::optional<Bezier> LocalizeSpline(const Bezier& spline, const ChannelView& im
     tangent.normalize();
     const Eigen::Vector2d normal = Normal(tangent);
     thread_local std::vector<float> profile;
-    SampleProfileInto(image, p, normal, search_px, profile);
+    SampleProfile(image, p, normal, search_px, profile);
     const auto peak = FindProfilePeak(profile, sigma_px);
     if (!peak) continue;
     const Eigen::Vector2d q = p + peak->offset * normal;
@@ -252,7 +245,7 @@ Bezier ExtendSpline(const Bezier& spline, const ChannelView& image, const Extend
       }
       const Eigen::Vector2d normal = Normal(dir);
       thread_local std::vector<float> profile;
-      SampleProfileInto(image, guess, normal, options.search_px, profile);
+      SampleProfile(image, guess, normal, options.search_px, profile);
       const auto peak = FindProfilePeak(profile, options.sigma_px);
       if (!peak || peak->contrast < options.min_contrast) break;
       const Eigen::Vector2d q = guess + peak->offset * normal;

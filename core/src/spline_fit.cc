@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
+#include "four_sums.h"
 #include "lane/ransac.h"
 
 namespace lane {
@@ -86,9 +87,8 @@ double ScoreOnRaster(const Bezier& spline, const WindowedRaster& raster,
     ys[i] = static_cast<int>(((ay * t + by) * t + cy) * t + dy + 0.5);
   }
   // The pixels' sums (0 for a pixel repeated or outside), then their total
-  // in four partial sums that do not wait on each other: the sums are of
-  // thresholded float pixels in double, exact, so the order does not change
-  // the score (as for the line score, line_fit.cc).
+  // in four partial sums (four_sums.h; thresholded float pixels, so the
+  // order does not change the score).
   double values[kSteps];
   int last_x = -1, last_y = -1;
   for (int i = 0; i < kSteps; ++i) {
@@ -99,12 +99,7 @@ double ScoreOnRaster(const Bezier& spline, const WindowedRaster& raster,
     last_y = y;
     values[i] = raster.Sum(x, y);
   }
-  double part[4] = {0, 0, 0, 0};
-  for (int i = 0; i + 4 <= kSteps; i += 4) {
-    for (int k = 0; k < 4; ++k) part[k] += values[i + k];
-  }
-  for (int i = kSteps - kSteps % 4; i < kSteps; ++i) part[0] += values[i];
-  const double raw = (part[0] + part[1]) + (part[2] + part[3]);
+  const double raw = internal::SumInFourParts(kSteps, [&values](size_t i) { return values[i]; });
   if (raw <= 0) return 0.0;
   // Length from a 20-segment polyline (within 0.1 % for these curves).
   double length = 0;

@@ -252,12 +252,10 @@ inline bool ChannelView::SampleAlong(const Eigen::Vector2d& c, const Eigen::Vect
 }
 
 // Samples of one channel along the segment center +- half * normal, one per
-// pixel step, bilinear; positions outside the image read as 0.
-std::vector<float> SampleProfile(const ChannelView& image, const Eigen::Vector2d& center,
-                                 const Eigen::Vector2d& normal, double half);
-// The same into `out` (resized; no allocation once it has grown).
-void SampleProfileInto(const ChannelView& image, const Eigen::Vector2d& center,
-                       const Eigen::Vector2d& normal, double half, std::vector<float>& out);
+// pixel step, bilinear, into `out` (resized: no allocation once it has
+// grown); positions outside the image read as 0.
+void SampleProfile(const ChannelView& image, const Eigen::Vector2d& center,
+                   const Eigen::Vector2d& normal, double half, std::vector<float>& out);
 
 // `in` smoothed with a Gaussian of `sigma` samples (truncated at 2.5 sigma,
 // renormalised where it passes the ends) into `out`. T: float or double.
