@@ -13,7 +13,6 @@
 #include "lane/detector.h"
 #include "lane/eval/drive.h"
 #include "lane/eval/drive_io.h"
-#include "lane/tracking.h"
 
 namespace lane_tools {
 namespace {
@@ -104,24 +103,15 @@ absl::Status RunDetector(const DriveEvalArgs& args, const lane::eval::DriveLabel
       lane::Detector::Create(config->camera, config->ipm, config->detector);
   if (!detector.ok()) return detector.status();
   *source = absl::StrCat("detector, config ", *args.config, ", seed ", config->detector.seed);
-  lane::SequenceTracker tracker(config->camera);
+  lane::eval::DriveRunner runner(*detector);
   for (size_t i = 0; i < labels.frames.size(); ++i) {
     const std::string path = (fs::path(args.dataset) / labels.frames[i]).string();
     const cv::Mat frame = cv::imread(path, cv::IMREAD_COLOR);
     if (frame.empty()) return absl::NotFoundError(absl::StrCat("cannot read the frame ", path));
-    absl::StatusOr<lane::Detection> alone = detector->Detect(frame);
-    if (!alone.ok()) return alone.status();
-    lane::ReadMarkings(frame, config->camera, alone->lanes);
-    untracked->push_back({alone->lanes, lane::ComputeEgoLane(alone->lanes, config->camera)});
-    const lane::DetectionPrior prior = tracker.Prior(detector->ipm());
-    absl::StatusOr<lane::Detection> with_prior = detector->Detect(frame, &prior);
-    if (!with_prior.ok()) return with_prior.status();
-    lane::ReadMarkings(frame, config->camera, with_prior->lanes);
-    lane::eval::DriveOutput out;
-    out.lanes = with_prior->lanes;
-    out.ego = tracker.Track(out.lanes, labels.truth[i].time_s, &detector->ipm());
-    tracked->push_back(std::move(out));
+    if (absl::Status s = runner.Add(frame, labels.truth[i].time_s); !s.ok()) return s;
   }
+  *untracked = runner.untracked();
+  *tracked = runner.tracked();
   return absl::OkStatus();
 }
 

@@ -9,6 +9,26 @@
 
 namespace lane::eval {
 
+DriveRunner::DriveRunner(const Detector& detector)
+    : detector_(detector), tracker_(detector.ipm().camera()) {}
+
+absl::Status DriveRunner::Add(const cv::Mat& frame, double time_s) {
+  const CameraModel& camera = detector_.ipm().camera();
+  absl::StatusOr<Detection> alone = detector_.Detect(frame);
+  if (!alone.ok()) return alone.status();
+  ReadMarkings(frame, camera, alone->lanes);
+  untracked_.push_back({alone->lanes, ComputeEgoLane(alone->lanes, camera)});
+  const DetectionPrior prior = tracker_.Prior(detector_.ipm());
+  absl::StatusOr<Detection> with_prior = detector_.Detect(frame, &prior);
+  if (!with_prior.ok()) return with_prior.status();
+  ReadMarkings(frame, camera, with_prior->lanes);
+  DriveOutput out;
+  out.lanes = std::move(with_prior->lanes);
+  out.ego = tracker_.Track(out.lanes, time_s, &detector_.ipm());
+  tracked_.push_back(std::move(out));
+  return absl::OkStatus();
+}
+
 DriveTruthFrame DriveTruthOf(const SyntheticFrame& frame) {
   DriveTruthFrame t;
   t.width = frame.bgr.cols;

@@ -33,29 +33,19 @@ DriveRun RunDrive(const Config& config, const SyntheticDriveOptions& options, ui
   absl::StatusOr<Detector> detector = Detector::Create(config.camera, config.ipm, config.detector);
   EXPECT_TRUE(detector.ok()) << detector.status();
   if (!detector.ok()) return run;
-  SequenceTracker tracker(config.camera);
+  eval::DriveRunner runner(*detector);
   for (int i = 0; i < options.count; ++i) {
     absl::StatusOr<SyntheticFrame> frame =
         RenderSyntheticDriveFrame(config.camera, options, seed, i);
     EXPECT_TRUE(frame.ok()) << frame.status();
     if (!frame.ok()) return run;
-    absl::StatusOr<Detection> detection = detector->Detect(frame->bgr);
-    EXPECT_TRUE(detection.ok()) << detection.status();
-    if (!detection.ok()) return run;
-    ReadMarkings(frame->bgr, config.camera, detection->lanes);
-    eval::DriveOutput untracked{detection->lanes, ComputeEgoLane(detection->lanes, config.camera)};
-    eval::DriveOutput tracked;
-    const DetectionPrior prior = tracker.Prior(detector->ipm());
-    absl::StatusOr<Detection> with_prior = detector->Detect(frame->bgr, &prior);
-    EXPECT_TRUE(with_prior.ok()) << with_prior.status();
-    if (!with_prior.ok()) return run;
-    ReadMarkings(frame->bgr, config.camera, with_prior->lanes);
-    tracked.lanes = with_prior->lanes;
-    tracked.ego = tracker.Track(tracked.lanes, frame->time_s, &detector->ipm());
+    const absl::Status added = runner.Add(frame->bgr, frame->time_s);
+    EXPECT_TRUE(added.ok()) << added;
+    if (!added.ok()) return run;
     run.truth.push_back(eval::DriveTruthOf(*frame));
-    run.untracked.push_back(std::move(untracked));
-    run.tracked.push_back(std::move(tracked));
   }
+  run.untracked = runner.untracked();
+  run.tracked = runner.tracked();
   return run;
 }
 

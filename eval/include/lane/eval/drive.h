@@ -13,10 +13,12 @@
 #include <string>
 #include <vector>
 
+#include "absl/status/status.h"
 #include "lane/detector.h"
 #include "lane/eval/curve.h"
 #include "lane/eval/paper_rule.h"
 #include "lane/synthetic.h"
+#include "lane/tracking.h"
 
 namespace lane::eval {
 
@@ -111,6 +113,24 @@ struct DriveScore {
   }
   // A multi-line human summary.
   std::string Summary() const;
+};
+
+// A detector run over a drive's frames in order, as the drive test and
+// `lane eval --drive` score it: each frame alone (untracked: colour and type
+// read from the frame, the ego lane of its own lanes) and with a tracker
+// (detected with the tracker's prior, then tracked at the frame's time).
+class DriveRunner {
+ public:
+  explicit DriveRunner(const Detector& detector);
+  // The next frame (BGR, the detector's size) at `time_s`.
+  absl::Status Add(const cv::Mat& frame, double time_s);
+  const std::vector<DriveOutput>& untracked() const { return untracked_; }
+  const std::vector<DriveOutput>& tracked() const { return tracked_; }
+
+ private:
+  const Detector& detector_;
+  SequenceTracker tracker_;
+  std::vector<DriveOutput> untracked_, tracked_;
 };
 
 // `truth` and `outputs` are the same frames in the same order.
