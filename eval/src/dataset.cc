@@ -294,6 +294,24 @@ absl::StatusOr<DatasetFormat> DetectDatasetFormat(const std::string& root_name) 
       "(CULane) or TuSimple .json label file, in it or in its subfolders"));
 }
 
+RepeatedLabels FindRepeatedLabels(const Clip& clip) {
+  RepeatedLabels r;
+  const LabelledFrame* previous = nullptr;
+  for (const LabelledFrame& frame : clip.frames) {
+    if (!frame.labelled || frame.boundaries.empty()) continue;
+    ++r.labelled;
+    if (previous && previous->boundaries.size() == frame.boundaries.size() &&
+        std::equal(frame.boundaries.begin(), frame.boundaries.end(), previous->boundaries.begin(),
+                   [](const LabelledBoundary& a, const LabelledBoundary& b) {
+                     return a.curve.kind == b.curve.kind && a.curve.points == b.curve.points;
+                   })) {
+      if (r.frames++ == 0) r.first = frame.name;
+    }
+    previous = &frame;
+  }
+  return r;
+}
+
 absl::StatusOr<Dataset> LoadDataset(const std::string& root_name,
                                     std::optional<DatasetFormat> format) {
   if (!format) {
@@ -345,6 +363,17 @@ absl::StatusOr<Dataset> LoadDataset(const std::string& root_name,
   }
   std::sort(dataset.clips.begin(), dataset.clips.end(),
             [](const Clip& a, const Clip& b) { return a.name < b.name; });
+  for (const Clip& clip : dataset.clips) {
+    const RepeatedLabels repeated = FindRepeatedLabels(clip);
+    if (repeated.frames == 0) continue;
+    dataset.warnings.push_back(absl::StrCat(
+        clip.name, ": ", repeated.frames, " of ", repeated.labelled,
+        " labelled frames repeat the labels of the frame before them to the last digit (the "
+        "first: ",
+        repeated.first,
+        "): one annotation copied over a run of frames, which weighs the figures towards that "
+        "view"));
+  }
   return dataset;
 }
 

@@ -7,6 +7,8 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "lane/detector.h"
 #include "lane/eval/dataset.h"
@@ -66,6 +68,50 @@ TEST(DatasetTest, CulaneFolderTree) {
   ASSERT_EQ(dataset->warnings.size(), 1u);
   EXPECT_NE(dataset->warnings[0].find("00180.lines.txt"), std::string::npos);
   EXPECT_EQ(dataset->FrameCount(), 4);
+}
+
+TEST(DatasetTest, LabelsCopiedFromFrameToFrameAreCountedAndWarned) {
+  // 00000 and 00090 differ; 00180 and 00270 repeat 00090 to the last digit;
+  // 00360 has no lanes (does not count, and does not break the run's
+  // comparison: 00450 repeats 00270); 00540 moves by a hundredth of a pixel.
+  const fs::path root = TempDir("culane_copies");
+  const std::string moving = "10 23 20 13\n40 23 30 13\n";
+  const std::string copied = "11 23 21 13\n41 23 31 13\n";
+  const std::vector<std::pair<std::string, std::string>> frames = {
+      {"00000", moving},
+      {"00090", copied},
+      {"00180", copied},
+      {"00270", copied},
+      {"00360", ""},
+      {"00450", copied},
+      {"00540", "11.01 23 21 13\n41 23 31 13\n"}};
+  for (const auto& [stem, labels] : frames) {
+    WriteImage(root / (stem + ".jpg"), 64, 24);
+    std::ofstream(root / (stem + ".lines.txt")) << labels;
+  }
+  const auto dataset = LoadDataset(root.string());
+  ASSERT_TRUE(dataset.ok()) << dataset.status();
+  ASSERT_EQ(dataset->clips.size(), 1u);
+  const RepeatedLabels repeated = FindRepeatedLabels(dataset->clips[0]);
+  EXPECT_EQ(repeated.frames, 3);    // 00180, 00270, 00450
+  EXPECT_EQ(repeated.labelled, 6);  // all but the empty 00360
+  EXPECT_EQ(repeated.first, "00180.jpg");
+  ASSERT_EQ(dataset->warnings.size(), 1u);
+  EXPECT_NE(dataset->warnings[0].find("3 of 6 labelled frames repeat"), std::string::npos)
+      << dataset->warnings[0];
+  EXPECT_NE(dataset->warnings[0].find("00180.jpg"), std::string::npos);
+
+  // A clip whose labels all differ gets no warning.
+  const fs::path moving_root = TempDir("culane_moving");
+  for (int i = 0; i < 3; ++i) {
+    const std::string stem = "0000" + std::to_string(i);
+    WriteImage(moving_root / (stem + ".jpg"), 64, 24);
+    std::ofstream(moving_root / (stem + ".lines.txt")) << (10 + i) << " 23 20 13\n";
+  }
+  const auto clean = LoadDataset(moving_root.string());
+  ASSERT_TRUE(clean.ok()) << clean.status();
+  EXPECT_EQ(FindRepeatedLabels(clean->clips[0]).frames, 0);
+  EXPECT_TRUE(clean->warnings.empty());
 }
 
 TEST(DatasetTest, MalformedCulaneLabelNamesTheFile) {

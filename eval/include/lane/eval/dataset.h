@@ -39,13 +39,27 @@ struct Dataset {
   std::string root;         // the folder given
   std::vector<Clip> clips;  // sorted by name
   // Oddities that did not stop loading (labels without an image, list
-  // entries without labels, ...), one message each.
+  // entries without labels, clips whose labels repeat from frame to frame,
+  // ...), one message each.
   std::vector<std::string> warnings;
 
   // Frames over all clips, in clip order then frame order: the order of the
   // original tool's results file.
   int FrameCount() const;
 };
+
+// Labelled frames of `clip` whose boundaries are exactly those of the
+// labelled frame before them (same count, same kind, same points; frames
+// without boundaries do not count). Hand labels never repeat to the last
+// digit while the car moves: a run of them is one annotation copied over a
+// standstill or past it. CULane's driver161 clip has 27 such frames of 60,
+// whose labels all meet at one vanishing point (docs/calibration.md).
+struct RepeatedLabels {
+  int frames = 0;     // frames that repeat the one before
+  int labelled = 0;   // labelled frames with boundaries
+  std::string first;  // the first repeating frame's name
+};
+RepeatedLabels FindRepeatedLabels(const Clip& clip);
 
 // The format of the data set in `root`, or INVALID_ARGUMENT explaining what
 // was looked for.
