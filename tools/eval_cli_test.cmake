@@ -119,6 +119,23 @@ if(NOT _pos EQUAL -1)
   message(FATAL_ERROR "lane eval --results --out reported:\n${rescored_err}")
 endif()
 
+# --- labels copied from frame to frame: warned, and skipped on request -------
+# A CULane folder of three rendered frames whose last two label files are the
+# same: one repeat, warned about; --skip-repeated-labels scores two frames.
+file(MAKE_DIRECTORY "${OUT}/copied")
+file(COPY_FILE "${OUT}/frames/000000.png" "${OUT}/copied/00000.png")
+file(COPY_FILE "${OUT}/frames/000001.png" "${OUT}/copied/00090.png")
+file(COPY_FILE "${OUT}/frames/000002.png" "${OUT}/copied/00180.png")
+file(WRITE "${OUT}/copied/00000.lines.txt" "100 479 300 260\n540 479 340 260\n")
+file(WRITE "${OUT}/copied/00090.lines.txt" "110 479 305 260\n530 479 335 260\n")
+file(WRITE "${OUT}/copied/00180.lines.txt" "110 479 305 260\n530 479 335 260\n")
+run(0 copied eval --config "${CONFIG}" "${OUT}/copied")
+expect_contains("${copied_err}" "1 of 3 labelled frames repeat" "lane eval on copied labels")
+expect_contains("${copied_err}" "3 frames scored" "lane eval on copied labels")
+run(0 copied_skip eval --config "${CONFIG}" --skip-repeated-labels "${OUT}/copied")
+expect_contains("${copied_skip_err}" "2 frames scored" "lane eval --skip-repeated-labels")
+run(2 copied_drive eval --config "${CONFIG}" --drive --skip-repeated-labels "${OUT}/copied")
+
 # --- several seeds: mean and spread, the first seed's tables unchanged -------
 run(0 seeds eval --config "${CONFIG}" --seeds 3 --out "${OUT}/seeds"
     --write-baseline "${OUT}/seeds-baseline.json" "${OUT}/frames")

@@ -67,6 +67,7 @@ struct EvalFlags {
   std::optional<std::string> write_baseline;
   bool no_progress = false;
   bool drive = false;
+  bool skip_repeated_labels = false;
 };
 
 // A file name stem for a frame name: extension dropped, '/', '#', ':' and
@@ -141,7 +142,7 @@ std::string FlagsError(const EvalFlags& flags) {
     return "--seeds must lie in 1..1000";
   if (flags.results && flags.seeds) return "--seeds has no effect with --results";
   if (flags.drive && (flags.seeds || flags.out || flags.overlays || flags.clip ||
-                      flags.write_baseline || flags.format)) {
+                      flags.write_baseline || flags.format || flags.skip_repeated_labels)) {
     return "--drive takes --config or --results, --mode, --seed, --rule and --count only";
   }
   return "";
@@ -167,6 +168,14 @@ absl::Status LoadSelectedDataset(const EvalFlags& flags, lane::eval::Dataset* ou
   }
   if (dataset->FrameCount() == 0) {
     return absl::NotFoundError(absl::StrCat(dataset_dir, " holds no frames"));
+  }
+  if (flags.skip_repeated_labels) {
+    // Still run (the results keep their frame numbering), no longer scored.
+    for (lane::eval::Clip& clip : dataset->clips) {
+      for (size_t i : lane::eval::FindRepeatedLabels(clip).indices) {
+        clip.frames[i].labelled = false;
+      }
+    }
   }
   *out = *std::move(dataset);
   return absl::OkStatus();
@@ -545,6 +554,9 @@ Command AddEvalCommand(CLI::App& lane, const std::vector<std::string>& args) {
                 "sequence, with --config untracked and tracked (the frames in order, the labels' "
                 "times) or the --results of lane detect --track: recall, false positives, colour, "
                 "type, id switches, the ego lane and departure warnings (docs/tracking.md)");
+  app->add_flag("--skip-repeated-labels", flags->skip_repeated_labels,
+                "do not score frames whose labels repeat the frame before's to the last digit "
+                "(one annotation copied over a run of frames; they are still run)");
   app->add_flag("--no-progress", flags->no_progress,
                 "no progress bar (it is only drawn when stderr is a terminal anyway)");
   app->add_option("DATASET", flags->dataset, "the data set's folder");

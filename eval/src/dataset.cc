@@ -297,7 +297,8 @@ absl::StatusOr<DatasetFormat> DetectDatasetFormat(const std::string& root_name) 
 RepeatedLabels FindRepeatedLabels(const Clip& clip) {
   RepeatedLabels r;
   const LabelledFrame* previous = nullptr;
-  for (const LabelledFrame& frame : clip.frames) {
+  for (size_t i = 0; i < clip.frames.size(); ++i) {
+    const LabelledFrame& frame = clip.frames[i];
     if (!frame.labelled || frame.boundaries.empty()) continue;
     ++r.labelled;
     if (previous && previous->boundaries.size() == frame.boundaries.size() &&
@@ -306,6 +307,7 @@ RepeatedLabels FindRepeatedLabels(const Clip& clip) {
                      return a.curve.kind == b.curve.kind && a.curve.points == b.curve.points;
                    })) {
       if (r.frames++ == 0) r.first = frame.name;
+      r.indices.push_back(i);
     }
     previous = &frame;
   }

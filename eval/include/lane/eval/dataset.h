@@ -55,9 +55,10 @@ struct Dataset {
 // standstill or past it. CULane's driver161 clip has 27 such frames of 60,
 // whose labels all meet at one vanishing point (docs/calibration.md).
 struct RepeatedLabels {
-  int frames = 0;     // frames that repeat the one before
-  int labelled = 0;   // labelled frames with boundaries
-  std::string first;  // the first repeating frame's name
+  int frames = 0;               // frames that repeat the one before
+  int labelled = 0;             // labelled frames with boundaries
+  std::string first;            // the first repeating frame's name
+  std::vector<size_t> indices;  // the repeating frames, into clip.frames
 };
 RepeatedLabels FindRepeatedLabels(const Clip& clip);
 
