@@ -96,6 +96,7 @@ TEST(DatasetTest, LabelsCopiedFromFrameToFrameAreCountedAndWarned) {
   EXPECT_EQ(repeated.frames, 3);    // 00180, 00270, 00450
   EXPECT_EQ(repeated.labelled, 6);  // all but the empty 00360
   EXPECT_EQ(repeated.first, "00180.jpg");
+  EXPECT_EQ(repeated.indices, (std::vector<size_t>{2, 3, 5}));
   ASSERT_EQ(dataset->warnings.size(), 1u);
   EXPECT_NE(dataset->warnings[0].find("3 of 6 labelled frames repeat"), std::string::npos)
       << dataset->warnings[0];
