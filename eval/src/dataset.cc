@@ -306,7 +306,6 @@ RepeatedLabels FindRepeatedLabels(const Clip& clip) {
                    [](const LabelledBoundary& a, const LabelledBoundary& b) {
                      return a.curve.kind == b.curve.kind && a.curve.points == b.curve.points;
                    })) {
-      if (r.frames++ == 0) r.first = frame.name;
       r.indices.push_back(i);
     }
     previous = &frame;
@@ -367,12 +366,12 @@ absl::StatusOr<Dataset> LoadDataset(const std::string& root_name,
             [](const Clip& a, const Clip& b) { return a.name < b.name; });
   for (const Clip& clip : dataset.clips) {
     const RepeatedLabels repeated = FindRepeatedLabels(clip);
-    if (repeated.frames == 0) continue;
+    if (repeated.indices.empty()) continue;
     dataset.warnings.push_back(absl::StrCat(
-        clip.name, ": ", repeated.frames, " of ", repeated.labelled,
+        clip.name, ": ", repeated.indices.size(), " of ", repeated.labelled,
         " labelled frames repeat the labels of the frame before them to the last digit (the "
         "first: ",
-        repeated.first,
+        clip.frames[repeated.indices.front()].name,
         "): one annotation copied over a run of frames, which weighs the figures towards that "
         "view"));
   }

@@ -52,13 +52,12 @@ struct Dataset {
 // labelled frame before them (same count, same kind, same points; frames
 // without boundaries do not count). Hand labels never repeat to the last
 // digit while the car moves: a run of them is one annotation copied over a
-// standstill or past it. CULane's driver161 clip has 27 such frames of 60,
-// whose labels all meet at one vanishing point (docs/calibration.md).
+// standstill or past it. CULane's driver161 clip has 27 such frames of its
+// 57 labelled ones, whose labels all meet at one vanishing point
+// (docs/calibration.md).
 struct RepeatedLabels {
-  int frames = 0;               // frames that repeat the one before
   int labelled = 0;             // labelled frames with boundaries
-  std::string first;            // the first repeating frame's name
-  std::vector<size_t> indices;  // the repeating frames, into clip.frames
+  std::vector<size_t> indices;  // the repeating frames, into clip.frames, in order
 };
 RepeatedLabels FindRepeatedLabels(const Clip& clip);
 
