@@ -52,6 +52,7 @@ class LineEstimator {
       xs_.push_back(p.x());
       ys_.push_back(p.y());
     }
+    for (double w : pts.weights) total_weight_ += w;
   }
 
   std::optional<IpmLine> Estimate(const std::vector<Eigen::Vector2d>& sample) const {
@@ -93,11 +94,17 @@ class LineEstimator {
     return line.Distance(pts_.points[i]) <= options_.inlier_distance_px;
   }
 
+  // The adaptive stop's support: the score is the inliers' weight.
+  double SupportFraction(const IpmLine& line) const {
+    return total_weight_ > 0 ? Score(line) / total_weight_ : 0.0;
+  }
+
  private:
   const WeightedPoints& pts_;
   int rows_;
   const LineRansacOptions& options_;
   std::vector<double> xs_, ys_;
+  double total_weight_ = 0;
 };
 
 }  // namespace
@@ -111,6 +118,12 @@ absl::Status LineRansacOptions::Validate() const {
   }
   if (!(inlier_distance_px > 0 && inlier_distance_px < 20)) {
     return absl::InvalidArgumentError("line_ransac.inlier_distance_px must lie in (0, 20)");
+  }
+  if (!(confidence >= 0 && confidence < 1)) {
+    return absl::InvalidArgumentError("line_ransac.confidence must lie in [0, 1)");
+  }
+  if (min_iterations < 1 || min_iterations > 10000) {
+    return absl::InvalidArgumentError("line_ransac.min_iterations must lie in 1..10000");
   }
   if (min_inliers < 2) return absl::InvalidArgumentError("line_ransac.min_inliers must be >= 2");
   if (!(max_angle_from_vertical_deg > 0 && max_angle_from_vertical_deg <= 90)) {
@@ -167,8 +180,9 @@ std::optional<IpmLine> FitLineAmong(const cv::Mat& thresholded, const WeightedPo
                                     const LineRansacOptions& options, std::mt19937_64& rng) {
   if (static_cast<int>(pts.points.size()) < options.min_inliers) return std::nullopt;
   const LineEstimator estimator(pts, thresholded.rows, options);
-  const auto report =
-      Ransac(estimator, pts.points, pts.weights, RansacOptions{options.iterations}, rng);
+  const auto report = Ransac(
+      estimator, pts.points, pts.weights,
+      RansacOptions{options.iterations, options.confidence, options.min_iterations}, rng);
   if (!report.model) return std::nullopt;
 
   // Refit on the inliers the score counted, weighted by their response.

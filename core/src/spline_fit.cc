@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "absl/strings/str_cat.h"
 #include "four_sums.h"
@@ -122,8 +123,11 @@ class SplineEstimator {
   using Model = Bezier;
   static constexpr int kSampleSize = 4;
 
-  SplineEstimator(const WindowedRaster& raster, const SplineRansacOptions& options)
-      : raster_(raster), options_(options) {}
+  SplineEstimator(const WindowedRaster& raster, const WeightedPoints& pts,
+                  const SplineRansacOptions& options)
+      : raster_(raster), pts_(pts), options_(options) {
+    for (double w : pts.weights) total_weight_ += w;
+  }
 
   std::optional<Bezier> Estimate(const std::vector<Eigen::Vector2d>& sample) const {
     sorted_ = sample;
@@ -134,9 +138,42 @@ class SplineEstimator {
 
   double Score(const Bezier& spline) const { return ScoreOnRaster(spline, raster_, options_); }
 
+  // The adaptive stop's support: the weight of the window's pixels within
+  // jitter_px columns of the curve rasterised as the score rasterises it
+  // (per row, between the leftmost and rightmost curve pixel), over the
+  // window's weight.
+  double SupportFraction(const Bezier& spline) const {
+    if (!(total_weight_ > 0)) return 0.0;
+    const int rows = raster_.rows();
+    row_lo_.assign(rows, std::numeric_limits<int>::max());
+    row_hi_.assign(rows, std::numeric_limits<int>::min());
+    constexpr int kSteps = 101;
+    for (int i = 0; i < kSteps; ++i) {
+      const Eigen::Vector2d q = spline.Eval(i * 0.01);
+      const int x = static_cast<int>(std::floor(q.x() + 0.5));
+      const int y = static_cast<int>(std::floor(q.y() + 0.5));
+      if (y < 0 || y >= rows) continue;
+      row_lo_[y] = std::min(row_lo_[y], x);
+      row_hi_[y] = std::max(row_hi_[y], x);
+    }
+    const int j = options_.jitter_px;
+    double support = 0;
+    for (size_t i = 0; i < pts_.points.size(); ++i) {
+      const int x = static_cast<int>(pts_.points[i].x());
+      const int y = static_cast<int>(pts_.points[i].y());
+      if (y >= 0 && y < rows && x >= row_lo_[y] - j && x <= row_hi_[y] + j) {
+        support += pts_.weights[i];
+      }
+    }
+    return support / total_weight_;
+  }
+
  private:
   const WindowedRaster& raster_;
+  const WeightedPoints& pts_;
   const SplineRansacOptions& options_;
+  double total_weight_ = 0;
+  mutable std::vector<int> row_lo_, row_hi_;  // scratch of SupportFraction
   mutable std::vector<Eigen::Vector2d> sorted_;  // scratch, reused across trials
 };
 
@@ -149,6 +186,12 @@ absl::Status SplineRansacOptions::Validate() const {
   }
   if (iterations < 0 || iterations > 10000) {
     return absl::InvalidArgumentError("spline_ransac.iterations must lie in 0..10000");
+  }
+  if (!(confidence >= 0 && confidence < 1)) {
+    return absl::InvalidArgumentError("spline_ransac.confidence must lie in [0, 1)");
+  }
+  if (min_iterations < 1 || min_iterations > 10000) {
+    return absl::InvalidArgumentError("spline_ransac.min_iterations must lie in 1..10000");
   }
   if (!std::isfinite(k1) || !std::isfinite(k2) || k1 < 0 || k2 < 0) {
     return absl::InvalidArgumentError("spline_ransac.k1 and k2 must be finite and >= 0");
@@ -176,12 +219,13 @@ std::optional<SplineFit> FitSplineAroundLine(const cv::Mat& thresholded, const I
       thresholded, [&line](double y) { return line.XAt(y); }, half_width_px);
   // Only the window's pixels count towards the score.
   const WindowedRaster raster(thresholded, &line, half_width_px, options.jitter_px);
-  const SplineEstimator estimator(raster, options);
+  const SplineEstimator estimator(raster, pts, options);
   const Bezier initial = Bezier::Line(line.top, line.bottom);
-  const auto report =
-      Ransac(estimator, pts.points, pts.weights, RansacOptions{options.iterations}, rng, initial);
+  const auto report = Ransac(
+      estimator, pts.points, pts.weights,
+      RansacOptions{options.iterations, options.confidence, options.min_iterations}, rng, initial);
   if (!report.model || !(report.score > 0)) return std::nullopt;
-  return SplineFit{*report.model, report.score};
+  return SplineFit{*report.model, report.score, report.trials};
 }
 
 }  // namespace lane

@@ -177,6 +177,53 @@ TEST(SplineFitTest, RansacFollowsACurvedMarkingAwayFromItsLine) {
   EXPECT_LT(d.mean, seed_mean / 3);
 }
 
+// The adaptive stop: on a clean marking nearly every weighted sample lies on
+// it, so a few trials reach the fit that 40 reach; clutter that holds most
+// of the window's weight keeps all 40.
+TEST(SplineFitTest, AdaptiveStopEndsEarlyOnACleanMarkingOnly) {
+  cv::Mat img(120, 160, CV_32F, cv::Scalar(0));
+  const Bezier truth{{Eigen::Vector2d(70, 0), Eigen::Vector2d(76, 40), Eigen::Vector2d(80, 80),
+                      Eigen::Vector2d(81, 119)}};
+  for (const auto& p : truth.Sample(400)) {
+    img.at<float>(static_cast<int>(std::lround(p.y())), static_cast<int>(std::lround(p.x()))) = 1.f;
+  }
+  IpmLine line;
+  line.top = {75, 0};
+  line.bottom = {85, 119};
+  SplineRansacOptions all;
+  all.confidence = 0;
+  SplineRansacOptions adaptive;
+  adaptive.confidence = 0.999;
+  adaptive.min_iterations = 5;
+  // The seed line lies >= 3 px off the curve (RansacFollowsACurvedMarking...).
+  int fast_trials = 0;
+  for (uint64_t seed = 1; seed <= 10; ++seed) {
+    std::mt19937_64 r1(seed), r2(seed);
+    const auto full = FitSplineAroundLine(img, line, 10, all, r1);
+    const auto fast = FitSplineAroundLine(img, line, 10, adaptive, r2);
+    ASSERT_TRUE(full && fast);
+    EXPECT_EQ(full->trials, 40);
+    EXPECT_GE(fast->trials, 5);
+    EXPECT_LT(fast->trials, 40) << "seed " << seed;
+    fast_trials += fast->trials;
+    // Both within 1.5 px of the curve on average (the marking is one
+    // rounded pixel wide; 40 trials also land 1.2 px off for some seeds).
+    EXPECT_LT(CurveMatchDistances(full->spline.Sample(101), truth.Sample(101)).mean, 1.5);
+    EXPECT_LT(CurveMatchDistances(fast->spline.Sample(101), truth.Sample(101)).mean, 1.5)
+        << "seed " << seed;
+  }
+  EXPECT_LE(fast_trials, 10 * 15);
+  // Clutter: random pixels in the window outweigh the marking 3:1.
+  cv::Mat cluttered = img.clone();
+  std::mt19937_64 noise(11);
+  std::uniform_int_distribution<int> col(66, 94), row(0, 119);
+  for (int i = 0; i < 360; ++i) cluttered.at<float>(row(noise), col(noise)) = 1.f;
+  std::mt19937_64 r3(1);
+  const auto busy = FitSplineAroundLine(cluttered, line, 10, adaptive, r3);
+  ASSERT_TRUE(busy.has_value());
+  EXPECT_EQ(busy->trials, 40);
+}
+
 TEST(MatchTest, PaperRuleAndWidthScaling) {
   const Bezier a = Bezier::Line({100, 300}, {50, 479});
   EXPECT_TRUE(PaperMatch(a, a, 640));

@@ -63,6 +63,23 @@ class ScoreOnly {
   const LineThroughTwo& inner_;
 };
 
+// The same with the adaptive stop's SupportFraction: the inliers' share.
+class WithSupport {
+ public:
+  using Model = Line;
+  static constexpr int kSampleSize = 2;
+  explicit WithSupport(const LineThroughTwo& inner, size_t n) : inner_(inner), n_(n) {}
+  std::optional<Line> Estimate(const std::vector<Eigen::Vector2d>& s) const {
+    return inner_.Estimate(s);
+  }
+  double Score(const Line& line) const { return inner_.Score(line); }
+  double SupportFraction(const Line& line) const { return Score(line) / n_; }
+
+ private:
+  const LineThroughTwo& inner_;
+  size_t n_;
+};
+
 struct Scene {
   std::vector<Eigen::Vector2d> points;
   std::vector<double> weights;
@@ -156,9 +173,65 @@ TEST(RansacTest, InitialModelSurvivesAndTooFewPointsGiveNoTrials) {
   EXPECT_FALSE(with.inlier_mask.empty());
 }
 
+TEST(RansacTest, AdaptiveTrialsFollowTheStandardFormula) {
+  // 60 % support, pairs: 0.36 per sample; log(0.01) / log(0.64) = 10.3.
+  EXPECT_EQ(AdaptiveTrials(0.99, 0.6, 2, 200), 11);
+  EXPECT_EQ(AdaptiveTrials(0.999, 0.6, 2, 200), 16);
+  // Four points at 90 %: 0.656 per sample, log(0.001) / log(0.344) = 6.5.
+  EXPECT_EQ(AdaptiveTrials(0.999, 0.9, 4, 40), 7);
+  EXPECT_EQ(AdaptiveTrials(0.999, 0.5, 4, 40), 40);  // 108 trials: capped
+  EXPECT_EQ(AdaptiveTrials(0.999, 1.0, 4, 40), 1);
+  EXPECT_EQ(AdaptiveTrials(0.999, 0.0, 4, 40), 40);
+  EXPECT_EQ(AdaptiveTrials(0.0, 0.9, 4, 40), 40);  // off
+}
+
+TEST(RansacTest, AdaptiveStopEndsOnceTheBestModelIsLikelyFound) {
+  int total_trials = 0;
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    const Scene scene = MakeScene(seed);
+    const LineThroughTwo inner(scene.points, 0.2);
+    const WithSupport estimator(inner, scene.points.size());
+    std::mt19937_64 rng(seed);
+    RansacOptions options{200};
+    options.confidence = 0.99;
+    const RansacReport<Line> report = Ransac(estimator, scene.points, scene.weights, options, rng);
+    ASSERT_TRUE(report.model.has_value()) << "seed " << seed;
+    EXPECT_NEAR(report.model->slope, 0.5, 0.01) << "seed " << seed;
+    EXPECT_EQ(report.score, 60.0) << "seed " << seed;
+    // Once the line is found (60 % support) 11 trials suffice; an earlier
+    // partial model may ask for more, but never the 200 allowed.
+    EXPECT_GE(report.trials, 11) << "seed " << seed;
+    EXPECT_LT(report.trials, 200) << "seed " << seed;
+    total_trials += report.trials;
+  }
+  EXPECT_LT(total_trials, 20 * 30);
+
+  // min_trials holds the loop open; without SupportFraction, or with
+  // confidence 0, it runs every trial.
+  const Scene scene = MakeScene(4);
+  const LineThroughTwo inner(scene.points, 0.2);
+  const WithSupport estimator(inner, scene.points.size());
+  RansacOptions options{200};
+  options.confidence = 0.99;
+  options.min_trials = 50;
+  std::mt19937_64 r1(1), r2(1), r3(1);
+  EXPECT_EQ(Ransac(estimator, scene.points, scene.weights, options, r1).trials, 50);
+  options.min_trials = 1;
+  EXPECT_EQ(Ransac(inner, scene.points, scene.weights, options, r2).trials, 200);
+  options.confidence = 0;
+  EXPECT_EQ(Ransac(estimator, scene.points, scene.weights, options, r3).trials, 200);
+}
+
 TEST(RansacTest, OptionsAreValidated) {
   EXPECT_TRUE(RansacOptions{}.Validate().ok());
   EXPECT_FALSE(RansacOptions{0}.Validate().ok());
+  RansacOptions o;
+  o.confidence = 1.0;
+  EXPECT_FALSE(o.Validate().ok());
+  o.confidence = 0.999;
+  EXPECT_TRUE(o.Validate().ok());
+  o.min_trials = 0;
+  EXPECT_FALSE(o.Validate().ok());
 }
 
 }  // namespace

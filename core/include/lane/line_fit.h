@@ -17,6 +17,11 @@ struct LineRansacOptions {
   // (reference: 15 IPM px all-lanes, 8 px 2-lanes, at 8.9 px/m).
   double window_half_width_m = 1.7;
   int iterations = 40;
+  // Adaptive stop (ransac.h): end after max(min_iterations, N) iterations,
+  // N = log(1 - confidence) / log(1 - e^4) for the best line's inlier share
+  // e of the window's weight. 0 = always `iterations`.
+  double confidence = 0.999;
+  int min_iterations = 5;
   // Distance from the line within which a pixel is an inlier, IPM pixels.
   // The reference uses 0.2 px; on a pixel grid that only keeps pixels whose
   // centres the line crosses, so we use 0.5 px (one pixel-wide band).

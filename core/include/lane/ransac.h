@@ -9,7 +9,10 @@
 // and, when its score counts inliers, optionally
 //   bool IsInlier(const Model& model, size_t i) const;   // point i of the set
 // in which case the report carries the best model's inlier mask, so that a
-// refit uses exactly the inliers the score counted.
+// refit uses exactly the inliers the score counted. For the adaptive stop
+// (RansacOptions::confidence), optionally
+//   double SupportFraction(const Model& model) const;    // in [0, 1]
+// the share of the points' total weight that supports `model`.
 //
 // Points are drawn without replacement with probability proportional to
 // their weight (the thresholded filter response), as the paper prescribes.
@@ -18,6 +21,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -34,15 +38,44 @@ struct RansacOptions {
   // Trials (samples drawn and scored). The paper's 40 for lines and splines
   // in all-lanes mode; fewer samples than kSampleSize end the loop early.
   int max_trials = 40;
+  // Adaptive stop (Fischler and Bolles; Hartley and Zisserman, Algorithm
+  // 4.5): with a best model whose support is a share e of the weight, a
+  // weighted sample of kSampleSize points is all support with probability
+  // about e^kSampleSize, so N = log(1 - confidence) / log(1 - e^kSampleSize)
+  // trials draw at least one such sample with that confidence. The loop ends
+  // once it has run max(min_trials, N) trials, and never more than max_trials.
+  // 0 turns it off: always max_trials. Needs the estimator's SupportFraction.
+  double confidence = 0.0;
+  int min_trials = 1;
 
   absl::Status Validate() const {
     if (max_trials < 1 || max_trials > 100000) {
       return absl::InvalidArgumentError(
           absl::StrCat("RANSAC max_trials must lie in 1..100000, got ", max_trials));
     }
+    if (!(confidence >= 0 && confidence < 1)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("RANSAC confidence must lie in [0, 1), got ", confidence));
+    }
+    if (min_trials < 1) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("RANSAC min_trials must be >= 1, got ", min_trials));
+    }
     return absl::OkStatus();
   }
 };
+
+// The trials the adaptive stop asks for: log(1 - confidence) / log(1 - e^s),
+// rounded up, for support share e and sample size s; `cap` when e^s is too
+// small to matter (or confidence is 0).
+inline int AdaptiveTrials(double confidence, double support, int sample_size, int cap) {
+  if (!(confidence > 0)) return cap;
+  const double all_support = std::pow(std::clamp(support, 0.0, 1.0), sample_size);
+  if (all_support >= 1.0) return 1;
+  if (!(all_support > 1e-12)) return cap;
+  const double n = std::ceil(std::log(1.0 - confidence) / std::log1p(-all_support));
+  return n >= cap ? cap : std::max(1, static_cast<int>(n));
+}
 
 template <typename Model>
 struct RansacReport {
@@ -78,6 +111,11 @@ inline bool WeightedSample(const std::vector<double>& cumulative, std::vector<in
 
 namespace internal {
 template <typename E, typename = void>
+struct HasSupportFraction : std::false_type {};
+template <typename E>
+struct HasSupportFraction<E, std::void_t<decltype(std::declval<const E&>().SupportFraction(
+                                 std::declval<const typename E::Model&>()))>> : std::true_type {};
+template <typename E, typename = void>
 struct HasIsInlier : std::false_type {};
 template <typename E>
 struct HasIsInlier<E, std::void_t<decltype(std::declval<const E&>().IsInlier(
@@ -85,17 +123,29 @@ struct HasIsInlier<E, std::void_t<decltype(std::declval<const E&>().IsInlier(
 };
 }  // namespace internal
 
-// Runs options.max_trials trials. `initial` (if any) is scored first, so a
-// good initial guess survives when no sample beats it.
+// Runs options.max_trials trials, or fewer with the adaptive stop. `initial`
+// (if any) is scored first, so a good initial guess survives when no sample
+// beats it. report.trials counts the trials run.
 template <typename Estimator>
 RansacReport<typename Estimator::Model> Ransac(
     const Estimator& estimator, const std::vector<Eigen::Vector2d>& points,
     const std::vector<double>& weights, const RansacOptions& options, std::mt19937_64& rng,
     const std::optional<typename Estimator::Model>& initial = std::nullopt) {
   RansacReport<typename Estimator::Model> report;
+  // Trials the adaptive stop asks for, updated when the best model changes.
+  int needed = options.max_trials;
+  const auto update_needed = [&] {
+    if constexpr (internal::HasSupportFraction<Estimator>::value) {
+      if (options.confidence > 0 && report.model) {
+        needed = AdaptiveTrials(options.confidence, estimator.SupportFraction(*report.model),
+                                Estimator::kSampleSize, options.max_trials);
+      }
+    }
+  };
   if (initial) {
     report.model = *initial;
     report.score = estimator.Score(*initial);
+    update_needed();
   }
   if (static_cast<int>(points.size()) >= Estimator::kSampleSize) {
     std::vector<double> cumulative(weights.size());
@@ -104,6 +154,7 @@ RansacReport<typename Estimator::Model> Ransac(
     std::vector<Eigen::Vector2d> sample(Estimator::kSampleSize);
     std::vector<int> idx(Estimator::kSampleSize);
     for (int it = 0; it < options.max_trials; ++it) {
+      if (it >= options.min_trials && it >= needed) break;
       ++report.trials;
       if (!WeightedSample(cumulative, idx, rng)) break;
       for (int j = 0; j < Estimator::kSampleSize; ++j) sample[j] = points[idx[j]];
@@ -113,6 +164,7 @@ RansacReport<typename Estimator::Model> Ransac(
       if (!report.model || score > report.score) {
         report.model = *model;
         report.score = score;
+        update_needed();
       }
     }
   }

@@ -17,6 +17,10 @@ struct SplineRansacOptions {
   // (reference: 10 IPM px all-lanes, 6 px 2-lanes, at 8.9 px/m).
   double window_half_width_m = 1.1;
   int iterations = 40;
+  // Adaptive stop (ransac.h), as LineRansacOptions'; a window pixel supports
+  // a spline when it lies within jitter_px columns of the rasterised curve.
+  double confidence = 0.999;
+  int min_iterations = 5;
   // Score = raw * (1 + k1 * l' + k2 * theta') (paper). k1 weighs length,
   // k2 straightness.
   double k1 = 1.5;
@@ -41,6 +45,7 @@ double SplineScore(const Bezier& spline, const cv::Mat& thresholded,
 struct SplineFit {
   Bezier spline;
   double score = 0;
+  int trials = 0;  // RANSAC trials run (fewer than `iterations` after an adaptive stop)
 };
 
 // RANSAC spline in the window around `line`, seeded with the line itself.
