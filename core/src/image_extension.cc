@@ -62,6 +62,10 @@ std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
 
 }  // namespace
 
+namespace {
+constexpr double kSamplesPerSigma = 4.0;
+}  // namespace
+
 std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& image,
                                       const CameraModel& camera, int n, double search_m,
                                       double sigma_m, double min_sigma_px, double max_search_px,
@@ -78,11 +82,16 @@ std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& i
     const Eigen::Vector2d normal = Normal(tangent);
     const double sigma = std::max(min_sigma_px, sigma_m * ppm);
     const double half = std::clamp(search_m * ppm, 2.0, max_search_px);
+    // The profile is sampled every `spacing` pixels, two samples per sigma
+    // (one pixel while sigma <= 2 px): near the camera a 10 cm sigma spans
+    // 5-10 px, and a 1 px raster only multiplied the samples and the taps.
+    const double spacing = std::max(1.0, sigma / kSamplesPerSigma);
+    const double sigma_samples = spacing > 1.0 ? kSamplesPerSigma : sigma;
     thread_local std::vector<float> profile;
-    SampleProfile(image, p, normal, half, profile);
-    const auto peak = FindProfilePeak(profile, sigma);
+    SampleProfile(image, p, spacing * normal, half / spacing, profile);
+    const auto peak = FindProfilePeak(profile, sigma_samples);
     if (!peak) continue;
-    const double offset = peak->offset;
+    const double offset = spacing * peak->offset;
     const Eigen::Vector2d q = p + offset * normal;
     if (!pts.empty()) {
       const Eigen::Vector2d step = q - pts.back();
