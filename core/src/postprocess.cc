@@ -103,11 +103,13 @@ const GaussianTaps& TapsFor(double sigma) {
   next = (next + 1) % kKept;
   taps.h = std::max(1, static_cast<int>(std::ceil(2.5 * sigma)));
   taps.w.resize(2 * taps.h + 1);
-  taps.sum = 0;
-  for (int j = -taps.h; j <= taps.h; ++j) {
-    taps.w[j + taps.h] = std::exp(-0.5 * j * j / (sigma * sigma));
-    taps.sum += taps.w[j + taps.h];
+  // The kernel is symmetric: one exp per |j| (the same value for -j and j),
+  // then the sum in order, lowest first.
+  for (int j = 0; j <= taps.h; ++j) {
+    taps.w[taps.h + j] = taps.w[taps.h - j] = std::exp(-0.5 * j * j / (sigma * sigma));
   }
+  taps.sum = 0;
+  for (double wj : taps.w) taps.sum += wj;
   taps.sigma = sigma;
   return taps;
 }
