@@ -180,9 +180,9 @@ std::optional<IpmLine> FitLineAmong(const cv::Mat& thresholded, const WeightedPo
                                     const LineRansacOptions& options, std::mt19937_64& rng) {
   if (static_cast<int>(pts.points.size()) < options.min_inliers) return std::nullopt;
   const LineEstimator estimator(pts, thresholded.rows, options);
-  const auto report = Ransac(
-      estimator, pts.points, pts.weights,
-      RansacOptions{options.iterations, options.confidence, options.min_iterations}, rng);
+  const auto report =
+      Ransac(estimator, pts.points, pts.weights,
+             RansacOptions{options.iterations, options.confidence, options.min_iterations}, rng);
   if (!report.model) return std::nullopt;
 
   // Refit on the inliers the score counted, weighted by their response.

@@ -173,7 +173,7 @@ class SplineEstimator {
   const WeightedPoints& pts_;
   const SplineRansacOptions& options_;
   double total_weight_ = 0;
-  mutable std::vector<int> row_lo_, row_hi_;  // scratch of SupportFraction
+  mutable std::vector<int> row_lo_, row_hi_;     // scratch of SupportFraction
   mutable std::vector<Eigen::Vector2d> sorted_;  // scratch, reused across trials
 };
 

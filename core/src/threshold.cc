@@ -36,11 +36,19 @@ float Quantile(std::vector<float>& values, double q) {
 
 namespace {
 
+// Floats [b, e), for range-for loops.
+struct FloatSpan {
+  const float* b;
+  const float* e;
+  const float* begin() const { return b; }
+  const float* end() const { return e; }
+};
+
 // The k-th and (k+1)-th smallest (0-based) of `values`, all > 0 and <= vmax,
 // found through one histogram so that only the bins holding them need a
 // selection. `second` is only computed when asked for (k + 1 < size).
-void KthPositives(const std::vector<float>& values, size_t k, float vmax, bool want_second,
-                  float* first, float* second) {
+void KthPositives(FloatSpan values, size_t k, float vmax, bool want_second, float* first,
+                  float* second) {
   constexpr int kBins = 256;
   const float scale = kBins / vmax;
   int counts[kBins + 1] = {0};
@@ -78,23 +86,32 @@ float ApplyQuantileThreshold(cv::Mat& image, double q) {
   // Negative responses are dropped first; they make up the bulk of the
   // pixels, so the quantile is computed over the positive values only, with
   // the rank shifted by the number of zeros.
-  thread_local std::vector<float> positives;
-  positives.clear();
-  float vmax = 0.f;
+  // Without branches: about half the filter's responses are positive, in
+  // no order a branch predictor could follow. Every value is written at the
+  // end of the kept ones and kept only if positive, so the positives keep
+  // their order; the maximum over all values is that over the positives
+  // (it starts at 0).
+  thread_local std::vector<float> positives;  // grows to the largest image, never shrinks
   const size_t n = image.total();
+  if (positives.size() < n) positives.resize(n);
+  size_t kept = 0;
+  float vmax = 0.f;
   for (int r = 0; r < image.rows; ++r) {
     float* row = image.ptr<float>(r);
+    float* out = positives.data();
     for (int c = 0; c < image.cols; ++c) {
-      if (row[c] > 0.f) {
-        positives.push_back(row[c]);
-        vmax = std::max(vmax, row[c]);
-      } else {
-        row[c] = 0.f;
-      }
+      const float v = row[c];
+      const bool positive = v > 0.f;
+      out[kept] = v;
+      kept += positive;
+      vmax = std::max(vmax, v);
+      row[c] = positive ? v : 0.f;
     }
   }
-  const size_t zeros = n - positives.size();
-  if (positives.empty()) return 0.f;
+  const float* first_positive = positives.data();
+  const float* end_positive = first_positive + kept;
+  const size_t zeros = n - kept;
+  if (kept == 0) return 0.f;
   const double pos = std::clamp(q, 0.0, 1.0) * (n - 1);
   float threshold = 0.f;
   if (pos >= static_cast<double>(zeros)) {
@@ -102,22 +119,20 @@ float ApplyQuantileThreshold(cv::Mat& image, double q) {
     const double rank = pos - zeros;
     const size_t lo = static_cast<size_t>(std::floor(rank));
     const double frac = rank - lo;
-    const bool interpolate = frac > 0 && lo + 1 < positives.size();
+    const bool interpolate = frac > 0 && lo + 1 < kept;
     float v_lo = 0, v_hi = 0;
-    KthPositives(positives, lo, vmax, interpolate, &v_lo, &v_hi);
+    KthPositives({first_positive, end_positive}, lo, vmax, interpolate, &v_lo, &v_hi);
     threshold = v_lo;
     if (interpolate) threshold = static_cast<float>(v_lo + frac * (v_hi - v_lo));
   } else if (pos > zeros - 1.0) {
     // Interpolating between the last zero and the smallest positive.
-    const float v_hi = *std::min_element(positives.begin(), positives.end());
+    const float v_hi = *std::min_element(first_positive, end_positive);
     threshold = static_cast<float>((pos - (zeros - 1.0)) * v_hi);
   }
   if (threshold > 0.f) {
     for (int r = 0; r < image.rows; ++r) {
       float* row = image.ptr<float>(r);
-      for (int c = 0; c < image.cols; ++c) {
-        if (row[c] < threshold) row[c] = 0.f;
-      }
+      for (int c = 0; c < image.cols; ++c) row[c] = row[c] < threshold ? 0.f : row[c];  // a select
     }
   }
   return threshold;

@@ -165,8 +165,9 @@ class IpmMapping {
   // 2 pixels each way, so every 2x2 does too.
   struct Quad {
     int32_t pixel;
-    int32_t off;
-    float w[4];  // (x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)
+    int32_t off;       // into the one-channel tap band
+    int16_t row, col;  // the same position as (row, column) of the tap band
+    float w[4];        // (x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)
   };
   std::vector<Quad> quads_;
   int tap_row0_ = 0, tap_rows_ = 0, tap_col0_ = 0, tap_cols_ = 0;
