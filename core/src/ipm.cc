@@ -287,7 +287,6 @@ void IpmMapping::BuildTaps() {
     const XyQuad& q = xy[i];
     if (q.x < 0) continue;
     quads_.push_back({i,
-                      (q.y - tap_row0_) * tap_cols_ + q.x - tap_col0_,
                       static_cast<int16_t>(q.y - tap_row0_),
                       static_cast<int16_t>(q.x - tap_col0_),
                       {q.w[0], q.w[1], q.w[2], q.w[3]}});
@@ -483,54 +482,35 @@ cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel, int channel2) const
   // (outside the ROI) with the valid ones' mean.
   cv::Mat out(height_, width_, CV_32F);
   float* dst = out.ptr<float>(0);  // continuous: freshly allocated
-  // A quad's zero weights add an exact 0: the sum equals that of its
-  // non-zero taps alone. The mean for the invalid pixels is added in four
-  // partial sums (four_sums.h; the mean, rounded to float, is the same).
-  double sum = 0;
-  if (channel2 == -1 && image.channels() > 1) {
-    // One channel of a colour frame: read it in place (no extracted band);
-    // the same bytes, so the same values.
-    const int cn = image.channels();
-    const size_t row_step = image.step[0];
-    const uint8_t* base = image.ptr<uint8_t>(tap_row0_) + tap_col0_ * cn + channel;
+  // Each quad's 2x2 from `base` (the band's top-left), `dx` bytes to the next
+  // column and `dy` to the next row. A quad's zero weights add an exact 0:
+  // the sum equals that of its non-zero taps alone. The mean for the invalid
+  // pixels is added in four partial sums (four_sums.h; the mean, rounded to
+  // float, is the same).
+  const auto gather = [&](const uint8_t* base, int dx, size_t dy) {
     const auto pixel = [&](const Quad& q) {
-      const uint8_t* p = base + q.row * row_step + q.col * cn;
+      const uint8_t* p = base + q.row * dy + q.col * dx;
       float v = 0.f;
       v += q.w[0] * p[0];
-      v += q.w[1] * p[cn];
-      v += q.w[2] * p[row_step];
-      v += q.w[3] * p[row_step + cn];
+      v += q.w[1] * p[dx];
+      v += q.w[2] * p[dy];
+      v += q.w[3] * p[dy + dx];
       v *= 1.f / 255.f;
       dst[q.pixel] = v;
       return static_cast<double>(v);
     };
-    sum = internal::SumInFourParts(quads_.size(), [&](size_t k) { return pixel(quads_[k]); });
+    return internal::SumInFourParts(quads_.size(), [&](size_t k) { return pixel(quads_[k]); });
+  };
+  double sum = 0;
+  if (channel2 == -1 && image.channels() > 1) {
+    // One channel of a colour frame: read in place (no extracted band).
+    const int cn = image.channels();
+    sum = gather(image.ptr<uint8_t>(tap_row0_) + tap_col0_ * cn + channel, cn, image.step[0]);
   } else {
     thread_local cv::Mat scratch, scratch2;
     const cv::Mat band = ChannelBand(image, cv::Rect(tap_col0_, tap_row0_, tap_cols_, tap_rows_),
                                      channel, channel2, scratch, scratch2);
-    // The taps index a continuous band; a view of a one-channel image has
-    // the image's stride, so it is copied when the two differ.
-    thread_local cv::Mat packed;
-    const cv::Mat* src = &band;
-    if (!band.isContinuous()) {
-      band.copyTo(packed);
-      src = &packed;
-    }
-    const uint8_t* base = src->ptr<uint8_t>(0);
-    const int stride = tap_cols_;
-    const auto pixel = [&](const Quad& q) {
-      const uint8_t* p = base + q.off;
-      float v = 0.f;
-      v += q.w[0] * p[0];
-      v += q.w[1] * p[1];
-      v += q.w[2] * p[stride];
-      v += q.w[3] * p[stride + 1];
-      v *= 1.f / 255.f;
-      dst[q.pixel] = v;
-      return static_cast<double>(v);
-    };
-    sum = internal::SumInFourParts(quads_.size(), [&](size_t k) { return pixel(quads_[k]); });
+    sum = gather(band.ptr<uint8_t>(0), 1, band.step[0]);
   }
   const float mean = static_cast<float>(sum / valid_count_);
   for (const int32_t i : invalid_pixels_) dst[i] = mean;

@@ -158,16 +158,16 @@ class IpmMapping {
   double mpp_x_ = 0, mpp_y_ = 0;
   // Per valid IPM pixel (`pixel`, its row-major index), the 2x2 image pixels
   // it reads and their weights (bilinear: the 4 neighbours; nearest: one of
-  // them with weight 1; area: only validity, see below). `off` indexes the
+  // them with weight 1; area: only validity, see below). (row, col) is the
   // top-left of the 2x2 in the band of the image that the quads read (rows
-  // tap_row0_.., columns tap_col0_.., tap_cols_ wide), into which Apply
-  // first copies the channel. The ROI lies inside the image and is at least
-  // 2 pixels each way, so every 2x2 does too.
+  // tap_row0_.., columns tap_col0_..): Apply reads it in place for one
+  // channel of a colour frame, else from the band's channel, converted
+  // first. The ROI lies inside the image and is at least 2 pixels each way,
+  // so every 2x2 does too. Frames are at most 16384 px each way.
   struct Quad {
     int32_t pixel;
-    int32_t off;       // into the one-channel tap band
-    int16_t row, col;  // the same position as (row, column) of the tap band
-    float w[4];        // (x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)
+    int16_t row, col;
+    float w[4];  // (x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)
   };
   std::vector<Quad> quads_;
   int tap_row0_ = 0, tap_rows_ = 0, tap_col0_ = 0, tap_cols_ = 0;
