@@ -60,10 +60,9 @@ std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
   return best;
 }
 
-}  // namespace
-
-namespace {
+// LocalizeInImage's profile samples per smoothing sigma.
 constexpr double kSamplesPerSigma = 4.0;
+
 }  // namespace
 
 std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& image,
@@ -82,9 +81,10 @@ std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& i
     const Eigen::Vector2d normal = Normal(tangent);
     const double sigma = std::max(min_sigma_px, sigma_m * ppm);
     const double half = std::clamp(search_m * ppm, 2.0, max_search_px);
-    // The profile is sampled every `spacing` pixels, two samples per sigma
-    // (one pixel while sigma <= 2 px): near the camera a 10 cm sigma spans
-    // 5-10 px, and a 1 px raster only multiplied the samples and the taps.
+    // The profile is sampled every `spacing` pixels, kSamplesPerSigma
+    // samples per sigma (one pixel while sigma <= 4 px): near the camera a
+    // 10 cm sigma spans 5-10 px, and a 1 px raster only multiplied the
+    // samples and the taps.
     const double spacing = std::max(1.0, sigma / kSamplesPerSigma);
     const double sigma_samples = spacing > 1.0 ? kSamplesPerSigma : sigma;
     thread_local std::vector<float> profile;

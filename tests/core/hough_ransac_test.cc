@@ -154,19 +154,30 @@ TEST(SplineScoreTest, MatchesABruteForceRasterOfTheWindow) {
   EXPECT_NEAR(SplineScore(s, img, o, {&line, half}), expected, 1e-3 * expected);
 }
 
-TEST(SplineFitTest, RansacFollowsACurvedMarkingAwayFromItsLine) {
-  cv::Mat img(120, 160, CV_32F, cv::Scalar(0));
+// A curved marking one rounded pixel wide in a 160x120 top view, and a seed
+// line several pixels off it (so returning the line unchanged fails), yet
+// with the curve inside its +-10 px window.
+struct CurvedMarking {
+  CurvedMarking() {
+    for (const auto& p : truth.Sample(400)) {
+      img.at<float>(static_cast<int>(std::lround(p.y())), static_cast<int>(std::lround(p.x()))) =
+          1.f;
+    }
+    line.top = {75, 0};
+    line.bottom = {85, 119};
+  }
+  cv::Mat img{120, 160, CV_32F, cv::Scalar(0)};
   const Bezier truth{{Eigen::Vector2d(70, 0), Eigen::Vector2d(76, 40), Eigen::Vector2d(80, 80),
                       Eigen::Vector2d(81, 119)}};
-  for (const auto& p : truth.Sample(400)) {
-    img.at<float>(static_cast<int>(std::lround(p.y())), static_cast<int>(std::lround(p.x()))) = 1.f;
-  }
-  std::mt19937_64 rng(3);
-  // The seed line is several pixels off the curve (so returning it unchanged
-  // fails), yet the curve stays inside its +-10 px window.
   IpmLine line;
-  line.top = {75, 0};
-  line.bottom = {85, 119};
+};
+
+TEST(SplineFitTest, RansacFollowsACurvedMarkingAwayFromItsLine) {
+  const CurvedMarking scene;
+  const cv::Mat& img = scene.img;
+  const Bezier& truth = scene.truth;
+  const IpmLine& line = scene.line;
+  std::mt19937_64 rng(3);
   const double seed_mean =
       CurveMatchDistances(Bezier::Line(line.top, line.bottom).Sample(101), truth.Sample(101)).mean;
   ASSERT_GE(seed_mean, 3.0);
@@ -181,21 +192,15 @@ TEST(SplineFitTest, RansacFollowsACurvedMarkingAwayFromItsLine) {
 // it, so a few trials reach the fit that 40 reach; clutter that holds most
 // of the window's weight keeps all 40.
 TEST(SplineFitTest, AdaptiveStopEndsEarlyOnACleanMarkingOnly) {
-  cv::Mat img(120, 160, CV_32F, cv::Scalar(0));
-  const Bezier truth{{Eigen::Vector2d(70, 0), Eigen::Vector2d(76, 40), Eigen::Vector2d(80, 80),
-                      Eigen::Vector2d(81, 119)}};
-  for (const auto& p : truth.Sample(400)) {
-    img.at<float>(static_cast<int>(std::lround(p.y())), static_cast<int>(std::lround(p.x()))) = 1.f;
-  }
-  IpmLine line;
-  line.top = {75, 0};
-  line.bottom = {85, 119};
+  const CurvedMarking scene;
+  const cv::Mat& img = scene.img;
+  const Bezier& truth = scene.truth;
+  const IpmLine& line = scene.line;
   SplineRansacOptions all;
   all.confidence = 0;
   SplineRansacOptions adaptive;
   adaptive.confidence = 0.999;
   adaptive.min_iterations = 5;
-  // The seed line lies >= 3 px off the curve (RansacFollowsACurvedMarking...).
   int fast_trials = 0;
   for (uint64_t seed = 1; seed <= 10; ++seed) {
     std::mt19937_64 r1(seed), r2(seed);
