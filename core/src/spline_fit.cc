@@ -60,6 +60,31 @@ class WindowedRaster {
   std::vector<double> prefix_;
 };
 
+// The curve in power form, Q(t) = ((a t + b) t + c) t + d, for Horner
+// evaluation in the hot loops (once per RANSAC trial).
+struct PowerForm {
+  explicit PowerForm(const Bezier& s)
+      : a(-s.p[0] + 3 * s.p[1] - 3 * s.p[2] + s.p[3]),
+        b(3 * s.p[0] - 6 * s.p[1] + 3 * s.p[2]),
+        c(-3 * s.p[0] + 3 * s.p[1]),
+        d(s.p[0]) {}
+  Eigen::Vector2d a, b, c, d;
+};
+
+// The score's raster of the curve: its pixels at t = 0, 0.01, .., 1,
+// rounded half up (coordinates >= 0; truncated towards 0 below), in a loop
+// without dependencies (it vectorises).
+constexpr int kRasterSteps = 101;
+void RasterizeCurve(const PowerForm& f, int* xs, int* ys) {
+  const double ax = f.a.x(), bx = f.b.x(), cx = f.c.x(), dx = f.d.x();
+  const double ay = f.a.y(), by = f.b.y(), cy = f.c.y(), dy = f.d.y();
+  for (int i = 0; i < kRasterSteps; ++i) {
+    const double t = i * 0.01;
+    xs[i] = static_cast<int>(((ax * t + bx) * t + cx) * t + dx + 0.5);
+    ys[i] = static_cast<int>(((ay * t + by) * t + cy) * t + dy + 0.5);
+  }
+}
+
 double ScoreOnRaster(const Bezier& spline, const WindowedRaster& raster,
                      const SplineRansacOptions& options) {
   for (const auto& p : spline.p) {
@@ -67,32 +92,20 @@ double ScoreOnRaster(const Bezier& spline, const WindowedRaster& raster,
       return 0.0;  // a control point outside the image disqualifies the spline
     }
   }
-  // The curve in power form, Q(t) = ((a t + b) t + c) t + d, for Horner
-  // evaluation in the hot loop (this runs once per RANSAC trial).
-  const Eigen::Vector2d a = -spline.p[0] + 3 * spline.p[1] - 3 * spline.p[2] + spline.p[3];
-  const Eigen::Vector2d b = 3 * spline.p[0] - 6 * spline.p[1] + 3 * spline.p[2];
-  const Eigen::Vector2d c = -3 * spline.p[0] + 3 * spline.p[1];
-  const Eigen::Vector2d d = spline.p[0];
-  // Raster the curve at dt = 0.01; each pixel counts once, with the jitter
-  // columns either side. All control points are inside the image, so the
-  // curve (inside their convex hull) is too and coordinates are >= 0.
-  // The pixels first, in a loop without dependencies (it vectorises), then
-  // the sum in order.
-  constexpr int kSteps = 101;
-  const double ax = a.x(), bx = b.x(), cx = c.x(), dx = d.x();
-  const double ay = a.y(), by = b.y(), cy = c.y(), dy = d.y();
-  int xs[kSteps], ys[kSteps];
-  for (int i = 0; i < kSteps; ++i) {
-    const double t = i * 0.01;
-    xs[i] = static_cast<int>(((ax * t + bx) * t + cx) * t + dx + 0.5);
-    ys[i] = static_cast<int>(((ay * t + by) * t + cy) * t + dy + 0.5);
-  }
+  const PowerForm f(spline);
+  const Eigen::Vector2d &a = f.a, &b = f.b, &c = f.c, &d = f.d;
+  // Each pixel counts once, with the jitter columns either side. All
+  // control points are inside the image, so the curve (inside their convex
+  // hull) is too and coordinates are >= 0. The pixels first, then the sum
+  // in order.
+  int xs[kRasterSteps], ys[kRasterSteps];
+  RasterizeCurve(f, xs, ys);
   // The pixels' sums (0 for a pixel repeated or outside), then their total
   // in four partial sums (four_sums.h; thresholded float pixels, so the
   // order does not change the score).
-  double values[kSteps];
+  double values[kRasterSteps];
   int last_x = -1, last_y = -1;
-  for (int i = 0; i < kSteps; ++i) {
+  for (int i = 0; i < kRasterSteps; ++i) {
     const int x = xs[i], y = ys[i];
     values[i] = 0.0;
     if ((x == last_x && y == last_y) || y >= raster.rows() || x >= raster.cols()) continue;
@@ -100,7 +113,8 @@ double ScoreOnRaster(const Bezier& spline, const WindowedRaster& raster,
     last_y = y;
     values[i] = raster.Sum(x, y);
   }
-  const double raw = internal::SumInFourParts(kSteps, [&values](size_t i) { return values[i]; });
+  const double raw =
+      internal::SumInFourParts(kRasterSteps, [&values](size_t i) { return values[i]; });
   if (raw <= 0) return 0.0;
   // Length from a 20-segment polyline (within 0.1 % for these curves).
   double length = 0;
@@ -147,11 +161,10 @@ class SplineEstimator {
     const int rows = raster_.rows();
     row_lo_.assign(rows, std::numeric_limits<int>::max());
     row_hi_.assign(rows, std::numeric_limits<int>::min());
-    constexpr int kSteps = 101;
-    for (int i = 0; i < kSteps; ++i) {
-      const Eigen::Vector2d q = spline.Eval(i * 0.01);
-      const int x = static_cast<int>(std::floor(q.x() + 0.5));
-      const int y = static_cast<int>(std::floor(q.y() + 0.5));
+    int xs[kRasterSteps], ys[kRasterSteps];
+    RasterizeCurve(PowerForm(spline), xs, ys);
+    for (int i = 0; i < kRasterSteps; ++i) {
+      const int x = xs[i], y = ys[i];
       if (y < 0 || y >= rows) continue;
       row_lo_[y] = std::min(row_lo_[y], x);
       row_hi_[y] = std::max(row_hi_[y], x);
