@@ -226,7 +226,18 @@ inline float ChannelView::Bilinear(double x, double y) const {
 inline bool ChannelView::SampleAlong(const Eigen::Vector2d& c, const Eigen::Vector2d& d, int h,
                                      float* out) const {
   bool all_inside = true;
+  // c + i * d rounds monotonically in i, so when both ends lie inside the
+  // (convex) image every point between them does: no test per point then.
+  const Eigen::Vector2d first = c + (-h) * d, last = c + h * d;
+  const bool ends_inside = Inside(first.x(), first.y()) && Inside(last.x(), last.y());
   const auto run = [&](const auto& sample) {
+    if (ends_inside) {
+      for (int i = -h; i <= h; ++i) {
+        const Eigen::Vector2d p = c + i * d;
+        out[i + h] = sample(p.x(), p.y());
+      }
+      return;
+    }
     for (int i = -h; i <= h; ++i) {
       const Eigen::Vector2d p = c + i * d;
       const bool inside = Inside(p.x(), p.y());
