@@ -19,8 +19,7 @@ class WindowedRaster {
  public:
   WindowedRaster(const cv::Mat& image, const IpmLine* line, double half, int jitter)
       : cols_(image.cols), jitter_(jitter), rows_(image.rows) {
-    prefix_.reserve(static_cast<size_t>(image.rows) * (line ? static_cast<size_t>(2 * half + 3)
-                                                            : static_cast<size_t>(image.cols + 1)));
+    size_t total = 0;
     for (int y = 0; y < image.rows; ++y) {
       int lo = 0, hi = image.cols - 1;
       if (line) {
@@ -28,11 +27,24 @@ class WindowedRaster {
         lo = std::max(lo, static_cast<int>(std::ceil(c - half)));
         hi = std::min(hi, static_cast<int>(std::floor(c + half)));
       }
-      rows_[y] = {lo, hi, prefix_.size()};
+      rows_[y] = {lo, hi, total};
+      total += 1 + static_cast<size_t>(std::max(0, hi - lo + 1));
+    }
+    prefix_.resize(total);
+    for (int y = 0; y < image.rows; ++y) {
+      const Row& r = rows_[y];
       const float* row = image.ptr<float>(y);
+      double* p = prefix_.data() + r.start;
       double acc = 0;
-      prefix_.push_back(0);
-      for (int x = lo; x <= hi; ++x) prefix_.push_back(acc += row[x]);
+      *p = 0;
+      // Most of a thresholded window is 0, and acc + 0 == acc: adding only
+      // the others keeps the sums and shortens the chain of dependent
+      // additions to the non-zero pixels.
+      for (int x = r.lo; x <= r.hi; ++x) {
+        const float v = row[x];
+        if (v != 0.f) acc += v;
+        *++p = acc;
+      }
     }
   }
 
