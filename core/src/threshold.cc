@@ -87,27 +87,36 @@ float ApplyQuantileThreshold(cv::Mat& image, double q) {
   // pixels, so the quantile is computed over the positive values only, with
   // the rank shifted by the number of zeros.
   // Without branches: about half the filter's responses are positive, in
-  // no order a branch predictor could follow. Every value is written at the
-  // end of the kept ones and kept only if positive, so the positives keep
-  // their order; the maximum over all values is that over the positives
-  // (it starts at 0).
+  // no order a branch predictor could follow. A row is first clamped at 0
+  // (a select; it vectorises); then every value is written at the end of the
+  // kept ones and kept only if positive, so the positives keep their order.
+  // The maximum over all values is that over the positives (it starts at 0),
+  // taken in four running maxima (max is exact in any order), so that the
+  // comparisons do not wait on each other.
   thread_local std::vector<float> positives;  // grows to the largest image, never shrinks
   const size_t n = image.total();
   if (positives.size() < n) positives.resize(n);
   size_t kept = 0;
-  float vmax = 0.f;
+  float m0 = 0.f, m1 = 0.f, m2 = 0.f, m3 = 0.f;
   for (int r = 0; r < image.rows; ++r) {
     float* row = image.ptr<float>(r);
     float* out = positives.data();
-    for (int c = 0; c < image.cols; ++c) {
-      const float v = row[c];
-      const bool positive = v > 0.f;
+    for (int c = 0; c < image.cols; ++c) row[c] = row[c] > 0.f ? row[c] : 0.f;
+    const auto keep = [&](float v, float& running_max) {
       out[kept] = v;
-      kept += positive;
-      vmax = std::max(vmax, v);
-      row[c] = positive ? v : 0.f;
+      kept += v > 0.f;
+      running_max = std::max(running_max, v);
+    };
+    int c = 0;
+    for (; c + 4 <= image.cols; c += 4) {
+      keep(row[c], m0);
+      keep(row[c + 1], m1);
+      keep(row[c + 2], m2);
+      keep(row[c + 3], m3);
     }
+    for (; c < image.cols; ++c) keep(row[c], m0);
   }
+  const float vmax = std::max(std::max(m0, m1), std::max(m2, m3));
   const float* first_positive = positives.data();
   const float* end_positive = first_positive + kept;
   const size_t zeros = n - kept;
