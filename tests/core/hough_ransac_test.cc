@@ -73,6 +73,37 @@ TEST(LineFitTest, EmptyWindowGivesNoLine) {
   EXPECT_FALSE(FitLineInWindow(img, 80, 15, LineRansacOptions{}, rng).has_value());
 }
 
+TEST(LineFitTest, WindowCollectsEveryPositivePixelInRowOrder) {
+  // A sparse thresholded view (mostly +0, a few positives, one negative),
+  // windows of odd and even widths at the edges and inside: the collected
+  // points are those of a plain scan, in the same order.
+  std::mt19937 rng(3);
+  cv::Mat view(30, 41, CV_32F, cv::Scalar(0));
+  std::uniform_int_distribution<int> col(0, 40), row(0, 29);
+  for (int i = 0; i < 120; ++i) view.at<float>(row(rng), col(rng)) = 0.25f + 0.01f * i;
+  view.at<float>(5, 20) = -1.f;
+  for (const double center : {0.0, 7.3, 20.0, 39.6}) {
+    for (const double half : {0.0, 1.5, 2.0, 3.7, 9.0}) {
+      const WeightedPoints got = CollectWindow(
+          view, [&](double) { return center; }, half);
+      WeightedPoints want;
+      for (int y = 0; y < view.rows; ++y) {
+        for (int x = 0; x < view.cols; ++x) {
+          if (std::abs(x - center) <= half && view.at<float>(y, x) > 0) {
+            want.points.emplace_back(x, y);
+            want.weights.push_back(view.at<float>(y, x));
+          }
+        }
+      }
+      ASSERT_EQ(got.points.size(), want.points.size()) << center << " " << half;
+      for (size_t i = 0; i < want.points.size(); ++i) {
+        EXPECT_EQ(got.points[i], want.points[i]);
+        EXPECT_EQ(got.weights[i], want.weights[i]);
+      }
+    }
+  }
+}
+
 TEST(BezierTest, FitRecoversAKnownCurve) {
   const Bezier truth{{Eigen::Vector2d(40, 0), Eigen::Vector2d(55, 40), Eigen::Vector2d(60, 80),
                       Eigen::Vector2d(58, 119)}};
