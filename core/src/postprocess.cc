@@ -144,11 +144,16 @@ void SmoothProfile(const std::vector<T>& in, double sigma, std::vector<double>& 
   // order, lowest first, as a plain loop over those taps gives.
   constexpr int kBlock = 8;
   const int blocks = (n + kBlock - 1) / kBlock;
-  thread_local std::vector<double> padded;
-  padded.assign(blocks * kBlock + 2 * h, 0.0);
+  // Both buffers only grow (a std::vector that shrinks and grows again
+  // zero-fills what it regrows).
+  thread_local std::vector<double> padded, sums;
+  const size_t padded_size = blocks * kBlock + 2 * h;
+  if (padded.size() < padded_size) padded.resize(padded_size);
+  if (sums.size() < static_cast<size_t>(blocks * kBlock)) sums.resize(blocks * kBlock);
+  std::fill(padded.begin(), padded.begin() + h, 0.0);
   for (int i = 0; i < n; ++i) padded[h + i] = in[i];
-  out.resize(blocks * kBlock);
-  double* o = out.data();
+  std::fill(padded.begin() + h + n, padded.begin() + padded_size, 0.0);
+  double* o = sums.data();
   const double* x = padded.data();  // x[i + j] is sample i + j - h
   for (int i = 0; i < blocks * kBlock; i += kBlock) {
     // Four pairs of sums in registers (GCC/Clang vector types: SSE2 on
@@ -171,7 +176,8 @@ void SmoothProfile(const std::vector<T>& in, double sigma, std::vector<double>& 
     const Pair acc[kBlock / 2] = {a0, a1, a2, a3};
     std::memcpy(o + i, acc, sizeof acc);
   }
-  out.resize(n);
+  out.assign(sums.begin(), sums.begin() + n);
+  o = out.data();
   // Each output over the weight of its in-range taps: the whole kernel's,
   // except within h of an end.
   for (int i = 0; i < n; ++i) {

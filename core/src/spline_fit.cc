@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include "absl/strings/str_cat.h"
 #include "four_sums.h"
@@ -30,11 +31,11 @@ class WindowedRaster {
       rows_[y] = {lo, hi, total};
       total += 1 + static_cast<size_t>(std::max(0, hi - lo + 1));
     }
-    prefix_.resize(total);
+    prefix_.reset(new double[total]);  // every element is written below
     for (int y = 0; y < image.rows; ++y) {
       const Row& r = rows_[y];
       const float* row = image.ptr<float>(y);
-      double* p = prefix_.data() + r.start;
+      double* p = prefix_.get() + r.start;
       double acc = 0;
       *p = 0;
       // Most of a thresholded window is 0, and acc + 0 == acc: adding only
@@ -57,7 +58,7 @@ class WindowedRaster {
     const int a = std::max(r.lo, x - jitter_);
     const int b = std::min(r.hi, x + jitter_);
     if (a > b) return 0.0;
-    const double* p = prefix_.data() + r.start;
+    const double* p = prefix_.get() + r.start;
     return p[b - r.lo + 1] - p[a - r.lo];
   }
 
@@ -69,7 +70,7 @@ class WindowedRaster {
   int cols_;
   int jitter_;
   std::vector<Row> rows_;
-  std::vector<double> prefix_;
+  std::unique_ptr<double[]> prefix_;
 };
 
 // The curve in power form, Q(t) = ((a t + b) t + c) t + d, for Horner
