@@ -51,15 +51,29 @@ void KthPositives(FloatSpan values, size_t k, float vmax, bool want_second, floa
                   float* second) {
   constexpr int kBins = 256;
   const float scale = kBins / vmax;
-  int counts[kBins + 1] = {0};
-  for (float v : values) ++counts[std::min(kBins, static_cast<int>(v * scale))];
+  // Four histograms, value k into histogram k % 4, then added: neighbouring
+  // pixels often share a bin, and one histogram's increments of the same
+  // counter would wait on each other.
+  int part[4][kBins + 1] = {};
+  const size_t n = values.e - values.b;
+  size_t i = 0;
+  const auto bin_of = [&](float v) { return std::min(kBins, static_cast<int>(v * scale)); };
+  for (; i + 4 <= n; i += 4) {
+    ++part[0][bin_of(values.b[i])];
+    ++part[1][bin_of(values.b[i + 1])];
+    ++part[2][bin_of(values.b[i + 2])];
+    ++part[3][bin_of(values.b[i + 3])];
+  }
+  for (; i < n; ++i) ++part[0][bin_of(values.b[i])];
+  int counts[kBins + 1];
+  for (int b = 0; b <= kBins; ++b) counts[b] = part[0][b] + part[1][b] + part[2][b] + part[3][b];
   size_t below = 0;
   int bin = 0;
   while (below + counts[bin] <= k) below += counts[bin++];
   thread_local std::vector<float> in_bin;
   in_bin.clear();
   for (float v : values) {
-    if (std::min(kBins, static_cast<int>(v * scale)) == bin) in_bin.push_back(v);
+    if (bin_of(v) == bin) in_bin.push_back(v);
   }
   std::nth_element(in_bin.begin(), in_bin.begin() + (k - below), in_bin.end());
   *first = in_bin[k - below];
@@ -74,7 +88,7 @@ void KthPositives(FloatSpan values, size_t k, float vmax, bool want_second, floa
   while (counts[next] == 0) ++next;
   float smallest = vmax;
   for (float v : values) {
-    if (std::min(kBins, static_cast<int>(v * scale)) == next) smallest = std::min(smallest, v);
+    if (bin_of(v) == next) smallest = std::min(smallest, v);
   }
   *second = smallest;
 }
