@@ -248,8 +248,8 @@ cv::Mat Detector::Filter(const cv::Mat& top_view, const cv::Mat& void_mask) cons
 }
 
 cv::Mat Detector::Threshold(const cv::Mat& filtered, float* threshold) const {
-  cv::Mat thresholded = filtered.clone();
-  *threshold = ApplyQuantileThreshold(thresholded, options_.threshold.quantile);
+  cv::Mat thresholded;
+  *threshold = ApplyQuantileThreshold(filtered, thresholded, options_.threshold.quantile);
   cv::Mat searched = ipm_.valid_mask();  // the columns searched for lanes
   if (options_.mode == Mode::kTwo) {
     // Only the band around the camera can hold the ego lane's boundaries.

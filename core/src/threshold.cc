@@ -96,7 +96,12 @@ void KthPositives(FloatSpan values, size_t k, float vmax, bool want_second, floa
 }  // namespace
 
 float ApplyQuantileThreshold(cv::Mat& image, double q) {
-  CV_Assert(image.type() == CV_32FC1);
+  return ApplyQuantileThreshold(image, image, q);
+}
+
+float ApplyQuantileThreshold(const cv::Mat& in, cv::Mat& image, double q) {
+  CV_Assert(in.type() == CV_32FC1);
+  if (image.data != in.data) image.create(in.size(), CV_32FC1);
   // Negative responses are dropped first; they make up the bulk of the
   // pixels, so the quantile is computed over the positive values only, with
   // the rank shifted by the number of zeros.
@@ -113,9 +118,10 @@ float ApplyQuantileThreshold(cv::Mat& image, double q) {
   size_t kept = 0;
   float m0 = 0.f, m1 = 0.f, m2 = 0.f, m3 = 0.f;
   for (int r = 0; r < image.rows; ++r) {
+    const float* src = in.ptr<float>(r);
     float* row = image.ptr<float>(r);
     float* out = positives.data();
-    for (int c = 0; c < image.cols; ++c) row[c] = row[c] > 0.f ? row[c] : 0.f;
+    for (int c = 0; c < image.cols; ++c) row[c] = src[c] > 0.f ? src[c] : 0.f;
     const auto keep = [&](float v, float& running_max) {
       out[kept] = v;
       kept += v > 0.f;

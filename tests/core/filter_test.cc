@@ -102,6 +102,23 @@ TEST(ThresholdTest, KeepsTheTopValuesUnbinarised) {
   }
 }
 
+TEST(ThresholdTest, IntoASecondImageEqualsInPlaceAndLeavesTheInput) {
+  std::mt19937 rng(11);
+  std::normal_distribution<float> n(0.f, 1.f);
+  cv::Mat img(37, 53, CV_32F);  // odd sizes: the row loops' tails
+  for (int r = 0; r < img.rows; ++r)
+    for (int c = 0; c < img.cols; ++c) img.at<float>(r, c) = n(rng);
+  const cv::Mat before = img.clone();
+  cv::Mat in_place = img.clone(), out;
+  const float thr_in_place = ApplyQuantileThreshold(in_place, 0.9);
+  const float thr = ApplyQuantileThreshold(img, out, 0.9);
+  EXPECT_EQ(thr, thr_in_place);
+  EXPECT_EQ(cv::norm(img, before, cv::NORM_INF), 0.0);
+  ASSERT_EQ(out.size(), img.size());
+  EXPECT_EQ(cv::norm(out, in_place, cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::countNonZero(out), 0);
+}
+
 TEST(ThresholdTest, MostlyZeroImagesKeepOnlyPositives) {
   cv::Mat img(10, 10, CV_32F, cv::Scalar(-1));
   img.at<float>(3, 3) = 2.f;

@@ -35,6 +35,9 @@ float Quantile(std::vector<float>& values, double q);
 // In place on a CV_32F image: negatives -> 0, then everything below the
 // q-quantile of all pixels -> 0. Returns the threshold used.
 float ApplyQuantileThreshold(cv::Mat& image, double q);
+// The same into `out` (allocated as `in`, unless it is `in`), leaving `in`
+// as it is: no copy of `in` first.
+float ApplyQuantileThreshold(const cv::Mat& in, cv::Mat& out, double q);
 
 // The transverse rows of ThresholdOptions::transverse_max_fraction: zeroes
 // rows of the thresholded `image` (and `margin_rows` either side) where the
