@@ -2,9 +2,9 @@
 
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 
 #include "absl/strings/str_cat.h"
+#include "double_pair.h"
 #include "lane/bezier.h"
 #include "lane/ransac.h"
 
@@ -71,7 +71,7 @@ class LineEstimator {
   // exact 0 for outliers, in four partial sums (four_sums.h: the weights
   // are thresholded float pixels, so the order does not change the score;
   // the lanes of cordova1 and driver161 are byte-identical to the one-sum
-  // loop's). Two points at a time in vector pairs (GCC/Clang vector types):
+  // loop's). Two points at a time in vector pairs (double_pair.h):
   // the pairs (s0, s1) and (s2, s3) hold the four sums exactly as
   // SumInFourParts adds them, term k into sum k % 4, the tail into s0.
   double Score(const IpmLine& line) const {
@@ -84,22 +84,19 @@ class LineEstimator {
     const auto term = [&](size_t i) {
       return std::abs(nx * x[i] + ny * y[i] - offset) <= tol ? w[i] : 0.0;
     };
-    using Pair = double __attribute__((vector_size(16)));
-    using Mask = int64_t __attribute__((vector_size(16)));
-    const auto load = [](const double* p) {
-      Pair v;
-      std::memcpy(&v, p, sizeof v);
-      return v;
-    };
-    const Pair vnx = {nx, nx}, vny = {ny, ny}, voff = {offset, offset}, vtol = {tol, tol};
-    const Mask no_sign = {INT64_MAX, INT64_MAX};
+    using internal::DoublePair;
+    using internal::LoadPair;
+    using internal::MaskPair;
+    const DoublePair vnx = {nx, nx}, vny = {ny, ny}, voff = {offset, offset}, vtol = {tol, tol};
+    const MaskPair no_sign = {INT64_MAX, INT64_MAX};
     const auto terms = [&](size_t i) {  // term(i), term(i + 1)
-      const Pair d = vnx * load(x + i) + vny * load(y + i) - voff;
-      const Pair dist = reinterpret_cast<Pair>(reinterpret_cast<Mask>(d) & no_sign);
-      return reinterpret_cast<Pair>(reinterpret_cast<Mask>(load(w + i)) & (dist <= vtol));
+      const DoublePair d = vnx * LoadPair(x + i) + vny * LoadPair(y + i) - voff;
+      const DoublePair dist = reinterpret_cast<DoublePair>(reinterpret_cast<MaskPair>(d) & no_sign);
+      return reinterpret_cast<DoublePair>(reinterpret_cast<MaskPair>(LoadPair(w + i)) &
+                                          (dist <= vtol));
     };
     const size_t n = xs_.size();
-    Pair s01 = {0, 0}, s23 = {0, 0};
+    DoublePair s01 = {0, 0}, s23 = {0, 0};
     size_t i = 0;
     for (; i + 4 <= n; i += 4) {
       s01 += terms(i);

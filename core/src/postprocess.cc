@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "absl/strings/str_cat.h"
+#include "double_pair.h"
 #include "lane/candidate_checks.h"
 #include "lane/image_extension.h"
 
@@ -156,24 +157,20 @@ void SmoothProfile(const std::vector<T>& in, double sigma, std::vector<double>& 
   double* o = sums.data();
   const double* x = padded.data();  // x[i + j] is sample i + j - h
   for (int i = 0; i < blocks * kBlock; i += kBlock) {
-    // Four pairs of sums in registers (GCC/Clang vector types: SSE2 on
-    // x86-64, NEON on ARM; each lane adds in the order written).
-    using Pair = double __attribute__((vector_size(16)));
-    Pair a0 = {}, a1 = {}, a2 = {}, a3 = {};
-    const auto load = [](const double* p) {
-      Pair v;
-      std::memcpy(&v, p, sizeof v);
-      return v;
-    };
+    // Four pairs of sums in registers (double_pair.h; each lane adds in the
+    // order written).
+    using internal::DoublePair;
+    using internal::LoadPair;
+    DoublePair a0 = {}, a1 = {}, a2 = {}, a3 = {};
     for (int j = 0; j < m; ++j) {
-      const Pair wj = {w[j], w[j]};
+      const DoublePair wj = {w[j], w[j]};
       const double* xj = x + i + j;
-      a0 += wj * load(xj);
-      a1 += wj * load(xj + 2);
-      a2 += wj * load(xj + 4);
-      a3 += wj * load(xj + 6);
+      a0 += wj * LoadPair(xj);
+      a1 += wj * LoadPair(xj + 2);
+      a2 += wj * LoadPair(xj + 4);
+      a3 += wj * LoadPair(xj + 6);
     }
-    const Pair acc[kBlock / 2] = {a0, a1, a2, a3};
+    const DoublePair acc[kBlock / 2] = {a0, a1, a2, a3};
     std::memcpy(o + i, acc, sizeof acc);
   }
   out.assign(sums.begin(), sums.begin() + n);
