@@ -84,17 +84,31 @@ FilterKernels MakeFilterKernels(const FilterOptions& options, double metres_per_
 cv::Mat FilterTopView(const cv::Mat& ipm, const FilterKernels& kernels,
                       const FilterOptions& options) {
   CV_Assert(ipm.type() == CV_32FC1);
-  cv::Mat out;
-  // Correlation with replicated borders; both kernels are symmetric.
-  cv::sepFilter2D(ipm, out, CV_32F, kernels.kx, kernels.ky, cv::Point(-1, -1), 0.0,
-                  cv::BORDER_REPLICATE);
-  const int bx = std::min(options.zero_border_x_px, out.cols / 2);
-  const int by = std::min(options.zero_border_bottom_px, out.rows);
-  if (bx > 0) {
-    out.colRange(0, bx).setTo(0);
-    out.colRange(out.cols - bx, out.cols).setTo(0);
+  // Correlation with replicated borders; both kernels are symmetric. The
+  // zeroed borders (zero_border_x_px on each side, zero_border_bottom_px at
+  // the bottom) are not filtered: the filter runs on the view's interior as
+  // an OpenCV region of interest, which reads the pixels around it as they
+  // are (replicating only past the view's own edges), so the interior is
+  // what filtering the whole view gives there.
+  const int bx = std::min(options.zero_border_x_px, ipm.cols / 2);
+  const int by = std::min(options.zero_border_bottom_px, ipm.rows);
+  cv::Mat out(ipm.size(), CV_32F);
+  const cv::Rect interior(bx, 0, ipm.cols - 2 * bx, ipm.rows - by);
+  if (interior.area() > 0) {
+    cv::Mat inside = out(interior);
+    cv::sepFilter2D(ipm(interior), inside, CV_32F, kernels.kx, kernels.ky, cv::Point(-1, -1), 0.0,
+                    cv::BORDER_REPLICATE);
   }
-  if (by > 0) out.rowRange(out.rows - by, out.rows).setTo(0);
+  // Only the borders are zeroed (not the whole image first).
+  for (int r = 0; r < out.rows; ++r) {
+    float* row = out.ptr<float>(r);
+    if (r >= interior.y + interior.height || interior.width <= 0) {
+      std::fill(row, row + out.cols, 0.f);
+    } else {
+      std::fill(row, row + bx, 0.f);
+      std::fill(row + out.cols - bx, row + out.cols, 0.f);
+    }
+  }
   return out;
 }
 

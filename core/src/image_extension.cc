@@ -33,7 +33,7 @@ std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
   const double ppm = PixelsPerMetreAcross(camera, p);
   if (!(ppm > 0)) return std::nullopt;
   const double width_px = o.marking_width_m * ppm;
-  const double sigma = std::max(0.7, std::min(o.sigma_px, 0.5 * width_px));
+  const double sigma = QuantizedSigma(std::max(0.7, std::min(o.sigma_px, 0.5 * width_px)));
   const double side = std::max(width_px, 2.5 * sigma);
   const double half = std::clamp(o.search_m * ppm, o.min_search_px, o.max_search_px);
   const int h = static_cast<int>(std::lround(half + side + 3 * sigma));
@@ -79,7 +79,7 @@ std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& i
     const double ppm = PixelsPerMetreAcross(camera, p);
     if (!(ppm > 0)) continue;
     const Eigen::Vector2d normal = Normal(tangent);
-    const double sigma = std::max(min_sigma_px, sigma_m * ppm);
+    const double sigma = QuantizedSigma(std::max(min_sigma_px, sigma_m * ppm));
     const double half = std::clamp(search_m * ppm, 2.0, max_search_px);
     // The profile is sampled every `spacing` pixels, kSamplesPerSigma
     // samples per sigma (one pixel while sigma <= 4 px): near the camera a

@@ -84,9 +84,9 @@ void SampleProfile(const ChannelView& image, const Eigen::Vector2d& center,
 namespace {
 
 // The Gaussian's taps -h..h for one sigma (h = 2.5 sigma, at least 1) and
-// their sum in order, kept per thread for the last 16 sigmas asked: a
-// spline's profiles share a few (the image extension's follow the rows'
-// scale, and repeat from candidate to candidate).
+// their sum in order, kept per thread (TapsFor): a spline's profiles share
+// a few sigmas (the image extension's follow the rows' scale, on the grid of
+// QuantizedSigma, and repeat from candidate to candidate).
 struct GaussianTaps {
   std::vector<double> w;
   double sum = 0;
@@ -99,14 +99,28 @@ struct GaussianTaps {
 };
 
 const GaussianTaps& TapsFor(double sigma) {
+  // A sigma on the 1/16 px grid of QuantizedSigma below 8 px has a slot of
+  // its own (the profiles along image splines ask for a few dozen of them,
+  // in no order a small cache would keep); any other sigma goes to the last
+  // 16 asked, round robin.
+  constexpr int kGridSlots = 8 * kSigmaSteps;
   constexpr size_t kKept = 16;
+  thread_local std::array<GaussianTaps, kGridSlots> grid;
   thread_local std::array<GaussianTaps, kKept> kept;
-  thread_local size_t next = 0;  // the slot to reuse next (round robin)
-  for (const GaussianTaps& t : kept) {
-    if (t.sigma == sigma) return t;
+  thread_local size_t next = 0;  // the slot of `kept` to reuse next
+  const double steps = sigma * kSigmaSteps;
+  GaussianTaps* slot = nullptr;
+  if (steps >= 0 && steps < kGridSlots && steps == std::floor(steps)) {
+    slot = &grid[static_cast<int>(steps)];
+    if (slot->sigma == sigma) return *slot;
+  } else {
+    for (const GaussianTaps& t : kept) {
+      if (t.sigma == sigma) return t;
+    }
+    slot = &kept[next];
+    next = (next + 1) % kKept;
   }
-  GaussianTaps& taps = kept[next];
-  next = (next + 1) % kKept;
+  GaussianTaps& taps = *slot;
   taps.h = std::max(1, static_cast<int>(std::ceil(2.5 * sigma)));
   const int m = 2 * taps.h + 1;
   taps.w.resize(m);

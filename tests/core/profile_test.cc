@@ -39,8 +39,11 @@ TEST(ProfileTest, SmoothingEqualsThePlainSumExactly) {
   std::uniform_real_distribution<float> value(0.f, 255.f);
   std::vector<double> smooth;
   // Lengths around the block of eight and below the kernel's width; sigmas
-  // whose kernels are cached and ones seen once.
-  for (const double sigma : {0.7, 1.0, 2.5, 4.0, 4.0, 3.37, 9.0}) {
+  // whose kernels are cached and ones seen once, on the grid of
+  // QuantizedSigma (kept in slots of their own; its first and last below
+  // 8 px) and off it.
+  for (const double sigma : {0.7, 1.0, 2.5, 4.0, 4.0, 3.37, 9.0, QuantizedSigma(1.23),
+                             QuantizedSigma(1.23), 0.0625, 7.9375, 8.0, 0.7}) {
     for (const int n : {1, 2, 3, 7, 8, 9, 16, 17, 23, 41, 64, 101}) {
       std::vector<float> in(n);
       for (float& v : in) v = value(rng);
@@ -52,6 +55,14 @@ TEST(ProfileTest, SmoothingEqualsThePlainSumExactly) {
       }
     }
   }
+}
+
+TEST(ProfileTest, QuantizedSigmaRoundsToTheNearestSixteenth) {
+  EXPECT_EQ(QuantizedSigma(1.23), 1.25);    // 19.68 sixteenths
+  EXPECT_EQ(QuantizedSigma(0.7), 0.6875);   // 11.2
+  EXPECT_EQ(QuantizedSigma(2.0), 2.0);      // on the grid already
+  EXPECT_EQ(QuantizedSigma(3.97), 4.0);     // 63.52
+  EXPECT_EQ(QuantizedSigma(3.95), 3.9375);  // 63.2
 }
 
 TEST(ProfileTest, SamplingAlongANormalEqualsPointByPointBilinear) {
