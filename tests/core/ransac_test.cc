@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <random>
@@ -220,6 +221,29 @@ TEST(RansacTest, AdaptiveStopEndsOnceTheBestModelIsLikelyFound) {
   EXPECT_EQ(Ransac(inner, scene.points, scene.weights, options, r2).trials, 200);
   options.confidence = 0;
   EXPECT_EQ(Ransac(estimator, scene.points, scene.weights, options, r3).trials, 200);
+}
+
+// The branch-free search gives std::upper_bound's index on every sorted
+// array, at and between its values, past both ends and through runs of equal
+// values (a zero weight repeats a cumulative value).
+TEST(RansacTest, UpperBoundIndexEqualsTheLibrarySearch) {
+  std::mt19937_64 rng(3);
+  std::uniform_int_distribution<int> step(0, 3);
+  for (int n = 0; n <= 40; ++n) {
+    std::vector<double> a(n);
+    double v = 0;
+    for (double& x : a) x = v += step(rng);  // steps of 0 repeat a value
+    std::vector<double> queries = {-1.0, v + 1, 0.0};
+    for (const double x : a) {
+      queries.push_back(x);
+      queries.push_back(x - 0.5);
+      queries.push_back(std::nextafter(x, 1e9));
+    }
+    for (const double q : queries) {
+      const int want = static_cast<int>(std::upper_bound(a.begin(), a.end(), q) - a.begin());
+      ASSERT_EQ(internal::UpperBoundIndex(a.data(), n, q), want) << "n " << n << " x " << q;
+    }
+  }
 }
 
 TEST(RansacTest, OptionsAreValidated) {

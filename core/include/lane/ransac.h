@@ -88,6 +88,25 @@ struct RansacReport {
   size_t num_inliers = 0;
 };
 
+namespace internal {
+// std::upper_bound(a, a + n, x) - a: the first index whose value exceeds x
+// (n if none), for a sorted `a`. Without branches on the comparisons (a
+// conditional move per halving): the draws of the RANSAC samples land
+// anywhere in the cumulative weights, so the library's branching search
+// mispredicted at every step.
+inline int UpperBoundIndex(const double* a, int n, double x) {
+  if (n <= 0) return 0;
+  const double* base = a;
+  // The answer lies in [base - a, base - a + n]; each step halves n.
+  while (n > 1) {
+    const int half = n / 2;
+    base = x < base[half] ? base : base + half;
+    n -= half;
+  }
+  return static_cast<int>(base - a) + (x < *base ? 0 : 1);
+}
+}  // namespace internal
+
 // Draws `out.size()` distinct indices with probability proportional to
 // `cumulative` (the running sum of the weights) into `out`. Returns false if
 // that many distinct indices could not be drawn. Deterministic for a given
@@ -101,9 +120,7 @@ inline bool WeightedSample(const std::vector<double>& cumulative, std::vector<in
   int have = 0;
   for (int attempts = 0; have < k && attempts < 20 * k; ++attempts) {
     const double r = uni(rng);
-    int idx = static_cast<int>(std::upper_bound(cumulative.begin(), cumulative.end(), r) -
-                               cumulative.begin());
-    idx = std::min(idx, n - 1);
+    const int idx = std::min(internal::UpperBoundIndex(cumulative.data(), n, r), n - 1);
     if (std::find(out.begin(), out.begin() + have, idx) == out.begin() + have) out[have++] = idx;
   }
   return have == k;
