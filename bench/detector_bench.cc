@@ -573,6 +573,28 @@ void BM_DecodeRegionBgr(benchmark::State& state) {
   }
 }
 
+// The floor of any region decode: only the frame's last 16 rows, grey. A
+// baseline JPEG has no index into its entropy-coded data, so libjpeg-turbo
+// still Huffman-decodes every row above them (jpeg_skip_scanlines skips
+// only the inverse DCT, upsampling and colour conversion of what it skips);
+// what this costs against BM_DecodeFull is the least any row or channel
+// choice can reach on the same files.
+void BM_DecodeFloor(benchmark::State& state) {
+  DecodeSet* set = GetDecodeSet(static_cast<int>(state.range(0)));
+  if (SkipDecode(state, set)) return;
+  const lane::decode::DecodeOptions options = DecodeOptionsFor(*set);
+  lane::decode::DecodeRegion region;
+  region.top = set->size.height - 16;
+  region.output = lane::decode::DecodeRegion::Output::kGray;
+  size_t i = 0;
+  for (auto _ : state) {
+    auto decoded =
+        lane::decode::DecodeImageRegion(set->jpegs[i++ % set->jpegs.size()], options, region);
+    if (!decoded.ok()) state.SkipWithError(std::string(decoded.status().message()).c_str());
+    benchmark::DoNotOptimize(decoded);
+  }
+}
+
 // For reference: OpenCV's decode of the whole frame (the same libjpeg-turbo).
 void BM_DecodeOpenCv(benchmark::State& state) {
   DecodeSet* set = GetDecodeSet(static_cast<int>(state.range(0)));
@@ -592,6 +614,7 @@ LANE_DECODE_BENCH(BM_DecodeFull);
 LANE_DECODE_BENCH(BM_DecodeFullGray);
 LANE_DECODE_BENCH(BM_DecodeRegion);
 LANE_DECODE_BENCH(BM_DecodeRegionBgr);
+LANE_DECODE_BENCH(BM_DecodeFloor);
 LANE_DECODE_BENCH(BM_DecodeOpenCv);
 
 // Arg 0 = synthetic frames, 1 = culane frames.
