@@ -4,6 +4,7 @@
 // are held to the plain definitions they must equal exactly.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/core.hpp>
 #include <random>
@@ -53,6 +54,23 @@ TEST(ProfileTest, SmoothingEqualsThePlainSumExactly) {
       for (int i = 0; i < n; ++i) {
         ASSERT_EQ(smooth[i], want[i]) << "sigma " << sigma << " n " << n << " i " << i;
       }
+    }
+  }
+}
+
+// The first index of the largest value, as std::max_element gives it: ties
+// (values drawn from a few levels, -0 and +0 among them) at every length
+// around the block of four.
+TEST(ProfileTest, FirstMaxIndexEqualsTheLibrarysMaxElement) {
+  std::mt19937 rng(9);
+  const double levels[] = {-3.0, -0.0, 0.0, 1.5, 2.0};
+  std::uniform_int_distribution<int> pick(0, 4);
+  for (int n = 1; n <= 23; ++n) {
+    for (int trial = 0; trial < 50; ++trial) {
+      std::vector<double> v(n);
+      for (double& x : v) x = levels[pick(rng)];
+      const int want = static_cast<int>(std::max_element(v.begin(), v.end()) - v.begin());
+      ASSERT_EQ(internal::FirstMaxIndex(v.data(), n), want) << "n " << n << " trial " << trial;
     }
   }
 }

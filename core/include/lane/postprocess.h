@@ -283,6 +283,12 @@ inline double QuantizedSigma(double sigma) { return std::round(sigma * kSigmaSte
 template <typename T>
 void SmoothProfile(const std::vector<T>& in, double sigma, std::vector<double>& out);
 
+namespace internal {
+// std::max_element(s, s + n) - s for n >= 1 values that are not NaN: the
+// first index of the largest.
+int FirstMaxIndex(const double* s, int n);
+}  // namespace internal
+
 // Offset (along the normal, pixels) of the strongest peak of the smoothed
 // profile and its contrast over the profile's mean. nullopt if flat.
 struct ProfilePeak {
