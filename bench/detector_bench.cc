@@ -543,34 +543,33 @@ void BM_DecodeFullGray(benchmark::State& state) {
   }
 }
 
+// The timed loop of the region decodes: `region` of the set's frames in turn.
+void TimeRegionDecode(benchmark::State& state, const DecodeSet& set,
+                      const lane::decode::DecodeRegion& region) {
+  const lane::decode::DecodeOptions options = DecodeOptionsFor(set);
+  size_t i = 0;
+  for (auto _ : state) {
+    auto decoded =
+        lane::decode::DecodeImageRegion(set.jpegs[i++ % set.jpegs.size()], options, region);
+    if (!decoded.ok()) state.SkipWithError(std::string(decoded.status().message()).c_str());
+    benchmark::DoNotOptimize(decoded);
+  }
+}
+
 // The region and channel the detector reads.
 void BM_DecodeRegion(benchmark::State& state) {
   DecodeSet* set = GetDecodeSet(static_cast<int>(state.range(0)));
   if (SkipDecode(state, set)) return;
-  const lane::decode::DecodeOptions options = DecodeOptionsFor(*set);
-  size_t i = 0;
-  for (auto _ : state) {
-    auto region =
-        lane::decode::DecodeImageRegion(set->jpegs[i++ % set->jpegs.size()], options, set->region);
-    if (!region.ok()) state.SkipWithError(std::string(region.status().message()).c_str());
-    benchmark::DoNotOptimize(region);
-  }
+  TimeRegionDecode(state, *set, set->region);
 }
 
 // The same region, BGR: what the channel choice is worth.
 void BM_DecodeRegionBgr(benchmark::State& state) {
   DecodeSet* set = GetDecodeSet(static_cast<int>(state.range(0)));
   if (SkipDecode(state, set)) return;
-  const lane::decode::DecodeOptions options = DecodeOptionsFor(*set);
   lane::decode::DecodeRegion region = set->region;
   region.output = lane::decode::DecodeRegion::Output::kBgr;
-  size_t i = 0;
-  for (auto _ : state) {
-    auto decoded =
-        lane::decode::DecodeImageRegion(set->jpegs[i++ % set->jpegs.size()], options, region);
-    if (!decoded.ok()) state.SkipWithError(std::string(decoded.status().message()).c_str());
-    benchmark::DoNotOptimize(decoded);
-  }
+  TimeRegionDecode(state, *set, region);
 }
 
 // The floor of any region decode: only the frame's last 16 rows, grey. A
@@ -582,17 +581,10 @@ void BM_DecodeRegionBgr(benchmark::State& state) {
 void BM_DecodeFloor(benchmark::State& state) {
   DecodeSet* set = GetDecodeSet(static_cast<int>(state.range(0)));
   if (SkipDecode(state, set)) return;
-  const lane::decode::DecodeOptions options = DecodeOptionsFor(*set);
   lane::decode::DecodeRegion region;
   region.top = set->size.height - 16;
   region.output = lane::decode::DecodeRegion::Output::kGray;
-  size_t i = 0;
-  for (auto _ : state) {
-    auto decoded =
-        lane::decode::DecodeImageRegion(set->jpegs[i++ % set->jpegs.size()], options, region);
-    if (!decoded.ok()) state.SkipWithError(std::string(decoded.status().message()).c_str());
-    benchmark::DoNotOptimize(decoded);
-  }
+  TimeRegionDecode(state, *set, region);
 }
 
 // For reference: OpenCV's decode of the whole frame (the same libjpeg-turbo).
