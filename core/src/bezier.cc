@@ -122,12 +122,13 @@ std::optional<Bezier> FitBezier(const std::vector<Eigen::Vector2d>& pts) {
     // least-squares solution as the pseudo-inverse, at a twentieth of the
     // cost of the complete orthogonal decomposition (this runs a few
     // thousand times per frame, once for every refit). Cholesky's pivots
-    // (the squared diagonal of L) bound the conditioning; below 1e-12 of the
-    // largest, the matrix is treated as singular and the pseudo-inverse
-    // gives the minimum-norm solution instead.
+    // (the squares of L's diagonal) bound the conditioning; when the
+    // smallest is below 1e-12 of the largest (L's diagonal below 1e-6), the
+    // matrix is treated as singular and the pseudo-inverse gives the
+    // minimum-norm solution instead.
     const Eigen::LLT<Eigen::Matrix4d> llt(ata);
-    const Eigen::Vector4d pivots = llt.matrixLLT().diagonal();
-    if (llt.info() == Eigen::Success && pivots.minCoeff() > 1e-6 * pivots.maxCoeff()) {
+    const Eigen::Vector4d l_diagonal = llt.matrixLLT().diagonal();
+    if (llt.info() == Eigen::Success && l_diagonal.minCoeff() > 1e-6 * l_diagonal.maxCoeff()) {
       cp = llt.solve(atq);
     } else {
       cp = ata.completeOrthogonalDecomposition().pseudoInverse() * atq;
