@@ -158,12 +158,19 @@ struct InprocessResult {
   int workers = 0;
   double fps = 0;
   uint64_t frames = 0;
-  LatencySummary latency_ms;  // decode + detect of one frame
+  // The session tracks its streams, so the reference tracked as the server
+  // does (the predicted lanes searched, colours and types read, the tracker
+  // updated), and `tracked_frames` of the measured frames went through a
+  // tracker (all of them, unless a frame failed).
+  bool tracked = false;
+  uint64_t tracked_frames = 0;
+  LatencySummary latency_ms;  // decode + detect (+ tracking) of one frame
 };
 
 // The service's work without gRPC: `workers` threads decode (the server's
 // lane::wire::DecodeFrame) and detect the same frames with a detector built
-// from `session`, for warm-up + duration.
+// from `session`, for warm-up + duration; if the session tracks its streams,
+// each thread also tracks its frames as the server does.
 absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& frames,
                                              const lane::v1::SessionConfig& session, int workers,
                                              absl::Duration warmup, absl::Duration duration,

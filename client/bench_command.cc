@@ -354,8 +354,9 @@ void AddTargetOptions(CLI::App* app, BenchFlags* flags) {
 void AddReportOptions(CLI::App* app, BenchFlags* flags) {
   const std::string group = "Reference and report";
   app->add_flag("--inprocess", flags->inprocess,
-                "also run the same decode + detect on the same frames without gRPC, on the "
-                "server's number of workers, and report service / in-process throughput")
+                "also run the same decode + detect (and tracking, if the session tracks) on the "
+                "same frames without gRPC, on the server's number of workers, and report "
+                "service / in-process throughput")
       ->group(group);
   lane_tools::AddOptional(app, "--workers", &flags->workers, "worker threads of the in-process run")
       ->type_name("W")

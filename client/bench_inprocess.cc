@@ -12,6 +12,7 @@
 #include "absl/strings/str_cat.h"
 #include "bench.h"
 #include "lane/detector.h"
+#include "lane/tracking.h"
 #include "wire/config_proto.h"
 #include "wire/frame_decoder.h"
 
@@ -42,6 +43,12 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
   // As the service decodes the session's frames: what its detector reads,
   // unless the session asks for whole frames.
   const lane::FrameNeeds* needs = session.decode().full_decode() ? nullptr : &detector->Needs();
+  // A stream of a tracked session (the default) also searches the tracker's
+  // predicted lanes, reads each lane's colour and type and updates the
+  // tracker (server/frame_processor.cc): the reference does the same work,
+  // with a tracker per worker, so the ratio measures the service's overhead
+  // and not tracking.
+  const bool tracked = !session.tracking().disabled();
 
   workers = std::max(1, workers);
   const Clock::time_point start = Clock::now();
@@ -49,6 +56,7 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
   const Clock::time_point end = measure_start + absl::ToChronoNanoseconds(duration);
   std::atomic<size_t> next{0};
   std::atomic<uint64_t> done_frames{0};
+  std::atomic<uint64_t> tracked_frames{0};
   std::mutex mu;
   std::vector<double> latency;
   std::string failure;
@@ -56,13 +64,27 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
   for (int w = 0; w < workers; ++w) {
     threads.emplace_back([&] {
       std::vector<double> own;
+      lane::SequenceTracker tracker(config->camera);
       while (true) {
         const Clock::time_point t0 = Clock::now();
         if (t0 >= end) break;
         const BenchFrame& frame = frames[next.fetch_add(1) % frames.size()];
         absl::StatusOr<cv::Mat> image = lane::wire::DecodeFrame(frame.request, decode, needs);
         absl::Status status = image.status();
-        if (image.ok()) status = detector->Detect(*image).status();
+        if (image.ok()) {
+          lane::DetectionPrior prior;
+          if (tracked) prior = tracker.Prior(detector->ipm());
+          absl::StatusOr<lane::Detection> detection =
+              detector->Detect(*image, tracked ? &prior : nullptr);
+          status = detection.status();
+          if (detection.ok() && tracked) {
+            const lane::FrameNeeds& read = detector->Needs();
+            lane::ReadMarkings(*image, detector->ipm().camera(), detection->lanes, read.top,
+                               read.bottom);
+            tracker.Track(detection->lanes, std::nullopt, &detector->ipm());
+            if (t0 >= measure_start) tracked_frames.fetch_add(1, std::memory_order_relaxed);
+          }
+        }
         const Clock::time_point t1 = Clock::now();
         if (!status.ok()) {
           std::lock_guard<std::mutex> lock(mu);
@@ -102,6 +124,8 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
   InprocessResult result;
   result.workers = workers;
   result.frames = latency.size();
+  result.tracked = tracked;
+  result.tracked_frames = tracked_frames.load();
   result.fps = static_cast<double>(result.frames) / absl::ToDoubleSeconds(duration);
   result.latency_ms = Summarize(latency);
   return result;

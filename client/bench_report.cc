@@ -228,6 +228,8 @@ std::string JsonReport(const Report& r) {
     x["workers"] = r.inprocess->workers;
     x["fps"] = Round3(r.inprocess->fps);
     x["frames"] = r.inprocess->frames;
+    x["tracked"] = r.inprocess->tracked;
+    x["tracked_frames"] = r.inprocess->tracked_frames;
     x["latency_ms"] = LatencyJson(r.inprocess->latency_ms);
     j["inprocess"] = std::move(x);
   } else {
@@ -342,9 +344,9 @@ std::string TextReport(const Report& r) {
   }
   if (r.inprocess) {
     out << absl::StrFormat(
-        "in-process: %d workers, %.1f frames/s, decode+detect p50 %.2f ms p99 %.2f ms\n",
-        r.inprocess->workers, r.inprocess->fps, r.inprocess->latency_ms.p50,
-        r.inprocess->latency_ms.p99);
+        "in-process: %d workers, %.1f frames/s, decode+detect%s p50 %.2f ms p99 %.2f ms\n",
+        r.inprocess->workers, r.inprocess->fps, r.inprocess->tracked ? "+track" : "",
+        r.inprocess->latency_ms.p50, r.inprocess->latency_ms.p99);
   }
   if (r.slo_p99_ms) {
     out << absl::StrFormat("SLO p99 <= %g ms: %s\n", *r.slo_p99_ms,

@@ -30,6 +30,7 @@
 #include "lane/synthetic.h"
 #include "server.h"
 #include "test_ca.h"
+#include "wire/config_proto.h"
 
 namespace lane_client {
 namespace {
@@ -178,6 +179,27 @@ TEST(ClientUnitTest, HeaderAndImagePartMakeOneRequest) {
   EXPECT_EQ(parsed.frame_id(), 42u);
   EXPECT_EQ(parsed.capture_time_unix_ns(), 7);
   EXPECT_EQ(parsed.encoded(), frames->front().request.encoded());
+}
+
+// The in-process reference does the session's work: with tracking (the
+// default) each measured frame goes through a tracker, without it none does.
+TEST(ClientUnitTest, InprocessReferenceTracksLikeTheSession) {
+  lane::CameraModel camera;
+  const auto frames = SyntheticBenchFrames(camera, 2, /*raw=*/false, 90);
+  ASSERT_TRUE(frames.ok()) << frames.status();
+  lane::Config config;
+  config.camera = camera;
+  v1::SessionConfig session;
+  lane::wire::ConfigToProto(config, &session);
+  for (const bool disabled : {false, true}) {
+    session.mutable_tracking()->set_disabled(disabled);
+    const absl::StatusOr<InprocessResult> result =
+        RunInprocess(*frames, session, 1, absl::ZeroDuration(), absl::Milliseconds(300), nullptr);
+    ASSERT_TRUE(result.ok()) << result.status();
+    EXPECT_GT(result->frames, 0u);
+    EXPECT_EQ(result->tracked, !disabled);
+    EXPECT_EQ(result->tracked_frames, disabled ? 0u : result->frames);
+  }
 }
 
 TEST_F(ClientTest, StreamWritesOneResultPerFrameInOrder) {
@@ -445,6 +467,10 @@ TEST_F(ClientTest, BenchClosedLoopJsonReport) {
   EXPECT_NE(html.find("</html>"), std::string::npos);
   EXPECT_EQ(report["inprocess"]["workers"], 2);  // the server's, from GetServerInfo
   EXPECT_GT(report["inprocess"]["fps"].get<double>(), 0);
+  // The bench's sessions track their streams (the default), so the reference
+  // tracked every measured frame as the server did.
+  EXPECT_EQ(report["inprocess"]["tracked"], true);
+  EXPECT_EQ(report["inprocess"]["tracked_frames"], report["inprocess"]["frames"]);
   EXPECT_GT(run["service_vs_inprocess"].get<double>(), 0);
   EXPECT_EQ(run["slo_met"], true);
   EXPECT_EQ(report["slo_met"], true);
