@@ -165,7 +165,21 @@ struct InprocessResult {
   bool tracked = false;
   uint64_t tracked_frames = 0;
   LatencySummary latency_ms;  // decode + detect (+ tracking) of one frame
+  // `lane-client bench --inprocess` runs the reference in two halves, one
+  // before the service runs and one after, and `fps` is their combined
+  // figure: a machine whose speed drifts during the bench (a shared VM)
+  // then biases the ratio less. The two halves' own figures (0 when the
+  // reference ran once):
+  double fps_before = 0;
+  double fps_after = 0;
+  std::vector<double> latency_samples;  // what latency_ms summarizes
 };
+
+// `a` and `b`, two halves of one reference, as one: frames added, fps over
+// both durations, latency over both halves' samples; fps_before/after are
+// a's and b's.
+InprocessResult CombineInprocess(InprocessResult a, InprocessResult b, absl::Duration a_duration,
+                                 absl::Duration b_duration);
 
 // The service's work without gRPC: `workers` threads decode (the server's
 // lane::wire::DecodeFrame) and detect the same frames with a detector built

@@ -171,10 +171,12 @@ absl::StatusOr<v1::ServerInfo> FetchServerInfo(const LoadSpec& spec) {
   return info;
 }
 
-// --inprocess: the reference run, on --workers threads or the server's.
-absl::Status RunReference(const BenchFlags& flags, const LoadSpec& spec,
-                          const absl::StatusOr<v1::ServerInfo>& server_info, ProgressLine& progress,
-                          Report* report) {
+// --inprocess: one half of the reference run (`duration`), on --workers
+// threads or the server's.
+absl::StatusOr<InprocessResult> RunReference(const BenchFlags& flags, const LoadSpec& spec,
+                                             const absl::StatusOr<v1::ServerInfo>& server_info,
+                                             absl::Duration duration, const char* phase,
+                                             ProgressLine& progress) {
   int threads = flags.workers.value_or(0);
   if (threads == 0) {
     if (!server_info.ok()) {
@@ -185,12 +187,10 @@ absl::Status RunReference(const BenchFlags& flags, const LoadSpec& spec,
     threads = static_cast<int>(server_info->limits().workers());
   }
   if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  absl::StatusOr<InprocessResult> inprocess = RunInprocess(
-      *spec.frames, spec.session, threads, spec.warmup, spec.duration, progress.fn("in-process"));
+  absl::StatusOr<InprocessResult> inprocess =
+      RunInprocess(*spec.frames, spec.session, threads, spec.warmup, duration, progress.fn(phase));
   progress.Clear();
-  if (!inprocess.ok()) return inprocess.status();
-  report->inprocess = *inprocess;
-  return absl::OkStatus();
+  return inprocess;
 }
 
 // One run per camera count of `sweep`; the sessions are deleted at the end
@@ -260,13 +260,26 @@ int RunBench(const CLI::App& app, const BenchFlags& flags) {
   const absl::StatusOr<v1::ServerInfo> server_info = FetchServerInfo(spec);
   Report report = MakeReport(flags, spec, *targets, server_info);
   ProgressLine progress;
+  // The reference brackets the service runs: half of --duration before them,
+  // half after (each after its own warm-up), so that a machine whose speed
+  // drifts during the bench biases service / in-process less.
+  const absl::Duration before = spec.duration / 2;
+  const absl::Duration after = spec.duration - before;
+  std::optional<InprocessResult> first_half;
   if (flags.inprocess) {
-    if (const absl::Status s = RunReference(flags, spec, server_info, progress, &report); !s.ok()) {
-      return Failure("bench", std::string(s.message()));
-    }
+    absl::StatusOr<InprocessResult> half =
+        RunReference(flags, spec, server_info, before, "in-process (1/2)", progress);
+    if (!half.ok()) return Failure("bench", std::string(half.status().message()));
+    first_half = *std::move(half);
   }
   if (const absl::Status s = RunSweep(flags, sweep, spec, progress, &report); !s.ok()) {
     return Failure("bench", std::string(s.message()));
+  }
+  if (first_half) {
+    absl::StatusOr<InprocessResult> half =
+        RunReference(flags, spec, server_info, after, "in-process (2/2)", progress);
+    if (!half.ok()) return Failure("bench", std::string(half.status().message()));
+    report.inprocess = CombineInprocess(*std::move(first_half), *std::move(half), before, after);
   }
   return WriteReport(flags, report);
 }
@@ -355,8 +368,9 @@ void AddReportOptions(CLI::App* app, BenchFlags* flags) {
   const std::string group = "Reference and report";
   app->add_flag("--inprocess", flags->inprocess,
                 "also run the same decode + detect (and tracking, if the session tracks) on the "
-                "same frames without gRPC, on the server's number of workers, and report "
-                "service / in-process throughput")
+                "same frames without gRPC, on the server's number of workers, half of the "
+                "duration before the service runs and half after, and report service / "
+                "in-process throughput")
       ->group(group);
   lane_tools::AddOptional(app, "--workers", &flags->workers, "worker threads of the in-process run")
       ->type_name("W")

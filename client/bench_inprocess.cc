@@ -128,7 +128,25 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
   result.tracked_frames = tracked_frames.load();
   result.fps = static_cast<double>(result.frames) / absl::ToDoubleSeconds(duration);
   result.latency_ms = Summarize(latency);
+  result.latency_samples = std::move(latency);
   return result;
+}
+
+InprocessResult CombineInprocess(InprocessResult a, InprocessResult b, absl::Duration a_duration,
+                                 absl::Duration b_duration) {
+  InprocessResult out;
+  out.workers = a.workers;
+  out.frames = a.frames + b.frames;
+  out.fps = static_cast<double>(out.frames) / absl::ToDoubleSeconds(a_duration + b_duration);
+  out.tracked = a.tracked;
+  out.tracked_frames = a.tracked_frames + b.tracked_frames;
+  out.fps_before = a.fps;
+  out.fps_after = b.fps;
+  out.latency_samples = std::move(a.latency_samples);
+  out.latency_samples.insert(out.latency_samples.end(), b.latency_samples.begin(),
+                             b.latency_samples.end());
+  out.latency_ms = Summarize(out.latency_samples);
+  return out;
 }
 
 }  // namespace lane_client

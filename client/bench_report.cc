@@ -108,6 +108,17 @@ std::vector<std::string> Warnings(const Report& r, const LoadResult& run) {
         "service, so the machine was busy with other work during one of them",
         *ratio * 100));
   }
+  if (r.inprocess && r.inprocess->fps_before > 0 && r.inprocess->fps_after > 0) {
+    const double lo = std::min(r.inprocess->fps_before, r.inprocess->fps_after);
+    const double hi = std::max(r.inprocess->fps_before, r.inprocess->fps_after);
+    if (hi > 1.25 * lo) {
+      out.push_back(absl::StrFormat(
+          "the in-process reference ran at %.1f frames/s before the service and %.1f after: the "
+          "machine's speed changed during the bench, and service/in-process is uncertain by as "
+          "much",
+          r.inprocess->fps_before, r.inprocess->fps_after));
+    }
+  }
   // Full intervals with answers (the last one also holds the drain).
   std::vector<const TimelinePoint*> full;
   for (size_t i = 0; i + 1 < run.timeline.size(); ++i) {
@@ -230,6 +241,8 @@ std::string JsonReport(const Report& r) {
     x["frames"] = r.inprocess->frames;
     x["tracked"] = r.inprocess->tracked;
     x["tracked_frames"] = r.inprocess->tracked_frames;
+    x["fps_before"] = Round3(r.inprocess->fps_before);
+    x["fps_after"] = Round3(r.inprocess->fps_after);
     x["latency_ms"] = LatencyJson(r.inprocess->latency_ms);
     j["inprocess"] = std::move(x);
   } else {
@@ -344,9 +357,11 @@ std::string TextReport(const Report& r) {
   }
   if (r.inprocess) {
     out << absl::StrFormat(
-        "in-process: %d workers, %.1f frames/s, decode+detect%s p50 %.2f ms p99 %.2f ms\n",
-        r.inprocess->workers, r.inprocess->fps, r.inprocess->tracked ? "+track" : "",
-        r.inprocess->latency_ms.p50, r.inprocess->latency_ms.p99);
+        "in-process: %d workers, %.1f frames/s (%.1f before the service, %.1f after), "
+        "decode+detect%s p50 %.2f ms p99 %.2f ms\n",
+        r.inprocess->workers, r.inprocess->fps, r.inprocess->fps_before, r.inprocess->fps_after,
+        r.inprocess->tracked ? "+track" : "", r.inprocess->latency_ms.p50,
+        r.inprocess->latency_ms.p99);
   }
   if (r.slo_p99_ms) {
     out << absl::StrFormat("SLO p99 <= %g ms: %s\n", *r.slo_p99_ms,

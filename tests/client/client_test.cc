@@ -471,6 +471,9 @@ TEST_F(ClientTest, BenchClosedLoopJsonReport) {
   // tracked every measured frame as the server did.
   EXPECT_EQ(report["inprocess"]["tracked"], true);
   EXPECT_EQ(report["inprocess"]["tracked_frames"], report["inprocess"]["frames"]);
+  // It ran in two halves, before and after the service.
+  EXPECT_GT(report["inprocess"]["fps_before"].get<double>(), 0);
+  EXPECT_GT(report["inprocess"]["fps_after"].get<double>(), 0);
   EXPECT_GT(run["service_vs_inprocess"].get<double>(), 0);
   EXPECT_EQ(run["slo_met"], true);
   EXPECT_EQ(report["slo_met"], true);
@@ -570,6 +573,44 @@ TEST(BenchReportTest, WarningsSayWhyFiguresMayNotBeTrusted) {
   run.latency_ms.count = 200;
   ASSERT_EQ(Warnings(report, run).size(), 1u);
   EXPECT_NE(Warnings(report, run)[0].find("200 frames measured"), std::string::npos);
+  run.latency_ms.count = 5000;
+  // The reference's two halves: within 1.25x of each other no warning, past
+  // it one that gives both figures.
+  report.inprocess->fps_before = 1000;
+  report.inprocess->fps_after = 1240;
+  EXPECT_TRUE(Warnings(report, run).empty());
+  report.inprocess->fps_after = 1260;
+  ASSERT_EQ(Warnings(report, run).size(), 1u);
+  EXPECT_NE(Warnings(report, run)[0].find("1000.0 frames/s before the service and 1260.0 after"),
+            std::string::npos);
+}
+
+// The reference's halves make one figure: frames and samples added, frames/s
+// over both durations.
+TEST(BenchReportTest, InprocessHalvesCombine) {
+  InprocessResult a;
+  a.workers = 2;
+  a.frames = 300;
+  a.fps = 100;
+  a.tracked = true;
+  a.tracked_frames = 300;
+  a.latency_samples = {1, 2, 3};
+  InprocessResult b = a;
+  b.frames = 100;
+  b.fps = 50;
+  b.tracked_frames = 100;
+  b.latency_samples = {10};
+  const InprocessResult c = CombineInprocess(a, b, absl::Seconds(3), absl::Seconds(2));
+  EXPECT_EQ(c.workers, 2);
+  EXPECT_EQ(c.frames, 400u);
+  EXPECT_DOUBLE_EQ(c.fps, 80);  // 400 frames in 5 s, not the mean of 100 and 50
+  EXPECT_EQ(c.fps_before, 100);
+  EXPECT_EQ(c.fps_after, 50);
+  EXPECT_TRUE(c.tracked);
+  EXPECT_EQ(c.tracked_frames, 400u);
+  EXPECT_EQ(c.latency_ms.count, 4u);
+  EXPECT_EQ(c.latency_ms.max, 10);
+  EXPECT_EQ(c.latency_ms.p50, 2);
 }
 
 // A comma list of targets: camera i goes to target i mod 2.
