@@ -27,11 +27,9 @@ inline std::shared_ptr<const lane::server::Session> SyntheticSession() {
   static lane::server::SessionRegistry* registry =
       new lane::server::SessionRegistry(lane::server::SessionRegistry::Options());
   static std::shared_ptr<const lane::server::Session> session = [] {
-    auto created =
-        registry->Create("fuzz",
-                         lane::server::SessionSpec{SyntheticConfig(), lane::server::StreamPolicy{},
-                                                   lane::server::DecodePolicy{}},
-                         false);
+    lane::server::SessionSpec spec;
+    spec.config = SyntheticConfig();
+    auto created = registry->Create("fuzz", spec, false);
     if (!created.ok()) std::abort();
     return created->session;
   }();

@@ -125,7 +125,6 @@ TEST(ImageExtensionTest, LocalisationMovesASplineOntoTheMarking) {
 }
 
 TEST(ImageExtensionTest, ClipsToTheImageAndItsContent) {
-  const CameraModel cam;
   cv::Mat frame(480, 640, CV_8UC1, cv::Scalar(100));
   frame.colRange(0, 100).setTo(0);  // black, as outside a lens circle
   const Bezier s = Bezier::Line({50, 300}, {400, 300});
