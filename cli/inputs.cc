@@ -208,8 +208,8 @@ void FrameReader::ReadImage(const InputEntry& entry, InputFrame* frame) const {
       options.width = width_;
       options.height = height_;
       options.max_pixels = int64_t{width_} * height_;
-      options.deadline = absl::InfiniteDuration();  // a file on disk, not a client
-      options.accept_damaged = true;                // as cv::imread does
+      options.cpu_budget = absl::InfiniteDuration();  // a file on disk, not a client
+      options.accept_damaged = true;                  // as cv::imread does
       absl::StatusOr<cv::Mat> decoded = lane::decode::DecodeForDetector(bytes, options, *needs_);
       frame->decode_ms = MillisecondsSince(start);
       if (decoded.ok()) {

@@ -54,7 +54,7 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
   decode.height = session.config.camera.image_height;
   decode.max_pixels = limits.max_frame_pixels;
   decode.accept_damaged = session.decode.accept_damaged_frames;
-  decode.deadline = limits.decode_deadline;
+  decode.cpu_budget = limits.decode_cpu_budget;
 
   absl::Status status;
   try {

@@ -35,10 +35,10 @@ void StartResponse(const v1::FrameRequest& request, const std::string& camera_id
 struct FrameLimits {
   // Largest frame accepted, width * height (checked on the header).
   int64_t max_frame_pixels = int64_t{3840} * 2160;
-  // Wall-clock budget of one frame's decode (lane::decode::DecodeOptions):
-  // beyond it the frame is FRAME_CODE_RESOURCE_EXHAUSTED and the worker is
-  // free again.
-  absl::Duration decode_deadline = absl::Milliseconds(500);
+  // CPU-time budget of one frame's decode (lane::decode::DecodeOptions::
+  // cpu_budget, the worker thread's own CPU time): beyond it the frame is
+  // FRAME_CODE_RESOURCE_EXHAUSTED and the worker is free again.
+  absl::Duration decode_cpu_budget = absl::Milliseconds(500);
 };
 
 // Decodes and detects `request`'s frame with the session's detector and fills

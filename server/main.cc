@@ -44,10 +44,14 @@ ABSL_FLAG(absl::Duration, session_ttl, absl::Hours(1),
           "Idle sessions are evicted after this long; 'inf' = never.");
 ABSL_FLAG(int64_t, max_frame_pixels, int64_t{3840} * 2160,
           "Largest frame accepted, width * height (checked before decoding).");
-ABSL_FLAG(absl::Duration, decode_deadline, absl::Milliseconds(500),
-          "Wall-clock budget of one frame's decode; beyond it the frame gets "
-          "FRAME_CODE_RESOURCE_EXHAUSTED and the worker is free again (a noisy 4K progressive "
-          "JPEG takes about 300 ms on a loaded 2-core machine).");
+ABSL_FLAG(absl::Duration, decode_cpu_budget, absl::Milliseconds(500),
+          "CPU time one frame's decode may use (the worker thread's own CPU time: waiting for a "
+          "core does not count, so a busy server never refuses a valid frame); beyond it the "
+          "frame gets FRAME_CODE_RESOURCE_EXHAUSTED and the worker is free again (a noisy 4K "
+          "progressive JPEG takes about 300 ms).");
+ABSL_FLAG(absl::Duration, decode_deadline, absl::ZeroDuration(),
+          "Old name of --decode_cpu_budget, kept as an alias: when set (not 0) it is used in "
+          "its place. It is CPU time now, no longer wall-clock time.");
 ABSL_FLAG(int, max_receive_message_bytes, 32 * 1024 * 1024,
           "gRPC maximum receive message size, bytes (a raw 1920x1080 BGR frame is 6220800, a "
           "3840x2160 one 24883200). Sessions whose camera's raw frame cannot fit are refused.");
@@ -172,6 +176,12 @@ void GrpcLogToJson(gpr_log_func_args* args) {
                         {{"file", args->file != nullptr ? args->file : ""}, {"line", args->line}});
 }
 
+// --decode_cpu_budget, or its old name --decode_deadline when that is set.
+absl::Duration DecodeCpuBudgetFlag() {
+  const absl::Duration old_name = absl::GetFlag(FLAGS_decode_deadline);
+  return old_name != absl::ZeroDuration() ? old_name : absl::GetFlag(FLAGS_decode_cpu_budget);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -239,7 +249,7 @@ int main(int argc, char** argv) {
   options.max_sessions = static_cast<size_t>(std::max(1, absl::GetFlag(FLAGS_max_sessions)));
   options.session_ttl = absl::GetFlag(FLAGS_session_ttl);
   options.max_frame_pixels = absl::GetFlag(FLAGS_max_frame_pixels);
-  options.decode_deadline = absl::GetFlag(FLAGS_decode_deadline);
+  options.decode_cpu_budget = DecodeCpuBudgetFlag();
   options.max_receive_message_bytes = absl::GetFlag(FLAGS_max_receive_message_bytes);
   options.max_session_memory_bytes =
       static_cast<uint64_t>(std::max<int64_t>(0, absl::GetFlag(FLAGS_max_session_memory_mib))) *

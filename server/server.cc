@@ -126,7 +126,7 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
 
   ServiceOptions service_options;
   service_options.frame_limits.max_frame_pixels = options.max_frame_pixels;
-  service_options.frame_limits.decode_deadline = options.decode_deadline;
+  service_options.frame_limits.decode_cpu_budget = options.decode_cpu_budget;
   service_options.max_receive_message_bytes =
       static_cast<uint64_t>(std::max(0, options.max_receive_message_bytes));
   service_options.auth_tokens = options.auth_tokens;

@@ -44,9 +44,10 @@ struct ServerOptions {
   absl::Duration session_ttl = absl::Hours(1);
   // Largest frame, width * height.
   int64_t max_frame_pixels = int64_t{3840} * 2160;
-  // Wall-clock budget of one frame's decode; beyond it the frame is
-  // FRAME_CODE_RESOURCE_EXHAUSTED (a backstop behind the decoder's limits).
-  absl::Duration decode_deadline = absl::Milliseconds(500);
+  // CPU-time budget of one frame's decode (the decoding thread's own CPU
+  // time, not waiting); beyond it the frame is FRAME_CODE_RESOURCE_EXHAUSTED
+  // (a backstop behind the decoder's limits).
+  absl::Duration decode_cpu_budget = absl::Milliseconds(500);
   // 32 MiB: room for a raw BGR frame of max_frame_pixels (3840x2160 is
   // 24.9 MB). Sessions whose camera's raw frame cannot fit are refused.
   int max_receive_message_bytes = 32 * 1024 * 1024;

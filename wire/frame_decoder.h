@@ -1,6 +1,6 @@
 // A frame request's image -> an image the detector accepts (CV_8UC3 BGR or
 // CV_8UC1): encoded frames through the bounded decoder (lane/decode: header
-// checks before decoding, a byte cap, a scan limit, a deadline, damaged data
+// checks before decoding, a byte cap, a scan limit, a CPU-time budget, damaged data
 // refused unless accepted), raw frames checked and wrapped without a copy.
 #ifndef LANE_WIRE_FRAME_DECODER_H_
 #define LANE_WIRE_FRAME_DECODER_H_
@@ -22,7 +22,7 @@ using decode::ReadEncodedHeader;
 // The frame of `request` (its `encoded` or `raw` image) as CV_8UC3 BGR or
 // CV_8UC1 of exactly options.width x options.height. INVALID_ARGUMENT for
 // every bad frame, with a message saying what is wrong; RESOURCE_EXHAUSTED
-// when decoding passes options.deadline.
+// when decoding uses more than options.cpu_budget of the thread's CPU time.
 //
 // A raw BGR8 or GRAY8 frame is not copied: the returned Mat points into
 // `request`, which must outlive it.

@@ -10,6 +10,7 @@
 #include "absl/status/status.h"
 #include "absl/strings/string_view.h"
 #include "absl/time/time.h"
+#include "cpu_budget.h"
 
 namespace lane::decode::internal {
 
@@ -23,8 +24,7 @@ struct CodecRequest {
   Output output = Output::kBgr;
   bool accept_damaged = false;
   int max_progressive_scans = 0;
-  absl::Time deadline;    // absolute
-  absl::Duration budget;  // the option, for the message
+  CpuBudget* budget = nullptr;  // the decode's CPU time; checked as it goes
 
   // The region, in the coordinates of the output (the frame scaled by
   // 1/scale_denom, each side rounded up), already checked: 0 <= top < bottom
@@ -49,8 +49,8 @@ absl::Status DecodePng(const CodecRequest& request, cv::Mat& out, cv::Rect& deco
 // that every message stays under 200 characters.
 inline constexpr size_t kMaxLibraryMessage = 120;
 
-// The status for an exceeded deadline.
-absl::Status DeadlineExceeded(absl::string_view format, absl::Duration budget);
+// The status for a decode that used up its CPU budget.
+absl::Status BudgetExceeded(absl::string_view format, absl::Duration budget);
 
 }  // namespace lane::decode::internal
 

@@ -98,9 +98,9 @@ const char* FormatName(EncodedFormat format) {
 
 namespace internal {
 
-absl::Status DeadlineExceeded(absl::string_view format, absl::Duration budget) {
+absl::Status BudgetExceeded(absl::string_view format, absl::Duration budget) {
   return absl::ResourceExhaustedError(absl::StrCat("decoding the ", format,
-                                                   " frame took longer than its deadline of ",
+                                                   " frame used more than its CPU budget of ",
                                                    absl::FormatDuration(budget)));
 }
 
@@ -146,9 +146,9 @@ absl::Status DecodeOptions::Validate() const {
     return absl::InvalidArgumentError(absl::StrCat("DecodeOptions: max_progressive_scans ",
                                                    max_progressive_scans, " must be at least 1"));
   }
-  if (deadline <= absl::ZeroDuration()) {
+  if (cpu_budget <= absl::ZeroDuration()) {
     return absl::InvalidArgumentError(absl::StrCat(
-        "DecodeOptions: deadline ", absl::FormatDuration(deadline), " must be positive"));
+        "DecodeOptions: cpu_budget ", absl::FormatDuration(cpu_budget), " must be positive"));
   }
   return absl::OkStatus();
 }
@@ -196,7 +196,7 @@ absl::StatusOr<EncodedHeader> CheckedHeader(absl::string_view bytes, const Decod
 }
 
 internal::CodecRequest RequestFor(absl::string_view bytes, const EncodedHeader& header,
-                                  const DecodeOptions& options, absl::Time start) {
+                                  const DecodeOptions& options, internal::CpuBudget* budget) {
   internal::CodecRequest request;
   request.bytes = bytes;
   request.width = header.width;
@@ -204,8 +204,7 @@ internal::CodecRequest RequestFor(absl::string_view bytes, const EncodedHeader& 
   request.output = options.gray ? internal::Output::kGray : internal::Output::kBgr;
   request.accept_damaged = options.accept_damaged;
   request.max_progressive_scans = options.max_progressive_scans;
-  request.deadline = start + options.deadline;
-  request.budget = options.deadline;
+  request.budget = budget;
   request.scale_denom = 1;
   request.top = 0;
   request.bottom = header.height;
@@ -226,11 +225,11 @@ int CeilDiv(int a, int b) { return (a + b - 1) / b; }
 }  // namespace
 
 absl::StatusOr<cv::Mat> DecodeImage(absl::string_view bytes, const DecodeOptions& options) {
-  const absl::Time start = absl::Now();
+  internal::CpuBudget budget(options.cpu_budget);
   if (absl::Status s = options.Validate(); !s.ok()) return s;
   absl::StatusOr<EncodedHeader> header = CheckedHeader(bytes, options);
   if (!header.ok()) return header.status();
-  const internal::CodecRequest request = RequestFor(bytes, *header, options, start);
+  const internal::CodecRequest request = RequestFor(bytes, *header, options, &budget);
   cv::Mat image(header->height, header->width, options.gray ? CV_8UC1 : CV_8UC3);
   cv::Rect decoded;
   if (absl::Status s = RunCodec(*header, request, image, decoded); !s.ok()) return s;
@@ -262,7 +261,7 @@ absl::Status DecodeRegion::Validate() const {
 absl::StatusOr<DecodedRegion> DecodeImageRegion(absl::string_view bytes,
                                                 const DecodeOptions& options,
                                                 const DecodeRegion& region) {
-  const absl::Time start = absl::Now();
+  internal::CpuBudget budget(options.cpu_budget);
   if (absl::Status s = options.Validate(); !s.ok()) return s;
   if (absl::Status s = region.Validate(); !s.ok()) return s;
   if (options.gray && region.output != DecodeRegion::Output::kGray) {
@@ -282,7 +281,7 @@ absl::StatusOr<DecodedRegion> DecodeImageRegion(absl::string_view bytes,
   }
 
   const int s = region.scale_denom;
-  internal::CodecRequest request = RequestFor(bytes, *header, options, start);
+  internal::CodecRequest request = RequestFor(bytes, *header, options, &budget);
   switch (region.output) {
     case DecodeRegion::Output::kBgr:
       request.output = internal::Output::kBgr;

@@ -62,7 +62,7 @@ enum class Failure {
   kError,       // libjpeg's error_exit: message[] holds libjpeg's message
   kDamaged,     // a libjpeg warning and !accept_damaged: message[] likewise
   kScanLimit,   // more than max_scans scans
-  kDeadline,    // the deadline passed
+  kBudget,      // the CPU budget was used up
   kColorSpace,  // not grey, YCbCr or RGB (color_space holds it)
   kUnexpected,  // libjpeg's idea of the image differs from the header's
   kNoProgress,  // jpeg_read_scanlines returned no rows
@@ -95,7 +95,7 @@ struct JpegState {
   bool read_to_end;
   bool accept_damaged;
   int max_scans;
-  absl::Time deadline;
+  CpuBudget* budget;
   long max_memory;  // bytes, libjpeg's max_memory_to_use
 
   // Outcome.
@@ -135,8 +135,8 @@ void OnEmitMessage(j_common_ptr cinfo, int msg_level) {
 
 void OnOutputMessage(j_common_ptr /*cinfo*/) {}
 
-void CheckDeadline(JpegState* state) {
-  if (absl::Now() > state->deadline) Fail(state, Failure::kDeadline);
+void CheckBudget(JpegState* state) {
+  if (state->budget->Exceeded()) Fail(state, Failure::kBudget);
 }
 
 // Called before each iMCU row of each scan libjpeg consumes (progressive and
@@ -148,12 +148,12 @@ void OnProgress(j_common_ptr cinfo) {
   // input_scan_number counts the SOS markers read, so the first call after
   // scan max_scans + 1 has started refuses it before any of it is decoded.
   if (decompress->input_scan_number > state->max_scans) Fail(state, Failure::kScanLimit);
-  CheckDeadline(state);
+  CheckBudget(state);
 }
 
 // ---- Source: the data in memory, handed over in slices --------------------------
 //
-// As jpeg_mem_src, but kFeedBytes at a time, so that the deadline is checked
+// As jpeg_mem_src, but kFeedBytes at a time, so that the CPU budget is checked
 // as the data is consumed: jpeg_skip_scanlines entropy-decodes the rows it
 // skips without calling the progress monitor. The slices are large enough
 // that libjpeg-turbo's Huffman decoder rarely leaves its fast path, which
@@ -165,7 +165,7 @@ void OnTermSource(j_decompress_ptr /*cinfo*/) {}
 
 boolean OnFillInput(j_decompress_ptr cinfo) {
   JpegState* state = StateOf(reinterpret_cast<j_common_ptr>(cinfo));
-  CheckDeadline(state);
+  CheckBudget(state);
   if (state->fed < state->size) {
     const size_t count = std::min(kFeedBytes, state->size - state->fed);
     state->source.next_input_byte = state->data + state->fed;
@@ -314,7 +314,7 @@ void DecodeSteps(JpegState* state) {
   if (state->top > 0) {
     const auto skip = static_cast<JDIMENSION>(state->top);
     if (jpeg_skip_scanlines(cinfo, skip) != skip) Fail(state, Failure::kNoProgress);
-    CheckDeadline(state);
+    CheckBudget(state);
   }
   JSAMPROW rows[kRowsPerCall];
   while (static_cast<int>(cinfo->output_scanline) < state->bottom) {
@@ -394,7 +394,7 @@ absl::Status DecodeJpeg(const CodecRequest& request, cv::Mat& out, cv::Rect& dec
   state.read_to_end = request.read_to_end;
   state.accept_damaged = request.accept_damaged;
   state.max_scans = request.max_progressive_scans;
-  state.deadline = request.deadline;
+  state.budget = request.budget;
   // A progressive (or other multi-scan) file keeps every DCT coefficient in
   // memory until its last scan: 2 bytes per sample, so at most 6 bytes per
   // pixel for three full-resolution components. 8 per pixel plus 16 MiB of
@@ -415,8 +415,8 @@ absl::Status DecodeJpeg(const CodecRequest& request, cv::Mat& out, cv::Rect& dec
       return absl::InvalidArgumentError(
           absl::StrCat("the JPEG frame has more than ", state.max_scans,
                        " scans, the scan limit (max_progressive_scans)"));
-    case Failure::kDeadline:
-      return DeadlineExceeded("JPEG", request.budget);
+    case Failure::kBudget:
+      return BudgetExceeded("JPEG", request.budget->budget());
     case Failure::kColorSpace:
       return absl::InvalidArgumentError(
           absl::StrCat("JPEG frames in libjpeg colour space ", state.color_space,

@@ -38,7 +38,7 @@ enum class Failure {
   kNone,
   kError,       // libpng's error: message[] holds libpng's message
   kDamaged,     // a libpng warning and !accept_damaged: message[] likewise
-  kDeadline,    // the deadline passed
+  kBudget,      // the CPU budget was used up
   kUnexpected,  // libpng's idea of the image differs from the header's
 };
 
@@ -58,7 +58,7 @@ struct PngState {
   int end_row;
   bool read_to_end;
   bool accept_damaged;
-  absl::Time deadline;
+  CpuBudget* budget;
 
   // Progress.
   bool interlaced;
@@ -73,7 +73,7 @@ struct PngState {
 static_assert(std::is_trivially_destructible_v<PngState>,
               "PngState is left by longjmp: no destructors");
 
-// Input is fed to libpng in slices of this size, the deadline checked
+// Input is fed to libpng in slices of this size, the CPU budget checked
 // between them (the rows' own checks do not see CRC-only skipping).
 constexpr size_t kFeedBytes = 64 << 10;
 // Largest non-IDAT chunk libpng accepts without a warning (so, unless
@@ -110,8 +110,8 @@ void OnWarning(png_structp png, png_const_charp message) {
   png_error(png, "");
 }
 
-void CheckDeadline(png_structp png, const PngState* state) {
-  if (absl::Now() > state->deadline) Fail(png, Failure::kDeadline);
+void CheckBudget(png_structp png, const PngState* state) {
+  if (state->budget->Exceeded()) Fail(png, Failure::kBudget);
 }
 
 // After the chunks before the first IDAT: the output transformations.
@@ -158,7 +158,7 @@ void OnInfo(png_structp png, png_infop info) {
 // final call.
 void OnRow(png_structp png, png_bytep new_row, png_uint_32 row, int pass) {
   PngState* state = StateOf(png);
-  CheckDeadline(png, state);
+  CheckBudget(png, state);
   if (row >= static_cast<png_uint_32>(state->height)) Fail(png, Failure::kUnexpected);
   const bool stored = row >= static_cast<png_uint_32>(state->first_row) &&
                       row < static_cast<png_uint_32>(state->end_row);
@@ -199,7 +199,7 @@ void DecodeSteps(PngState* state) {
     // libpng only reads the buffer; its API predates const.
     png_process_data(png, state->info, const_cast<png_bytep>(state->data + pos), count);
     pos += count;
-    CheckDeadline(png, state);
+    CheckBudget(png, state);
   }
 }
 
@@ -298,13 +298,13 @@ absl::Status DecodePng(const CodecRequest& request, cv::Mat& out, cv::Rect& deco
   state.end_row = end;
   state.read_to_end = request.read_to_end;
   state.accept_damaged = request.accept_damaged;
-  state.deadline = request.deadline;
+  state.budget = request.budget;
   if (!RunPng(&state)) {
     switch (state.failure) {
       case Failure::kDamaged:
         return absl::InvalidArgumentError(absl::StrCat("damaged PNG frame: ", state.message));
-      case Failure::kDeadline:
-        return DeadlineExceeded("PNG", request.budget);
+      case Failure::kBudget:
+        return BudgetExceeded("PNG", request.budget->budget());
       case Failure::kUnexpected:
         return absl::InvalidArgumentError("the PNG frame decoded to an unexpected image");
       case Failure::kError:

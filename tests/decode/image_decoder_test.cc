@@ -92,8 +92,8 @@ TEST(ImageDecoderTest, OptionsAreValidated) {
   bad.max_progressive_scans = 0;
   EXPECT_NE(bad.Validate().message().find("max_progressive_scans"), absl::string_view::npos);
   bad = For(640, 480);
-  bad.deadline = absl::ZeroDuration();
-  EXPECT_NE(bad.Validate().message().find("deadline"), absl::string_view::npos);
+  bad.cpu_budget = absl::ZeroDuration();
+  EXPECT_NE(bad.Validate().message().find("cpu_budget"), absl::string_view::npos);
   // DecodeImage refuses bad options before looking at the frame.
   EXPECT_EQ(DecodeImage(Jpeg(Frame(64, 48)), bad).status().code(),
             absl::StatusCode::kInvalidArgument);
@@ -331,9 +331,9 @@ TEST(ImageDecoderTest, RepeatedScanBombIsRefusedQuickly) {
       "(scan limit)\n",
       bomb.size(), CountScans(bomb), strict_ms, limited_ms);
 
-  // Without the limit the deadline is the backstop.
+  // Without the limit the CPU budget is the backstop.
   lenient.max_progressive_scans = 1 << 30;
-  lenient.deadline = absl::Milliseconds(100);
+  lenient.cpu_budget = absl::Milliseconds(100);
   start = Clock::now();
   absl::StatusOr<cv::Mat> timed_out = DecodeImage(bomb, lenient);
   const double timed_out_ms = MillisecondsSince(start);
@@ -362,7 +362,7 @@ TEST(ImageDecoderTest, ValidProgressionWithThousandsOfScansIsRefusedQuickly) {
   // a single warning, to what cv::imdecode gives.
   DecodeOptions generous = For(640, 480);
   generous.max_progressive_scans = 2090;
-  generous.deadline = absl::Seconds(30);
+  generous.cpu_budget = absl::Seconds(30);
   const Clock::time_point full_start = Clock::now();
   absl::StatusOr<cv::Mat> full = DecodeImage(jpeg, generous);
   const double full_ms = MillisecondsSince(full_start);
@@ -374,17 +374,17 @@ TEST(ImageDecoderTest, ValidProgressionWithThousandsOfScansIsRefusedQuickly) {
               jpeg.size(), refused_ms, full_ms);
 }
 
-// ---- The deadline --------------------------------------------------------------
+// ---- The CPU budget ------------------------------------------------------------
 
-TEST(ImageDecoderTest, DeadlineIsResourceExhausted) {
+TEST(ImageDecoderTest, CpuBudgetIsResourceExhausted) {
   const cv::Mat frame = Frame(1640, 590);
   DecodeOptions hurried = For(1640, 590);
-  hurried.deadline = absl::Nanoseconds(1);
+  hurried.cpu_budget = absl::Nanoseconds(1);
   for (const std::string& bytes :
        {Jpeg(frame, 95, false), Jpeg(frame, 95, true), Encode(frame, ".png")}) {
     absl::StatusOr<cv::Mat> image = DecodeImage(bytes, hurried);
     EXPECT_EQ(image.status().code(), absl::StatusCode::kResourceExhausted) << image.status();
-    EXPECT_NE(image.status().message().find("deadline of 1ns"), absl::string_view::npos)
+    EXPECT_NE(image.status().message().find("CPU budget of 1ns"), absl::string_view::npos)
         << image.status();
     EXPECT_TRUE(DecodeImage(bytes, For(1640, 590)).ok());
   }
@@ -592,7 +592,7 @@ TEST(ImageDecoderTest, PngBombIsCheap) {
     SCOPED_TRACE(accept_damaged ? "accept_damaged" : "strict");
     DecodeOptions options = For(640, 480);
     options.accept_damaged = accept_damaged;
-    options.deadline = absl::Seconds(30);  // the test is of the work, not the backstop
+    options.cpu_budget = absl::Seconds(30);  // the test is of the work, not the backstop
     start = Clock::now();
     absl::StatusOr<cv::Mat> image = DecodeImage(bomb, options);
     const double ms = MillisecondsSince(start);

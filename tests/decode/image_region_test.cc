@@ -409,9 +409,9 @@ TEST(ImageRegionTest, RegionsAreValidated) {
     EXPECT_EQ(DecodeImageRegion(bytes, For(32, 24), DecodeRegion{}).status().message(),
               "frame is 64x48 but the session's camera delivers 32x24");
     DecodeOptions bad = For(64, 48);
-    bad.deadline = absl::ZeroDuration();
+    bad.cpu_budget = absl::ZeroDuration();
     EXPECT_TRUE(absl::StrContains(DecodeImageRegion(bytes, bad, DecodeRegion{}).status().message(),
-                                  "deadline"));
+                                  "cpu_budget"));
   }
   EXPECT_EQ(DecodeImageRegion("", For(64, 48), DecodeRegion{}).status().message(),
             "encoded frame is empty");
@@ -562,7 +562,7 @@ TEST(ImageRegionTest, ScanBombsAreRefusedQuicklyThroughTheRegionPath) {
               "the JPEG frame has more than 64 scans, the scan limit (max_progressive_scans)");
 
     lenient.max_progressive_scans = 1 << 30;
-    lenient.deadline = absl::Milliseconds(100);
+    lenient.cpu_budget = absl::Milliseconds(100);
     start = Clock::now();
     absl::StatusOr<DecodedRegion> timed_out = DecodeImageRegion(bomb, lenient, region);
     EXPECT_LT(MillisecondsSince(start), kFrameBudgetMs);
@@ -582,10 +582,10 @@ TEST(ImageRegionTest, ScanBombsAreRefusedQuicklyThroughTheRegionPath) {
             "the JPEG frame has more than 64 scans, the scan limit (max_progressive_scans)");
 }
 
-TEST(ImageRegionTest, DeadlineIsResourceExhaustedOnEveryPath) {
+TEST(ImageRegionTest, CpuBudgetIsResourceExhaustedOnEveryPath) {
   const cv::Mat frame = Frame(1640, 590);
   DecodeOptions hurried = For(1640, 590);
-  hurried.deadline = absl::Nanoseconds(1);
+  hurried.cpu_budget = absl::Nanoseconds(1);
   const DecodeRegion regions[] = {Region(400, 0, 0, 0, Output::kGray),
                                   Region(100, 300, 50, 900, Output::kRed, 2),
                                   StoppingEarly(Region(0, 10, 0, 0, Output::kBgr, 4))};
@@ -595,30 +595,32 @@ TEST(ImageRegionTest, DeadlineIsResourceExhaustedOnEveryPath) {
       SCOPED_TRACE(Describe(region));
       absl::StatusOr<DecodedRegion> image = DecodeImageRegion(bytes, hurried, region);
       EXPECT_EQ(image.status().code(), absl::StatusCode::kResourceExhausted) << image.status();
-      EXPECT_TRUE(absl::StrContains(image.status().message(), "deadline of 1ns")) << image.status();
+      EXPECT_TRUE(absl::StrContains(image.status().message(), "CPU budget of 1ns"))
+          << image.status();
       EXPECT_TRUE(DecodeImageRegion(bytes, For(1640, 590), region).ok());
     }
   }
 }
 
 // jpeg_skip_scanlines entropy-decodes the rows it skips without calling
-// libjpeg's progress monitor; the data source checks the deadline as the
+// libjpeg's progress monitor; the data source checks the CPU budget as the
 // data is consumed, so a skip over a large frame stops soon after it.
-TEST(ImageRegionTest, DeadlineStopsASkip) {
+TEST(ImageRegionTest, CpuBudgetStopsASkip) {
   const std::string jpeg = Jpeg(Frame(3840, 2160), 95);
   const DecodeRegion last_row = Region(2159, 0, 0, 0, Output::kGray);
   Clock::time_point start = Clock::now();
   ASSERT_TRUE(DecodeImageRegion(jpeg, For(3840, 2160), last_row).ok());
   const double whole_ms = MillisecondsSince(start);
   DecodeOptions hurried = For(3840, 2160);
-  hurried.deadline = absl::Microseconds(static_cast<int64_t>(whole_ms * 1000 / 10));
+  hurried.cpu_budget = absl::Microseconds(static_cast<int64_t>(whole_ms * 1000 / 10));
   start = Clock::now();
   absl::StatusOr<DecodedRegion> stopped = DecodeImageRegion(jpeg, hurried, last_row);
   const double stopped_ms = MillisecondsSince(start);
   EXPECT_EQ(stopped.status().code(), absl::StatusCode::kResourceExhausted) << stopped.status();
   EXPECT_LT(stopped_ms, whole_ms / 2);
-  std::printf("%zu-byte 3840x2160 JPEG, last row: %.1f ms; deadline %s: stopped after %.1f ms\n",
-              jpeg.size(), whole_ms, absl::FormatDuration(hurried.deadline).c_str(), stopped_ms);
+  std::printf(
+      "%zu-byte 3840x2160 JPEG, last row: %.1f ms of CPU; budget %s: stopped after %.1f ms\n",
+      jpeg.size(), whole_ms, absl::FormatDuration(hurried.cpu_budget).c_str(), stopped_ms);
 }
 
 // ---- PNG ------------------------------------------------------------------------------
@@ -724,7 +726,7 @@ TEST(ImageRegionTest, PngDamageBelowTheRegionIsNoticedUnlessDecodingStopsEarly) 
   // default, as by DecodeImage; never read when decoding stops early.
   const std::string bomb = PngBomb(frame, 1024);
   DecodeOptions options = For(640, 480);
-  options.deadline = absl::Seconds(30);
+  options.cpu_budget = absl::Seconds(30);
   Clock::time_point start = Clock::now();
   EXPECT_EQ(DecodeImageRegion(bomb, options, Region(400, 0, 0, 0, Output::kRed)).status().message(),
             "damaged PNG frame: Extra compressed data in IDAT");

@@ -8,7 +8,9 @@
 //   * a progressive JPEG may have at most max_progressive_scans scans;
 //   * a PNG is inflated only as far as its rows need (plus at most one row):
 //     an IDAT stream that goes on for gigabytes past the image costs nothing;
-//   * a wall-clock deadline is the backstop for everything else;
+//   * a CPU-time budget, of the decoding thread's own CPU time, is the
+//     backstop for everything else (ThreadCpuClock: time spent waiting for a
+//     core does not count, so a busy machine never refuses a valid frame);
 //   * damaged data (what libjpeg or libpng report as a warning: corrupt
 //     entropy data, a truncated file) is an error unless the caller accepts
 //     it.
@@ -95,16 +97,22 @@ struct DecodeOptions {
   // 1.7 MB (10 s of decoding). 64 is 3-6x what honest encoders produce and
   // bounds that work to ~5 ms at 640x480 and ~130 ms at 4K.
   int max_progressive_scans = 64;
-  // Wall-clock budget of one DecodeImage call, from its start; checked by
+  // CPU-time budget of one DecodeImage call: the decoding thread's own CPU
+  // time (CLOCK_THREAD_CPUTIME_ID) from the call's start, checked by
   // libjpeg's progress monitor (every iMCU row of every scan and every call
-  // for output rows) and between PNG rows and input chunks. Exceeding it is
-  // RESOURCE_EXHAUSTED. A backstop: the limits above already bound the work
-  // of the known bombs, this catches whatever they miss. Measured on a loaded
-  // 2-core machine: a noisy 1640x590 frame takes 7 ms (baseline JPEG), 20 ms
-  // (progressive JPEG, PNG); a noisy 3840x2160 one 110 ms (baseline) and
-  // 300 ms (progressive), so 500 ms passes every honest frame up to 4K;
-  // absl::InfiniteDuration() disables it.
-  absl::Duration deadline = absl::Milliseconds(500);
+  // for output rows), as the input is consumed, and between PNG rows and
+  // input slices. Exceeding it is RESOURCE_EXHAUSTED. A backstop: the limits
+  // above already bound the work of the known bombs, this catches whatever
+  // they miss. Work, not waiting: a bomb costs CPU, while a busy machine or
+  // an overloaded server only makes a frame wait for a core, and that must
+  // never refuse a valid frame (the wall-clock deadline this replaces did,
+  // under load). No wall-clock backstop is kept: a decode runs on its own
+  // thread without blocking, so its wall time is its CPU time plus waiting.
+  // Measured on a loaded 2-core machine: a noisy 1640x590 frame takes 7 ms
+  // (baseline JPEG), 20 ms (progressive JPEG, PNG); a noisy 3840x2160 one
+  // 110 ms (baseline) and 300 ms (progressive), so 500 ms passes every
+  // honest frame up to 4K; absl::InfiniteDuration() disables it.
+  absl::Duration cpu_budget = absl::Milliseconds(500);
 
   // OK, or INVALID_ARGUMENT naming the first field that makes no sense.
   absl::Status Validate() const;
@@ -134,7 +142,7 @@ absl::Status CheckFrameSize(int64_t width, int64_t height, const DecodeOptions& 
 //
 // Errors: INVALID_ARGUMENT for anything wrong with the frame (not JPEG/PNG,
 // size, byte cap, scan limit, corrupt or damaged data) or with `options`;
-// RESOURCE_EXHAUSTED if the deadline passed. Messages are under 200
+// RESOURCE_EXHAUSTED if the decode used up its CPU budget. Messages are under 200
 // characters and never quote the input.
 absl::StatusOr<cv::Mat> DecodeImage(absl::string_view bytes, const DecodeOptions& options);
 
@@ -221,7 +229,7 @@ struct DecodedRegion {
 };
 
 // Decodes the part of `bytes` (JPEG or PNG) that `region` asks for, with the
-// checks, limits, deadline and damaged-data handling of DecodeImage (the
+// checks, limits, CPU budget and damaged-data handling of DecodeImage (the
 // same errors, from the same limits; options.gray must be false or agree
 // with region.output == kGray).
 //
