@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "lane/config.h"
+#include "lane/config/config.h"
 #include "lane/decode/image_decoder.h"
 #include "lane/detector.h"
 

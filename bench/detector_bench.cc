@@ -32,16 +32,17 @@
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
 
-#include "lane/config.h"
+#include "lane/config/config.h"
 #include "lane/decode/detector_region.h"
 #include "lane/decode/image_decoder.h"
 #include "lane/detector.h"
 #include "lane/synthetic.h"
-#include "lane/tracking.h"
+#include "lane/track/frame_tracker.h"
 
 namespace {
 
@@ -340,37 +341,29 @@ void BM_DetectClip(benchmark::State& state) {
 }
 BENCHMARK(BM_DetectClip)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
-// What tracking adds to a frame (docs/tracking.md): each lane's colour and
-// type from the image, then the tracker, the lanes drawn from it and the ego lane, over the clip's
-// frames in order (their detections made beforehand). The counter detect_ms is the mean detection
-// time of the same frames, measured in the same run: the benchmark's time over it is tracking's
-// share.
+// A tracked frame (docs/tracking.md), as lane detect --track and the service's streams
+// process one (lane::FrameTracker): detection with the tracker's predicted lanes searched,
+// each lane's colour and type read from the image, then the tracker, the lanes drawn from it
+// and the ego lane, over the clip's frames in order (restarted at the clip's start). The
+// counter detect_ms is the mean untracked detection time of the same frames, measured in the
+// same run: the benchmark's time over it is what tracking costs a frame.
 void BM_TrackClip(benchmark::State& state) {
   ClipSet* set = GetClip(static_cast<int>(state.range(0)));
   if (set == nullptr) {
     state.SkipWithError("clip not present (../shared/data)");
     return;
   }
-  std::vector<lane::Detection> detections;
   double detect_ms = 0;
-  for (const cv::Mat& f : set->frames) {
-    detections.push_back(*set->detector->Detect(f));
-    detect_ms += detections.back().timings.total_ms;
-  }
-  detect_ms /= static_cast<double>(detections.size());
-  const lane::CameraModel& camera = set->detector->ipm().camera();
-  lane::SequenceTracker tracker(camera);
+  for (const cv::Mat& f : set->frames) detect_ms += set->detector->Detect(f)->timings.total_ms;
+  detect_ms /= static_cast<double>(set->frames.size());
+  std::optional<lane::FrameTracker> tracker;
   size_t i = 0;
   double t = 0;
   for (auto _ : state) {
-    const size_t k = i++ % detections.size();
-    if (k == 0) tracker.Reset();
-    std::vector<lane::Lane> lanes = detections[k].lanes;
-    lane::ReadMarkings(set->frames[k], camera, lanes);  // as the service and lane detect --track
-    // With the top view, as the service and lane detect --track: predicted
-    // lanes and the confirmed lanes' filtered curves are drawn.
-    auto ego = tracker.Track(lanes, t += 1.0 / 15, &set->detector->ipm());
-    benchmark::DoNotOptimize(ego);
+    const size_t k = i++ % set->frames.size();
+    if (k == 0) tracker.emplace(set->detector->ipm().camera());
+    auto tracked = tracker->Process(*set->detector, set->frames[k], t += 1.0 / 15);
+    benchmark::DoNotOptimize(tracked);
   }
   state.counters["detect_ms"] = detect_ms;
   state.SetLabel(set->name);

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "absl/status/statusor.h"
-#include "lane/config.h"
+#include "lane/config/config.h"
 
 namespace lane_tools {
 

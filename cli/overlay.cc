@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
-#include "lane/bezier.h"
+#include "lane/geometry/bezier.h"
 
 namespace lane_tools {
 namespace {

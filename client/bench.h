@@ -22,7 +22,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
-#include "lane/config.h"
+#include "lane/config/config.h"
 #include "lane/v1/lane_service.pb.h"
 
 namespace lane_client {

@@ -12,7 +12,7 @@
 #include "absl/strings/str_cat.h"
 #include "bench.h"
 #include "lane/detector.h"
-#include "lane/tracking.h"
+#include "lane/track/frame_tracker.h"
 #include "wire/config_proto.h"
 #include "wire/frame_decoder.h"
 
@@ -64,7 +64,7 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
   for (int w = 0; w < workers; ++w) {
     threads.emplace_back([&] {
       std::vector<double> own;
-      lane::SequenceTracker tracker(config->camera);
+      lane::FrameTracker tracker(config->camera);
       while (true) {
         const Clock::time_point t0 = Clock::now();
         if (t0 >= end) break;
@@ -72,17 +72,11 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
         absl::StatusOr<cv::Mat> image = lane::wire::DecodeFrame(frame.request, decode, needs);
         absl::Status status = image.status();
         if (image.ok()) {
-          lane::DetectionPrior prior;
-          if (tracked) prior = tracker.Prior(detector->ipm());
           absl::StatusOr<lane::Detection> detection =
-              detector->Detect(*image, tracked ? &prior : nullptr);
+              tracked ? tracker.Process(*detector, *image, std::nullopt) : detector->Detect(*image);
           status = detection.status();
-          if (detection.ok() && tracked) {
-            const lane::FrameNeeds& read = detector->Needs();
-            lane::ReadMarkings(*image, detector->ipm().camera(), detection->lanes, read.top,
-                               read.bottom);
-            tracker.Track(detection->lanes, std::nullopt, &detector->ipm());
-            if (t0 >= measure_start) tracked_frames.fetch_add(1, std::memory_order_relaxed);
+          if (detection.ok() && tracked && t0 >= measure_start) {
+            tracked_frames.fetch_add(1, std::memory_order_relaxed);
           }
         }
         const Clock::time_point t1 = Clock::now();

@@ -3,7 +3,7 @@
 #include <string>
 
 #include "cli/cli_config.h"
-#include "lane/config.h"
+#include "lane/config/config.h"
 #include "wire/config_proto.h"
 
 namespace lane_client {

@@ -372,7 +372,10 @@ def main():
         # Phase 1 ends: the spread over all replicas, before anything is stopped.
         at(0.4)
         victim = busiest(replicas)
-        phase1 = [r.totals()["frames_ok"] for r in replicas]
+        # Frames received, not answered: on a loaded machine (CI shares its
+        # cores; the ASan build is 3-5x slower) answers can lag the balancing
+        # by seconds, and the spread checked is the client's.
+        phase1 = [r.totals()["received"] for r in replicas]
         victim.proc.send_signal(signal.SIGTERM)
         term_at = time.monotonic()
         events.append("t=%.1fs SIGTERM replica %d (%s)" % (term_at - t0, victim.index,
@@ -499,7 +502,7 @@ def main():
         t = r.totals()
         per_inc = " + ".join("%d" % inc["last"]["frames_ok"] for inc in r.incarnations)
         print("  replica %d %s: ok %6d (%4.1f %%)%s  received %d, dropped %d, error+invalid %d, "
-              "StreamFrames ended OK %d / UNAVAILABLE %d / CANCELLED %d; before the SIGTERM %d" % (
+              "StreamFrames ended OK %d / UNAVAILABLE %d / CANCELLED %d; received before the SIGTERM %d" % (
                   r.index, r.target, t["frames_ok"], 100.0 * t["frames_ok"] / total_ok,
                   " (" + per_inc + " by process)" if len(r.incarnations) > 1 else "",
                   t["received"], t["frames_dropped"], t["frames_error"] + t["frames_invalid"],
@@ -517,9 +520,10 @@ def main():
         failures.append("no stream run completed")
     phase1_total = sum(phase1)
     if phase1_total == 0 or min(phase1) < 0.10 * phase1_total:
-        failures.append("load not spread before the SIGTERM: %s" % phase1)
+        failures.append("load not spread before the SIGTERM (frames received): %s" % phase1)
     else:
-        print("spread before the SIGTERM: %s OK frames, smallest share %.0f %% (>= 10 %% required)"
+        print("spread before the SIGTERM: %s frames received, smallest share %.0f %% (>= 10 %% "
+              "required)"
               % ("/".join("%d" % v for v in phase1), 100.0 * min(phase1) / phase1_total))
     if killed.incarnations[-1]["last"]["frames_ok"] == 0:
         print("note: the restarted replica answered no frame: open streams stay on their pod "

@@ -7,7 +7,7 @@
 #include <memory>
 #include <string>
 
-#include "lane/config.h"
+#include "lane/config/config.h"
 #include "session_registry.h"
 
 #ifndef LANE_SOURCE_DIR

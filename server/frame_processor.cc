@@ -6,7 +6,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
-#include "lane/tracking.h"
+#include "lane/track/frame_tracker.h"
 #include "session_proto.h"
 #include "wire/config_proto.h"
 #include "wire/detection_proto.h"
@@ -38,9 +38,10 @@ void StartResponse(const v1::FrameRequest& request, const std::string& camera_id
   response->set_server_receive_time_unix_ns(arrival.unix_ns);
 }
 
-absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& session,
+absl::Status ProcessFrame(const v1::FrameRequest& request, Session& session,
                           const FrameLimits& limits, const Arrival& arrival, Metrics& metrics,
-                          v1::FrameResponse* response, bool tracked) {
+                          v1::FrameResponse* response, std::optional<lane::Detection>* detection,
+                          bool tracked) {
   const SteadyTime start = std::chrono::steady_clock::now();
   const double queue_wait_ms = MillisecondsBetween(arrival.steady, start);
   metrics.ObserveQueueWait(queue_wait_ms * 1e-3);
@@ -57,6 +58,7 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
   decode.cpu_budget = limits.decode_cpu_budget;
 
   absl::Status status;
+  detection->reset();
   try {
     // Only the rows and channel the detector reads, unless the session asks
     // for whole frames.
@@ -70,48 +72,43 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& sessio
     if (!frame.ok()) {
       status = frame.status();
     } else {
-      // A tracked session's predicted lanes are searched too.
-      lane::DetectionPrior prior;
-      if (tracked) prior = session.Prior(*detector);
-      absl::StatusOr<lane::Detection> detection =
-          detector->Detect(*frame, tracked ? &prior : nullptr);
-      if (detection.ok()) {
-        session.ObserveLanes(detection->lanes);
-        if (tracked) {
-          const lane::FrameNeeds& needs = detector->Needs();
-          lane::ReadMarkings(*frame, detector->ipm().camera(), detection->lanes, needs.top,
-                             needs.bottom);
-        }
-        wire::LanesToProto(*detection, response);
-        wire::TimingsToProto(detection->timings, timings);
-        metrics.ObserveDetectorStages(detection->timings);
-        metrics.ObserveLanes(detection->lanes.size());
+      absl::StatusOr<lane::Detection> detected =
+          tracked ? session.tracker().Measure(*detector, *frame) : detector->Detect(*frame);
+      if (detected.ok()) {
+        session.ObserveLanes(detected->lanes);
+        wire::TimingsToProto(detected->timings, timings);
+        metrics.ObserveDetectorStages(detected->timings);
+        metrics.ObserveLanes(detected->lanes.size());
         session.frames_processed.fetch_add(1, std::memory_order_relaxed);
+        *detection = *std::move(detected);
       } else {
-        status = detection.status();
+        status = detected.status();
       }
     }
   } catch (const std::exception& e) {
     // The core reports errors as values; an exception is a bug, not the
     // client's fault.
     status = absl::InternalError(absl::StrCat("detector failed: ", e.what()));
+    detection->reset();
   }
-  if (!status.ok()) response->clear_lanes();
   wire::ToFrameStatus(status, response->mutable_status());
   const wire::FrameResult result = wire::ToFrameResult(response->status().code());
   metrics.CountFrame(result);
-  metrics.CountCameraFrame(session.camera_id, result, static_cast<size_t>(response->lanes_size()));
+  metrics.CountCameraFrame(session.camera_id, result,
+                           *detection ? (*detection)->lanes.size() : size_t{0});
   metrics.ObserveFrameLatency(SecondsSince(arrival.steady));
   return status;
 }
 
-void TrackFrame(const Session& session, v1::FrameResponse* response) {
-  if (response->status().code() != v1::FRAME_CODE_OK) return;
-  std::vector<lane::Lane> lanes = wire::LanesFromProto(*response);
-  std::optional<double> time_s;
-  if (response->capture_time_unix_ns() > 0) time_s = response->capture_time_unix_ns() * 1e-9;
-  const std::optional<lane::EgoLane> ego = session.Track(lanes, time_s);
-  wire::TrackingToProto(lanes, ego, response);
+void FinishFrame(Session& session, bool tracked, std::optional<lane::Detection>& detection,
+                 v1::FrameResponse* response) {
+  if (!detection) return;
+  if (tracked) {
+    std::optional<double> time_s;
+    if (response->capture_time_unix_ns() > 0) time_s = response->capture_time_unix_ns() * 1e-9;
+    session.tracker().Commit(*session.CurrentDetector(), *detection, time_s);
+  }
+  wire::LanesToProto(*detection, response);
 }
 
 void AnswerUnprocessed(const absl::Status& status, Metrics& metrics, v1::FrameResponse* response) {

@@ -1,14 +1,18 @@
-// The work of one frame, on a worker thread: decode, detect, fill the
-// response, record the metrics. Shared by StreamFrames and Detect.
+// The work of one frame: on a worker thread, decode and detect (for a tracked
+// session, lane::FrameTracker's Measure); in frame order, when the response
+// is written, track (Commit) and put the lanes into the response. Shared by
+// StreamFrames and Detect.
 #ifndef LANE_SERVER_FRAME_PROCESSOR_H_
 #define LANE_SERVER_FRAME_PROCESSOR_H_
 
 #include <chrono>
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "absl/status/status.h"
 #include "absl/time/time.h"
+#include "lane/detector.h"
 #include "lane/v1/lane_service.pb.h"
 #include "metrics.h"
 #include "session.h"
@@ -41,22 +45,27 @@ struct FrameLimits {
   absl::Duration decode_cpu_budget = absl::Milliseconds(500);
 };
 
-// Decodes and detects `request`'s frame with the session's detector and fills
-// `response` (status, lanes, timings, calibration version). A bad frame is
-// not an error of the call: its status goes into the response and is also
-// returned. Records queue wait, stage durations, frame latency and the
-// frame's result in `metrics`.
-// With `tracked` (a tracked session's frame), the detector also searches the
-// tracker's predicted lanes (Session::Prior), and each lane's paint colour
-// and type in this frame go into the response for TrackFrame's vote.
-absl::Status ProcessFrame(const v1::FrameRequest& request, const Session& session,
+// Decodes and detects `request`'s frame with the session's detector: an OK
+// frame's detection goes into `detection` (its lanes stay lanes until
+// FinishFrame), and `response` gets the status, timings and calibration
+// version. A bad frame is not an error of the call: its status goes into the
+// response and is also returned. Records queue wait, stage durations, frame
+// latency and the frame's result in `metrics`.
+// With `tracked` (a tracked session's frame), this is the session tracker's
+// Measure: the detector also searches the predicted lanes, and each lane's
+// colour and type are read for FinishFrame's vote.
+absl::Status ProcessFrame(const v1::FrameRequest& request, Session& session,
                           const FrameLimits& limits, const Arrival& arrival, Metrics& metrics,
-                          v1::FrameResponse* response, bool tracked = false);
+                          v1::FrameResponse* response, std::optional<lane::Detection>* detection,
+                          bool tracked = false);
 
-// In frame order, after ProcessFrame: an OK frame's lanes through the
-// session's tracker: ids, confirmed flags, voted colours and the ego lane
-// into the response. Time: the frame's capture time when it has one.
-void TrackFrame(const Session& session, v1::FrameResponse* response);
+// In frame order, after ProcessFrame, when the response is about to be
+// written: with `tracked`, an OK frame's detection goes through the session
+// tracker's Commit (ids, confirmed flags, voted colours and types, predicted
+// lanes, the ego lane; time: the frame's capture time when it has one); then
+// its lanes and ego lane go into `response`. Nothing for a failed frame.
+void FinishFrame(Session& session, bool tracked, std::optional<lane::Detection>& detection,
+                 v1::FrameResponse* response);
 
 // Answers a frame without processing it (dropped, or refused before
 // processing): sets the status and counts the result.

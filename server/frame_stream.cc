@@ -24,12 +24,15 @@ size_t MaxSlots(uint32_t max_inflight) { return 4 * size_t{max_inflight} + 16; }
 struct FrameStream::Slot {
   std::unique_ptr<v1::FrameRequest> request;  // released once processed
   v1::FrameResponse response;
+  // An OK frame's lanes, kept as lanes until the response is written (and,
+  // for a tracked session, committed to its tracker in stream order then).
+  std::optional<lane::Detection> detection;
   grpc::ByteBuffer wire;  // the response, serialized for the write
   std::string camera_id;
   Arrival arrival;
-  std::shared_ptr<const Session> session;  // set at receipt, or by the setup
-  std::atomic<int> state{kQueued};         // kQueued -> kRunning | kDropped
-  bool setup = false;                      // create/confirm the session first
+  std::shared_ptr<Session> session;  // set at receipt, or by the setup
+  std::atomic<int> state{kQueued};   // kQueued -> kRunning | kDropped
+  bool setup = false;                // create/confirm the session first
   // Guarded by the stream's mu_:
   bool done = false;                         // response ready (or stream_error / skipped)
   bool in_bound = true;                      // counts against max_inflight
@@ -160,7 +163,7 @@ void FrameStream::Process(const std::shared_ptr<Slot>& slot) {
     if (slot->session != nullptr) {
       // A bad frame's status is in its response; the stream goes on.
       ProcessFrame(request, *slot->session, deps_.limits, slot->arrival, deps_.metrics,
-                   &slot->response, slot->session->TracksStreams())
+                   &slot->response, &slot->detection, slot->session->TracksStreams())
           .IgnoreError();
     }
   }
@@ -265,8 +268,9 @@ void FrameStream::MaybeWriteLocked() {
       continue;
     }
     // Tracking sees the frames in the stream's order.
-    if (front.session != nullptr && front.session->TracksStreams()) {
-      TrackFrame(*front.session, &front.response);
+    if (front.session != nullptr) {
+      FinishFrame(*front.session, front.session->TracksStreams(), front.detection, &front.response);
+      front.detection.reset();
     }
     front.response.set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
     if (absl::Status s = SerializeMessage(front.response, &front.wire); !s.ok()) {

@@ -193,7 +193,7 @@ grpc::ServerUnaryReactor* LaneServiceImpl::Detect(grpc::CallbackServerContext* c
         if (absl::Status s = SessionRegistry::ValidateCameraId(camera_id); !s.ok()) {
           return call->Reply(s);
         }
-        std::shared_ptr<const Session> session;
+        std::shared_ptr<Session> session;
         if (!call->request().has_session_config()) {
           session = sessions_.Find(camera_id);
           if (session == nullptr) return call->Reply(wire::NoSessionForFrame(camera_id));
@@ -218,9 +218,10 @@ grpc::ServerUnaryReactor* LaneServiceImpl::Detect(grpc::CallbackServerContext* c
               if (session != nullptr) {
                 StartResponse(request, request.camera_id(), arrival, response);
                 const bool track = session->TracksUnary();
+                std::optional<lane::Detection> detection;
                 status = ProcessFrame(request, *session, options_.frame_limits, arrival, metrics_,
-                                      response, track);
-                if (track) TrackFrame(*session, response);
+                                      response, &detection, track);
+                FinishFrame(*session, track, detection, response);
                 response->set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
               }
               metrics_.FrameAnswered();

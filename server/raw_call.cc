@@ -9,7 +9,7 @@
 #include <mutex>
 
 #include "absl/strings/str_cat.h"
-#include "lane/excerpt.h"
+#include "lane/base/excerpt.h"
 
 namespace lane::server {
 namespace {

@@ -13,7 +13,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "calibration_metrics.h"
-#include "lane/config.h"
+#include "lane/config/config.h"
 #include "process_metrics.h"
 
 #ifndef LANE_VERSION

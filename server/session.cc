@@ -4,19 +4,19 @@ namespace lane::server {
 
 std::shared_ptr<const lane::Detector> Session::CurrentDetector() const {
   if (calibration.auto_calibrate) {
-    std::lock_guard<std::mutex> lock(refine_mu_);
+    absl::MutexLock lock(&refine_mu_);
     if (refined_) return refined_;
   }
   // Not owned: the caller holds the session, which holds `detector`.
   return std::shared_ptr<const lane::Detector>(std::shared_ptr<const lane::Detector>(), &detector);
 }
 
-void Session::ObserveLanes(const std::vector<lane::Lane>& lanes) const {
+void Session::ObserveLanes(const std::vector<lane::Lane>& lanes) {
   if (!calibration.auto_calibrate) return;
   lane::CameraModel camera;
   uint64_t generation = 0;
   {
-    std::lock_guard<std::mutex> lock(refine_mu_);
+    absl::MutexLock lock(&refine_mu_);
     if (!calibrator_.Observe(lanes)) return;
     camera = calibrator_.camera();
     generation = ++refine_generation_;
@@ -28,25 +28,13 @@ void Session::ObserveLanes(const std::vector<lane::Lane>& lanes) const {
       lane::Detector::Create(camera, config.ipm, config.detector);
   if (!rebuilt.ok()) return;  // keeps the detector in use
   auto shared = std::make_shared<const lane::Detector>(*std::move(rebuilt));
-  std::lock_guard<std::mutex> lock(refine_mu_);
+  absl::MutexLock lock(&refine_mu_);
   // A later re-derivation may have finished first.
   if (generation == refine_generation_) refined_ = std::move(shared);
 }
 
-std::optional<lane::EgoLane> Session::Track(std::vector<lane::Lane>& lanes,
-                                            std::optional<double> time_s) const {
-  const std::shared_ptr<const lane::Detector> detector = CurrentDetector();
-  std::lock_guard<std::mutex> lock(track_mu_);
-  return tracker_.Track(lanes, time_s, &detector->ipm());
-}
-
-lane::DetectionPrior Session::Prior(const lane::Detector& detector) const {
-  std::lock_guard<std::mutex> lock(track_mu_);
-  return tracker_.Prior(detector.ipm());
-}
-
 CalibrationSnapshot Session::Calibration() const {
-  std::lock_guard<std::mutex> lock(refine_mu_);
+  absl::MutexLock lock(&refine_mu_);
   CalibrationSnapshot s;
   s.camera = calibrator_.camera();
   s.confidence = calibrator_.confidence();

@@ -1,25 +1,28 @@
-// A camera's session: what a client configured under a camera id, and the
-// detector built from it. Immutable once created (only its counter and, with
-// auto_calibrate, its refined camera move), so a frame in flight keeps using
-// the session it started with even when the session is replaced or deleted
-// meanwhile.
+// A camera's session: what a client configured under a camera id, the
+// detector built from it, and the camera's state over its frames. The
+// configuration is fixed when the session is created (the const members), so
+// a frame in flight keeps using the session it started with even when the
+// session is replaced or deleted meanwhile. What the frames change is behind
+// the non-const methods, each thread-safe: the tracker (tracker()), the
+// online calibrator and its refined detector (ObserveLanes), the counter.
 #ifndef LANE_SERVER_SESSION_H_
 #define LANE_SERVER_SESSION_H_
 
 #include <atomic>
 #include <cstdint>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "absl/base/thread_annotations.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
-#include "lane/calibration.h"
-#include "lane/config.h"
+#include "lane/calibrate/calibration.h"
+#include "lane/config/config.h"
 #include "lane/detector.h"
-#include "lane/tracking.h"
+#include "lane/track/frame_tracker.h"
 
 namespace lane::server {
 
@@ -109,8 +112,8 @@ struct Session {
         tracking(tracking_in),
         detector(std::move(detector_in)),
         create_time(create_time_in),
-        calibrator_(config.camera),
-        tracker_(config.camera) {}
+        tracker_(config.camera),
+        calibrator_(config.camera) {}
 
   const std::string camera_id;
   // Unique within the process; new on every create and replace.
@@ -127,7 +130,7 @@ struct Session {
   const lane::Detector detector;
   const absl::Time create_time;
   // Frames processed with this session.
-  mutable std::atomic<uint64_t> frames_processed{0};
+  std::atomic<uint64_t> frames_processed{0};
 
   // The detector for the next frame: `detector`, or with auto_calibrate the
   // one re-derived from the latest refined camera. Valid while the caller
@@ -135,30 +138,23 @@ struct Session {
   std::shared_ptr<const lane::Detector> CurrentDetector() const;
   // A processed frame's lanes, with auto_calibrate: refines the camera and
   // re-derives the detector (outside the lock) when it has moved enough.
-  void ObserveLanes(const std::vector<lane::Lane>& lanes) const;
+  void ObserveLanes(const std::vector<lane::Lane>& lanes);
   CalibrationSnapshot Calibration() const;
 
   bool TracksStreams() const { return !tracking.disabled; }
   bool TracksUnary() const { return !tracking.disabled && tracking.unary; }
-  // One frame's lanes, in frame order, through the session's tracker
-  // (lane::SequenceTracker): ids, confirmed flags and voted colours set,
-  // the ego lane returned. `time_s`: the capture time, if the frame had one.
-  std::optional<lane::EgoLane> Track(std::vector<lane::Lane>& lanes,
-                                     std::optional<double> time_s) const;
-  // The tracker's prediction in `detector`'s top view, for the frame about
-  // to be detected (lane::SequenceTracker::Prior). Frames of a stream are
-  // detected concurrently and tracked in order, so this is the state after
-  // the last frame tracked: with k frames in flight, up to k frames old.
-  // It only adds search windows, which still need evidence in the frame.
-  lane::DetectionPrior Prior(const lane::Detector& detector) const;
+  // The camera's tracker: frames are measured on workers, concurrently
+  // (Measure: its prediction is the state after the last frame committed,
+  // with k frames in flight up to k frames old), and committed in stream
+  // order (Commit). Thread-safe.
+  lane::FrameTracker& tracker() { return tracker_; }
 
  private:
-  mutable std::mutex refine_mu_;
-  mutable lane::OnlineCalibrator calibrator_;              // guarded by refine_mu_
-  mutable std::shared_ptr<const lane::Detector> refined_;  // guarded by refine_mu_
-  mutable uint64_t refine_generation_ = 0;                 // guarded by refine_mu_
-  mutable std::mutex track_mu_;
-  mutable lane::SequenceTracker tracker_;  // guarded by track_mu_
+  lane::FrameTracker tracker_;
+  mutable absl::Mutex refine_mu_;
+  lane::OnlineCalibrator calibrator_ ABSL_GUARDED_BY(refine_mu_);
+  std::shared_ptr<const lane::Detector> refined_ ABSL_GUARDED_BY(refine_mu_);
+  uint64_t refine_generation_ ABSL_GUARDED_BY(refine_mu_) = 0;
 };
 
 }  // namespace lane::server

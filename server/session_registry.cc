@@ -4,7 +4,7 @@
 #include <utility>
 
 #include "absl/strings/str_cat.h"
-#include "lane/excerpt.h"
+#include "lane/base/excerpt.h"
 #include "wire/status_map.h"
 
 namespace lane::server {
@@ -55,7 +55,7 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
   std::string config_json = lane::ConfigToJson(spec.config);
 
   // The checks that need no detector, so a confirmation costs nothing.
-  auto check_locked = [&](absl::Time now) -> absl::StatusOr<std::shared_ptr<const Session>> {
+  auto check_locked = [&](absl::Time now) -> absl::StatusOr<std::shared_ptr<Session>> {
     auto it = sessions_.find(camera_id);
     if (it != sessions_.end()) {
       const Session& existing = *it->second.session;
@@ -74,7 +74,7 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
 
   {
     std::lock_guard<std::mutex> lock(mu_);
-    absl::StatusOr<std::shared_ptr<const Session>> existing = check_locked(options_.clock());
+    absl::StatusOr<std::shared_ptr<Session>> existing = check_locked(options_.clock());
     if (!existing.ok()) return existing.status();
     if (*existing != nullptr) return CreateResult{*std::move(existing), Outcome::kUnchanged};
   }
@@ -88,11 +88,11 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
 
   const uint64_t need = detector->MemoryBytes() + config_json.size();
 
-  std::shared_ptr<const Session> replaced;  // destroyed outside the lock
+  std::shared_ptr<Session> replaced;  // destroyed outside the lock
   std::lock_guard<std::mutex> lock(mu_);
   const absl::Time now = options_.clock();
   // Another call may have changed the entry meanwhile: check again.
-  absl::StatusOr<std::shared_ptr<const Session>> existing = check_locked(now);
+  absl::StatusOr<std::shared_ptr<Session>> existing = check_locked(now);
   if (!existing.ok()) return existing.status();
   if (*existing != nullptr) return CreateResult{*std::move(existing), Outcome::kUnchanged};
 
@@ -104,7 +104,7 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
   }
   if (old != sessions_.end()) replaced = std::move(old->second.session);
 
-  auto session = std::make_shared<const Session>(
+  auto session = std::make_shared<Session>(
       camera_id, next_version_++, spec.config, std::move(config_json), stream, spec.decode,
       *std::move(detector), now, spec.calibration, spec.tracking);
   memory_bytes_ = held + SessionBytes(*session);
@@ -114,7 +114,7 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
   return CreateResult{std::move(session), inserted ? Outcome::kCreated : Outcome::kReplaced};
 }
 
-std::shared_ptr<const Session> SessionRegistry::Find(absl::string_view camera_id) {
+std::shared_ptr<Session> SessionRegistry::Find(absl::string_view camera_id) {
   std::lock_guard<std::mutex> lock(mu_);
   auto it = sessions_.find(camera_id);
   if (it == sessions_.end()) return nullptr;
@@ -139,7 +139,7 @@ std::vector<SessionRegistry::Entry> SessionRegistry::List() const {
 }
 
 absl::Status SessionRegistry::Delete(absl::string_view camera_id) {
-  std::shared_ptr<const Session> doomed;  // destroyed outside the lock
+  std::shared_ptr<Session> doomed;  // destroyed outside the lock
   std::lock_guard<std::mutex> lock(mu_);
   auto it = sessions_.find(camera_id);
   if (it == sessions_.end()) return wire::SessionNotFound(camera_id);
@@ -152,7 +152,7 @@ absl::Status SessionRegistry::Delete(absl::string_view camera_id) {
 
 size_t SessionRegistry::EvictIdle() {
   if (options_.ttl == absl::InfiniteDuration()) return 0;
-  std::vector<std::shared_ptr<const Session>> doomed;  // destroyed outside the lock
+  std::vector<std::shared_ptr<Session>> doomed;  // destroyed outside the lock
   std::lock_guard<std::mutex> lock(mu_);
   const absl::Time cutoff = options_.clock() - options_.ttl;
   for (auto it = sessions_.begin(); it != sessions_.end();) {

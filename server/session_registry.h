@@ -1,6 +1,6 @@
 // camera id -> session. Thread-safe.
 //
-// Sessions are shared_ptr<const Session>: a frame holds the snapshot it
+// Sessions are shared_ptr<Session>: a frame holds the snapshot it
 // started with, so replacing or deleting a session never disturbs frames in
 // flight. Detectors are built outside the registry's lock.
 #ifndef LANE_SERVER_SESSION_REGISTRY_H_
@@ -52,12 +52,12 @@ class SessionRegistry {
 
   enum class Outcome { kCreated, kUnchanged, kReplaced };
   struct CreateResult {
-    std::shared_ptr<const Session> session;
+    std::shared_ptr<Session> session;
     Outcome outcome = Outcome::kCreated;
   };
 
   struct Entry {
-    std::shared_ptr<const Session> session;
+    std::shared_ptr<Session> session;
     absl::Time last_used;
   };
 
@@ -70,7 +70,7 @@ class SessionRegistry {
                                       bool replace);
 
   // The session of a camera, marking it used; nullptr if none.
-  std::shared_ptr<const Session> Find(absl::string_view camera_id);
+  std::shared_ptr<Session> Find(absl::string_view camera_id);
   // Like Find with its last use; NOT_FOUND if none.
   absl::StatusOr<Entry> Get(absl::string_view camera_id);
   // All sessions, sorted by camera id.

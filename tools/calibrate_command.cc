@@ -17,8 +17,8 @@
 #include "cli/cli_config.h"
 #include "cli/inputs.h"
 #include "commands.h"
-#include "lane/calibration.h"
-#include "lane/config.h"
+#include "lane/calibrate/calibration.h"
+#include "lane/config/config.h"
 #include "lane/detector.h"
 
 namespace lane_tools {

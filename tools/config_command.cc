@@ -6,7 +6,7 @@
 
 #include "cli/cli_config.h"
 #include "commands.h"
-#include "lane/config.h"
+#include "lane/config/config.h"
 
 namespace lane_tools {
 namespace {

@@ -23,9 +23,9 @@
 #include "cli/progress_bar.h"
 #include "cli/results_json.h"
 #include "commands.h"
-#include "lane/config.h"
+#include "lane/config/config.h"
 #include "lane/detector.h"
-#include "lane/tracking.h"
+#include "lane/track/frame_tracker.h"
 
 namespace lane_tools {
 namespace {
@@ -120,12 +120,11 @@ class DetectRun {
         overlay_dir_(std::move(overlay_dir)) {}
 
   // Frames in the given order are one camera's: lanes get ids, colours and
-  // the ego lane (lane/tracking.h). `fps`: their rate (0: 30/s).
+  // the ego lane (lane/track/frame_tracker.h). `fps`: their rate (0: 30/s).
   void EnableTracking(const lane::CameraModel& camera, double fps) {
     lane::LaneTrackingOptions options;
     if (fps > 0) options.default_fps = fps;
     tracker_.emplace(camera, options);
-    camera_ = camera;
   }
 
   void Process(const InputFrame& frame) {
@@ -140,10 +139,10 @@ class DetectRun {
     }
     if (error.empty()) {
       try {
-        // Tracked: the tracker's predicted lanes are searched too.
-        lane::DetectionPrior prior;
-        if (tracker_) prior = tracker_->Prior(detector_.ipm());
-        detection = detector_.Detect(frame.bgr, tracker_ ? &prior : nullptr);
+        // Tracked: the tracker's predicted lanes are searched too, and the
+        // lanes' markings read and tracked in frame order.
+        detection = tracker_ ? tracker_->Process(detector_, frame.bgr, std::nullopt)
+                             : detector_.Detect(frame.bgr);
         if (!detection.ok()) error = std::string(detection.status().message());
       } catch (const std::exception& e) {  // e.g. a cv::Exception: this frame fails, not the run
         error = absl::StrCat("detector error: ", e.what());
@@ -164,11 +163,6 @@ class DetectRun {
       out_ << ErrorJsonLine(frame.name, frame.bgr.cols, frame.bgr.rows, mode_, error) << '\n';
       out_.flush();
       return;
-    }
-    if (tracker_) {
-      const lane::FrameNeeds& needs = detector_.Needs();
-      lane::ReadMarkings(frame.bgr, camera_, detection->lanes, needs.top, needs.bottom);
-      detection->ego = tracker_->Track(detection->lanes, std::nullopt, &detector_.ipm());
     }
     out_ << DetectionJsonLine(frame.name, frame.bgr.cols, frame.bgr.rows, mode_, *detection,
                               frame.decode_ms, tracker_.has_value())
@@ -258,8 +252,7 @@ class DetectRun {
   long total_lanes_ = 0;
   std::vector<double> total_ms_;
   std::set<std::string> used_stems_;
-  std::optional<lane::SequenceTracker> tracker_;
-  lane::CameraModel camera_;
+  std::optional<lane::FrameTracker> tracker_;
 };
 
 int RunDetect(const DetectFlags& flags) {

@@ -22,7 +22,7 @@
 #include "commands.h"
 #include "eval_drive.h"
 #include "eval_overlay.h"
-#include "lane/config.h"
+#include "lane/config/config.h"
 #include "lane/detector.h"
 #include "lane/eval/dataset.h"
 #include "lane/eval/evaluate.h"
@@ -30,7 +30,7 @@
 #include "lane/eval/results_jsonl.h"
 #include "lane/eval/results_txt.h"
 #include "lane/eval/seeds.h"
-#include "lane/ipm.h"
+#include "lane/geometry/ipm.h"
 
 namespace lane_tools {
 namespace {

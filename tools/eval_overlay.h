@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "lane/eval/evaluate.h"
-#include "lane/ipm.h"
+#include "lane/geometry/ipm.h"
 
 namespace lane_tools {
 

@@ -10,7 +10,7 @@
 #include "absl/strings/str_cat.h"
 #include "cli/cli_config.h"
 #include "commands.h"
-#include "lane/config.h"
+#include "lane/config/config.h"
 #include "lane/eval/render_labels.h"
 #include "lane/synthetic.h"
 

@@ -7,7 +7,7 @@
 #include <type_traits>
 
 #include "absl/strings/str_cat.h"
-#include "lane/config_fields.h"
+#include "lane/config/config_fields.h"
 #include "wire/config_proto_internal.h"
 #include "wire/status_map.h"
 

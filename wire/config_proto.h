@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "lane/config.h"
+#include "lane/config/config.h"
 #include "lane/v1/lane_service.pb.h"
 
 namespace lane::wire {

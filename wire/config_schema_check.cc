@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
-#include "lane/config_fields.h"
+#include "lane/config/config_fields.h"
 #include "wire/config_proto.h"
 #include "wire/config_proto_internal.h"
 

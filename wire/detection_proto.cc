@@ -125,15 +125,6 @@ std::optional<lane::EgoLane> EgoFromProto(const v1::FrameResponse& response) {
   return ego;
 }
 
-void TrackingToProto(const std::vector<lane::Lane>& lanes, const std::optional<lane::EgoLane>& ego,
-                     v1::FrameResponse* out) {
-  // The tracker may have added predicted lanes and re-sorted: all anew.
-  out->clear_lanes();
-  out->mutable_lanes()->Reserve(static_cast<int>(lanes.size()));
-  for (const lane::Lane& lane : lanes) LaneToProto(lane, out->add_lanes());
-  EgoToProto(ego, out);
-}
-
 void TimingsToProto(const lane::StageTimings& timings, v1::StageTimings* out) {
   out->set_ipm_ms(timings.ipm_ms);
   out->set_filter_ms(timings.filter_ms);

@@ -16,13 +16,8 @@ void LanesToProto(const lane::Detection& detection, v1::FrameResponse* out);
 // The lanes of a response back (control points, score, id, confirmed,
 // colour).
 std::vector<lane::Lane> LanesFromProto(const v1::FrameResponse& response);
-// Tracking's results into a response: its lanes become `lanes` (the
-// detected ones with id, confirmed, colour and type, and any predicted
-// ones, in their order) and the ego lane is set (cleared when none).
 // The response's ego lane (none when it has none); ids 0 become -1.
 std::optional<lane::EgoLane> EgoFromProto(const v1::FrameResponse& response);
-void TrackingToProto(const std::vector<lane::Lane>& lanes, const std::optional<lane::EgoLane>& ego,
-                     v1::FrameResponse* out);
 // The detector's stage timings (milliseconds) into `out`.
 void TimingsToProto(const lane::StageTimings& timings, v1::StageTimings* out);
 

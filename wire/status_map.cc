@@ -4,7 +4,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "lane/excerpt.h"
+#include "lane/base/excerpt.h"
 
 namespace lane::wire {
 

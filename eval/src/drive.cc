@@ -6,6 +6,7 @@
 
 #include "absl/strings/str_format.h"
 #include "lane/eval/matching.h"
+#include "lane/track/marking_reader.h"
 
 namespace lane::eval {
 
@@ -16,16 +17,12 @@ absl::Status DriveRunner::Add(const cv::Mat& frame, double time_s) {
   const CameraModel& camera = detector_.ipm().camera();
   absl::StatusOr<Detection> alone = detector_.Detect(frame);
   if (!alone.ok()) return alone.status();
-  ReadMarkings(frame, camera, alone->lanes);
+  const FrameNeeds& needs = detector_.Needs();
+  ReadMarkings(frame, camera, alone->lanes, needs.top, needs.bottom);
   untracked_.push_back({alone->lanes, ComputeEgoLane(alone->lanes, camera)});
-  const DetectionPrior prior = tracker_.Prior(detector_.ipm());
-  absl::StatusOr<Detection> with_prior = detector_.Detect(frame, &prior);
-  if (!with_prior.ok()) return with_prior.status();
-  ReadMarkings(frame, camera, with_prior->lanes);
-  DriveOutput out;
-  out.lanes = std::move(with_prior->lanes);
-  out.ego = tracker_.Track(out.lanes, time_s, &detector_.ipm());
-  tracked_.push_back(std::move(out));
+  absl::StatusOr<Detection> tracked = tracker_.Process(detector_, frame, time_s);
+  if (!tracked.ok()) return tracked.status();
+  tracked_.push_back({std::move(tracked->lanes), tracked->ego});
   return absl::OkStatus();
 }
 

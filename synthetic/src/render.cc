@@ -13,7 +13,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
-#include "lane/bezier.h"
+#include "lane/geometry/bezier.h"
 #include "scene.h"
 
 namespace lane {

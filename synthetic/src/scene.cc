@@ -16,7 +16,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
-#include "lane/bezier.h"
+#include "lane/geometry/bezier.h"
 
 namespace lane::synthetic_internal {
 

@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "absl/status/status.h"
-#include "lane/bezier.h"
-#include "lane/camera.h"
+#include "lane/geometry/bezier.h"
+#include "lane/geometry/camera.h"
 #include "lane/synthetic.h"
 
 namespace lane::synthetic_internal {

@@ -26,7 +26,7 @@
 #include "commands.h"
 #include "common.h"
 #include "frames.h"
-#include "lane/config.h"
+#include "lane/config/config.h"
 #include "lane/synthetic.h"
 #include "server.h"
 #include "test_ca.h"

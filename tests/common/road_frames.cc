@@ -5,7 +5,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "lane/ipm.h"
+#include "lane/geometry/ipm.h"
 
 namespace lane::testing {
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "lane/camera.h"
+#include "lane/geometry/camera.h"
 #include "lane/v1/lane_service.pb.h"
 
 namespace lane::testing {

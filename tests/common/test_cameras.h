@@ -5,8 +5,8 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "lane/camera.h"
-#include "lane/config.h"
+#include "lane/config/config.h"
+#include "lane/geometry/camera.h"
 
 namespace lane::testing {
 

@@ -1,7 +1,7 @@
 // Auto-calibration (lane/calibration.h, lane/vanishing_point.h): the pieces,
 // random cameras recovered from rendered drives, the real clips when
 // present, and the online refinement following a drifting pitch.
-#include "lane/calibration.h"
+#include "lane/calibrate/calibration.h"
 
 #include <gtest/gtest.h>
 
@@ -14,10 +14,10 @@
 #include <string>
 #include <vector>
 
-#include "lane/config.h"
+#include "lane/calibrate/vanishing_point.h"
+#include "lane/config/config.h"
 #include "lane/detector.h"
 #include "lane/synthetic.h"
-#include "lane/vanishing_point.h"
 #include "shared_data.h"
 #include "test_cameras.h"
 

@@ -1,4 +1,4 @@
-#include "lane/camera.h"
+#include "lane/geometry/camera.h"
 
 #include <gtest/gtest.h>
 

@@ -5,10 +5,10 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
-#include "lane/image_extension.h"
-#include "lane/marking_check.h"
-#include "lane/threshold.h"
-#include "lane/vehicle_check.h"
+#include "lane/postprocess/image_extension.h"
+#include "lane/postprocess/marking_check.h"
+#include "lane/postprocess/vehicle_check.h"
+#include "lane/stages/threshold.h"
 
 namespace lane {
 namespace {

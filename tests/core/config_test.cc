@@ -1,4 +1,4 @@
-#include "lane/config.h"
+#include "lane/config/config.h"
 
 #include <gtest/gtest.h>
 

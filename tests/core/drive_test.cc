@@ -11,10 +11,14 @@
 #include <optional>
 #include <vector>
 
-#include "lane/config.h"
+#include "lane/config/config.h"
 #include "lane/detector.h"
 #include "lane/synthetic.h"
-#include "lane/tracking.h"
+#include "lane/track/ego_lane.h"
+#include "lane/track/frame_tracker.h"
+#include "lane/track/lane_tracker.h"
+#include "lane/track/marking_reader.h"
+#include "lane/track/sequence_tracker.h"
 
 namespace lane {
 namespace {

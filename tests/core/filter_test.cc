@@ -1,4 +1,4 @@
-#include "lane/filter.h"
+#include "lane/stages/filter.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 
-#include "lane/threshold.h"
+#include "lane/stages/threshold.h"
 
 namespace lane {
 namespace {

@@ -3,11 +3,11 @@
 #include <cmath>
 #include <random>
 
-#include "lane/bezier.h"
 #include "lane/eval/match.h"
-#include "lane/line_detection.h"
-#include "lane/line_fit.h"
-#include "lane/spline_fit.h"
+#include "lane/geometry/bezier.h"
+#include "lane/stages/line_detection.h"
+#include "lane/stages/line_fit.h"
+#include "lane/stages/spline_fit.h"
 
 namespace lane {
 namespace {

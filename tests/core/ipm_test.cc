@@ -1,4 +1,4 @@
-#include "lane/ipm.h"
+#include "lane/geometry/ipm.h"
 
 #include <gtest/gtest.h>
 

@@ -10,7 +10,7 @@
 #include <random>
 #include <vector>
 
-#include "lane/postprocess.h"
+#include "lane/postprocess/postprocess.h"
 
 namespace lane {
 namespace {

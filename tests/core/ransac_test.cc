@@ -1,7 +1,7 @@
 // The RANSAC template on synthetic truth (in the manner of COLMAP's
 // ransac_test): a known line among outliers comes back with exactly its
 // inliers in the report's mask.
-#include "lane/ransac.h"
+#include "lane/stages/ransac.h"
 
 #include <gtest/gtest.h>
 

@@ -1,16 +1,19 @@
-// Video-aware detection (lane/tracking.h): the Kalman tracker, association,
+// Video-aware detection (lane/track/): the Kalman tracker, association,
 // ids, the ego lane with departure, and the marking colour.
-#include "lane/tracking.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 #include <vector>
 
-#include "lane/config.h"
+#include "lane/config/config.h"
 #include "lane/detector.h"
 #include "lane/synthetic.h"
+#include "lane/track/ego_lane.h"
+#include "lane/track/frame_tracker.h"
+#include "lane/track/lane_tracker.h"
+#include "lane/track/marking_reader.h"
+#include "lane/track/sequence_tracker.h"
 
 namespace lane {
 namespace {
@@ -188,7 +191,8 @@ TEST(TrackingTest, EgoLaneGeometryAndDeparture) {
     const double shift = -0.8 * t;  // the lanes move left as the car moves right
     std::vector<Lane> lanes = {GroundLane(-1.8 + shift, 0, 0), GroundLane(1.8 + shift, 0, 0)};
     const std::optional<EgoLane> e = sequence.Track(lanes, t);
-    if (!e) continue;
+    if (f + 1 < LaneTrackingOptions().confirm_frames) continue;
+    ASSERT_TRUE(e.has_value()) << "frame " << f;
     if (e->departing && e->right_distance_m > 1.2) warned_early = true;
     if (e->departing && e->right_distance_m > 0.2) warned = true;
     if (f > 20) {
@@ -207,9 +211,11 @@ TEST(TrackingTest, StraightDrivingIsNoDeparture) {
     std::vector<Lane> lanes = {GroundLane(-1.7 + noise(rng), 0, 0),
                                GroundLane(1.9 + noise(rng), 0, 0)};
     const std::optional<EgoLane> e = sequence.Track(lanes, f / 30.0);
-    if (e) {
-      EXPECT_FALSE(e->departing) << "frame " << f;
-    }
+    // The two boundaries are confirmed after confirm_frames; from then on
+    // every frame has the ego lane, and none is a departure.
+    if (f + 1 < LaneTrackingOptions().confirm_frames) continue;
+    ASSERT_TRUE(e.has_value()) << "frame " << f;
+    EXPECT_FALSE(e->departing) << "frame " << f;
   }
 }
 

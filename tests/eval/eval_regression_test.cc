@@ -12,7 +12,7 @@
 #include <filesystem>
 #include <string>
 
-#include "lane/config.h"
+#include "lane/config/config.h"
 #include "lane/detector.h"
 #include "lane/eval/dataset.h"
 #include "lane/eval/evaluate.h"
@@ -22,7 +22,6 @@
 
 namespace lane::eval {
 namespace {
-
 
 constexpr double kF1Tolerance = 0.02;
 constexpr double kRateTolerance = 0.01;

@@ -14,7 +14,7 @@
 #include <utility>
 #include <vector>
 
-#include "lane/camera.h"
+#include "lane/geometry/camera.h"
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "road_frames.h"
 #include "server.h"

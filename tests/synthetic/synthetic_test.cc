@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "lane/bezier.h"
-#include "lane/camera.h"
 #include "lane/eval/render_labels.h"
+#include "lane/geometry/bezier.h"
+#include "lane/geometry/camera.h"
 #include "test_cameras.h"
 
 namespace {

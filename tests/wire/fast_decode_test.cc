@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "lane/config.h"
+#include "lane/config/config.h"
 #include "lane/detector.h"
 #include "lane/synthetic.h"
 #include "road_frames.h"

@@ -14,7 +14,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "lane/camera.h"
+#include "lane/geometry/camera.h"
 
 namespace lane {
 

@@ -10,7 +10,7 @@
 #include <optional>
 #include <vector>
 
-#include "lane/bezier.h"
+#include "lane/geometry/bezier.h"
 
 namespace lane::eval {
 

@@ -18,7 +18,8 @@
 #include "lane/eval/curve.h"
 #include "lane/eval/paper_rule.h"
 #include "lane/synthetic.h"
-#include "lane/tracking.h"
+#include "lane/track/ego_lane.h"
+#include "lane/track/frame_tracker.h"
 
 namespace lane::eval {
 
@@ -129,7 +130,7 @@ class DriveRunner {
 
  private:
   const Detector& detector_;
-  SequenceTracker tracker_;
+  FrameTracker tracker_;
   std::vector<DriveOutput> untracked_, tracked_;
 };
 

@@ -6,7 +6,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "lane/bezier.h"
+#include "lane/geometry/bezier.h"
 
 namespace lane {
 

@@ -1,0 +1,215 @@
+// Auto-calibration: a camera's pitch and yaw from the road's vanishing
+// point, the rows that show road, a top view for the result, and the slow
+// online refinement a session runs on its own detections
+// (docs/calibration.md).
+//
+// Only the ground-to-image homography matters to the detector. On a flat,
+// straight road the lanes meet at the vanishing point (u0, v0), and with the
+// project's convention (camera.h)
+//   pitch = atan((cv - v0) / fv),   yaw = atan((cu - u0) cos(pitch) / fu).
+// The camera height sets the metric scale and is given. The focal length is
+// given or assumed: at a fixed vanishing point it only scales distances
+// along the road.
+#ifndef LANE_CALIBRATION_H_
+#define LANE_CALIBRATION_H_
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "lane/calibrate/vanishing_point.h"
+#include "lane/detector.h"
+#include "lane/geometry/camera.h"
+#include "lane/geometry/ipm.h"
+
+namespace lane {
+
+// Focal length assumed when none is given: 0.61 x the image width, a 79°
+// horizontal field of view, typical of dash cameras (the CULane camera's
+// workable 1000 px at 1640 px).
+inline constexpr double kDefaultFocalPerImageWidth = 0.61;
+
+// `intrinsics` (focal lengths, principal point, height, image size) with the
+// pitch and yaw that put the vanishing point at `vp`.
+CameraModel CameraFromVanishingPoint(const CameraModel& intrinsics, const Eigen::Vector2d& vp);
+
+// The rows of a fixed camera's frames that show road: the car's own hood
+// (and any mount in front of the lens) stays still while the road moves, so
+// its pixels barely change over a drive. Feed frames (any size-consistent
+// 8-bit images) of one camera; RoadBottomRow is the first row below the road.
+class RoadRowFinder {
+ public:
+  void Add(const cv::Mat& frame);
+  int frames() const { return frames_; }
+  // The image height when fewer than kMinFrames frames were added or no
+  // still band was found.
+  int RoadBottomRow() const;
+  // Per-row temporal spread (median over the row of the per-pixel standard
+  // deviation, grey levels), top to bottom, at 1/kScale of the rows.
+  std::vector<double> RowSpread() const;
+
+  static constexpr int kMinFrames = 8;
+  static constexpr int kScale = 4;
+
+ private:
+  cv::Mat mean_, m2_;  // CV_64F, Welford's running moments
+  int frames_ = 0;
+  int height_ = 0;
+};
+
+// The top view for a camera (docs/config.md, "Choosing a ground view"):
+// across, +-(2 lane widths + 0.5 m), the ego lane's boundaries and the next
+// on each side with the car half a lane off centre; along, from the nearest
+// visible road (the ground under row road_bottom_row - 1) to 10 m further,
+// the depth of one dash and gap; 0.0625 m x 0.125 m pixels.
+// INVALID_ARGUMENT when the road rows lie above the horizon.
+absl::StatusOr<GroundView> ChooseGroundView(const CameraModel& camera, double lane_width_m,
+                                            int road_bottom_row);
+
+// `lane calibrate`'s estimate from frames of ordinary driving, in two passes
+// over the same frames:
+//   1. marking segments below 45 % of the image height at four fixed bar
+//      widths, and the still rows at the bottom (RoadRowFinder): a first
+//      vanishing point, whose row is the horizon for pass 2;
+//   2. segments from just below that horizon to the road's last row, with
+//      the bar width each row's distance implies: per-frame points, curved
+//      frames and frames without markings left out, a robust mean.
+struct CalibrationOptions {
+  double height_m = 1.5;
+  // Square pixels of this focal length; unset: kDefaultFocalPerImageWidth.
+  std::optional<double> focal_px;
+  // Unset: the image centre.
+  std::optional<Eigen::Vector2d> principal_point;
+  double lane_width_m = 3.5;
+  // The first image row below the road (a hood), when known; else found
+  // by RoadRowFinder.
+  std::optional<int> road_bottom_row;
+  VanishingPointOptions vanishing_point;
+};
+
+struct CalibrationResult {
+  CameraModel camera;
+  CombinedVanishingPoint vanishing_point;
+  Eigen::Vector2d first_pass_point = Eigen::Vector2d::Zero();
+  bool focal_assumed = false;
+  int frames = 0;              // frames of pass 2
+  int frames_no_markings = 0;  // left out: fewer than two consistent markings
+  int frames_curved = 0;       // left out: near and far markings disagree
+  int frames_stationary = 0;   // left out: the same view as the frame before
+  int segments = 0;            // segments supporting the used frames' points
+  int road_bottom_row = 0;     // first row below the road (hood), or the height
+  GroundView view;
+  // Far ground point (0, 1e5 m) projected by the camera, for the check
+  // against the vanishing point.
+  Eigen::Vector2d far_point = Eigen::Vector2d::Zero();
+};
+
+class CameraCalibrator {
+ public:
+  explicit CameraCalibrator(CalibrationOptions options) : options_(std::move(options)) {}
+
+  // Pass 1, every frame (BGR or grey, all of one size).
+  absl::Status AddFirstPass(const cv::Mat& frame);
+  // Between the passes; FAILED_PRECONDITION when no frame showed markings.
+  absl::Status FinishFirstPass();
+  // Pass 2, the same frames again; the frame's point and segments, for
+  // overlays.
+  absl::StatusOr<FrameVanishingPoint> AddSecondPass(const cv::Mat& frame,
+                                                    std::vector<ImageSegment>* segments = nullptr);
+  // FAILED_PRECONDITION when fewer than kMinFramesUsed frames of pass 2
+  // gave a point.
+  absl::StatusOr<CalibrationResult> Finish() const;
+  static constexpr int kMinFramesUsed = 3;
+
+  // The camera before pitch and yaw: focal length, principal point, height
+  // and size (valid after the first frame).
+  const CameraModel& intrinsics() const { return intrinsics_; }
+
+ private:
+  MarkingSegmentOptions SecondPassSegments() const;
+  cv::Rect2d SearchBounds() const;
+
+  CalibrationOptions options_;
+  CameraModel intrinsics_;
+  bool focal_assumed_ = false;
+  int width_ = 0, height_ = 0;
+  RoadRowFinder road_rows_;
+  std::vector<std::vector<ImageSegment>> first_segments_;
+  Eigen::Vector2d first_point_ = Eigen::Vector2d::Zero();
+  int road_bottom_ = 0;
+  bool first_done_ = false;
+  static constexpr double kStationaryLevels = 1.5;  // mean absolute change, grey levels
+  cv::Mat previous_;
+  std::vector<bool> stationary_;
+  int second_frames_ = 0, stationary_count_ = 0;
+  std::vector<Eigen::Vector2d> points_;
+  int frames_ = 0, no_markings_ = 0, curved_ = 0, segments_ = 0;
+};
+
+// A session's slow refinement of pitch and yaw from its own detections.
+//
+// Frames with at least two lanes that are straight in the image (their
+// control points within max_bend_px of the chord) and not parallel give a
+// vanishing point; the estimate moves a fraction `gain` of the way to it,
+// at most max_step_deg per frame, and never further than max_drift_deg
+// from the camera it started with. When the estimate has moved
+// rederive_deg from the camera the detector uses, Observe says so and the
+// caller rebuilds the detector (and its top view) with camera().
+struct OnlineCalibrationOptions {
+  double max_bend_px = 2.0;
+  double min_spread_deg = 10.0;
+  // A frame whose point is further than this (angle seen from the camera)
+  // from the estimate is an outlier and ignored.
+  double gate_deg = 4.0;
+  double gain = 0.05;
+  double max_step_deg = 0.05;
+  double max_drift_deg = 5.0;
+  double rederive_deg = 0.2;
+};
+
+class OnlineCalibrator {
+ public:
+  OnlineCalibrator(const CameraModel& initial, OnlineCalibrationOptions options = {});
+
+  // One frame's lanes (image control points). True when camera() has moved
+  // at least rederive_deg from the camera of the last true (or the initial
+  // one): the caller then rebuilds its detector with camera().
+  bool Observe(const std::vector<Lane>& lanes);
+
+  CameraModel camera() const;  // the current estimate
+  const CameraModel& initial() const { return initial_; }
+  Eigen::Vector2d vanishing_point() const { return vp_; }
+  int frames_used() const { return frames_used_; }
+  int frames_seen() const { return frames_seen_; }
+  int rederived() const { return rederived_; }
+  // Standard error of the estimate, degrees (from the scatter of the
+  // frames' points and the effective number of frames averaged).
+  double uncertainty_deg() const;
+  // 0 before any frame; 1 - uncertainty / 1°, clamped to [0, 1], after.
+  double confidence() const;
+  double drift_pitch_deg() const { return camera().pitch_deg - initial_.pitch_deg; }
+  double drift_yaw_deg() const { return camera().yaw_deg - initial_.yaw_deg; }
+
+ private:
+  CameraModel initial_;
+  CameraModel applied_;
+  OnlineCalibrationOptions options_;
+  Eigen::Vector2d vp_;
+  double var_deg2_ = 0;  // running variance of the frames' points, degrees^2
+  int frames_used_ = 0;
+  int frames_seen_ = 0;
+  int rederived_ = 0;
+};
+
+// The vanishing point of one frame's lanes that are straight in the image,
+// or none (fewer than two such lanes, or too parallel).
+std::optional<Eigen::Vector2d> LanesVanishingPoint(const std::vector<Lane>& lanes,
+                                                   double max_bend_px, double min_spread_deg);
+
+}  // namespace lane
+
+#endif  // LANE_CALIBRATION_H_

@@ -1,0 +1,366 @@
+#include "lane/calibrate/calibration.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+
+#include "absl/strings/str_cat.h"
+#include "lane/calibrate/vanishing_point.h"
+
+namespace lane {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  const size_t h = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(h), v.end());
+  return v[h];
+}
+
+}  // namespace
+
+CameraModel CameraFromVanishingPoint(const CameraModel& intrinsics, const Eigen::Vector2d& vp) {
+  CameraModel c = intrinsics;
+  const double pitch = std::atan((c.cv - vp.y()) / c.fv);
+  const double yaw = std::atan((c.cu - vp.x()) * std::cos(pitch) / c.fu);
+  c.pitch_deg = pitch / kDegToRad;
+  c.yaw_deg = yaw / kDegToRad;
+  return c;
+}
+
+// ---------------------------------------------------------------------------
+// RoadRowFinder
+
+void RoadRowFinder::Add(const cv::Mat& frame) {
+  cv::Mat grey = frame;
+  if (frame.channels() == 3) cv::cvtColor(frame, grey, cv::COLOR_BGR2GRAY);
+  cv::Mat small;
+  cv::resize(grey, small,
+             cv::Size(std::max(1, grey.cols / kScale), std::max(1, grey.rows / kScale)), 0, 0,
+             cv::INTER_AREA);
+  cv::Mat x;
+  small.convertTo(x, CV_64F);
+  if (frames_ == 0 || x.size() != mean_.size()) {
+    mean_ = cv::Mat::zeros(x.size(), CV_64F);
+    m2_ = cv::Mat::zeros(x.size(), CV_64F);
+    frames_ = 0;
+    height_ = grey.rows;
+  }
+  ++frames_;
+  const cv::Mat delta = x - mean_;
+  mean_ += delta / frames_;
+  m2_ += delta.mul(x - mean_);
+}
+
+std::vector<double> RoadRowFinder::RowSpread() const {
+  std::vector<double> spread;
+  if (frames_ < 2) return spread;
+  for (int r = 0; r < m2_.rows; ++r) {
+    std::vector<double> s(static_cast<size_t>(m2_.cols));
+    const double* m = m2_.ptr<double>(r);
+    for (int c = 0; c < m2_.cols; ++c) s[static_cast<size_t>(c)] = std::sqrt(m[c] / (frames_ - 1));
+    spread.push_back(Median(std::move(s)));
+  }
+  return spread;
+}
+
+int RoadRowFinder::RoadBottomRow() const {
+  if (frames_ < kMinFrames) return height_;
+  int bottom = height_;
+  const std::vector<double> spread = RowSpread();
+  const int rows = static_cast<int>(spread.size());
+  // The road's level: the median spread of the rows of the image's lower
+  // half above its last eighth (road in every mounting seen so far).
+  std::vector<double> road(spread.begin() + rows / 2, spread.begin() + rows * 7 / 8);
+  const double level = Median(road);
+  if (level <= 0) return bottom;
+  // From the bottom up: the first run of 2 rows at half the road's level or
+  // more ends the still band.
+  for (int r = rows - 1; r >= 1; --r) {
+    if (spread[static_cast<size_t>(r)] >= 0.5 * level &&
+        spread[static_cast<size_t>(r - 1)] >= 0.5 * level) {
+      if (r < rows - 1) bottom = std::min(bottom, (r + 1) * kScale);
+      break;
+    }
+  }
+  return bottom;
+}
+
+// ---------------------------------------------------------------------------
+// Ground view
+
+absl::StatusOr<GroundView> ChooseGroundView(const CameraModel& camera, double lane_width_m,
+                                            int road_bottom_row) {
+  if (absl::Status s = camera.Validate(); !s.ok()) return s;
+  if (!(lane_width_m > 1.0 && lane_width_m < 10.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("lane width must lie in (1, 10) metres, got ", lane_width_m));
+  }
+  const double horizon = camera.HorizonRow();
+  const double row = std::min<double>(road_bottom_row, camera.image_height) - 1.0;
+  if (!(row > horizon + 2.0)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "the road's lowest row ", row, " does not lie below the horizon (row ", horizon, ")"));
+  }
+  GroundView g;
+  g.x_max_m = 2.0 * lane_width_m + 0.5;
+  g.x_min_m = -g.x_max_m;
+  const double near = camera.ImageToGround({camera.cu, row}).y();
+  // Exactly the last road row's ground, not rounded: rounding to a tidy
+  // figure moved the edge into the hood or off the nearest road (up to
+  // 0.25 m at 0.5 m steps).
+  g.y_min_m = std::max(0.5, near);
+  g.y_max_m = g.y_min_m + 10.0;
+  g.metres_per_px_x = 0.0625;
+  g.metres_per_px_y = 0.125;
+  return g;
+}
+
+// ---------------------------------------------------------------------------
+// CameraCalibrator
+
+absl::Status CameraCalibrator::AddFirstPass(const cv::Mat& frame) {
+  if (frame.empty() || (frame.type() != CV_8UC3 && frame.type() != CV_8UC1)) {
+    return absl::InvalidArgumentError("frames must be 8-bit BGR or grey images");
+  }
+  if (width_ == 0) {
+    width_ = frame.cols;
+    height_ = frame.rows;
+    CameraModel& c = intrinsics_;
+    c.image_width = width_;
+    c.image_height = height_;
+    focal_assumed_ = !options_.focal_px;
+    c.fu = c.fv = options_.focal_px.value_or(kDefaultFocalPerImageWidth * width_);
+    const Eigen::Vector2d pp =
+        options_.principal_point.value_or(Eigen::Vector2d(width_ / 2.0, height_ / 2.0));
+    c.cu = pp.x();
+    c.cv = pp.y();
+    c.pitch_deg = 0;
+    c.yaw_deg = 0;
+    c.height_m = options_.height_m;
+    if (absl::Status s = c.Validate(); !s.ok()) return s;
+  } else if (frame.cols != width_ || frame.rows != height_) {
+    return absl::InvalidArgumentError(absl::StrCat("frame is ", frame.cols, "x", frame.rows,
+                                                   ", the first was ", width_, "x", height_));
+  }
+  const cv::Mat paint = PaintChannel(frame);
+  // A frame (nearly) equal to the previous one: the car stands.
+  cv::Mat small;
+  cv::resize(paint.rowRange(height_ / 2, height_), small,
+             cv::Size(std::max(1, width_ / 8), std::max(1, height_ / 16)), 0, 0, cv::INTER_AREA);
+  const bool still = !previous_.empty() &&
+                     cv::norm(small, previous_, cv::NORM_L1) / static_cast<double>(small.total()) <
+                         kStationaryLevels;
+  previous_ = small;
+  stationary_.push_back(still);
+  if (!still) road_rows_.Add(paint);
+  MarkingSegmentOptions o;
+  o.top_row = static_cast<int>(0.6 * height_);
+  for (double f : {320.0, 160.0, 80.0, 40.0})
+    o.fixed_widths_px.push_back(std::max(2.0, width_ / f));
+  first_segments_.push_back(FindMarkingSegments(paint, o));
+  return absl::OkStatus();
+}
+
+absl::Status CameraCalibrator::FinishFirstPass() {
+  road_bottom_ = road_rows_.RoadBottomRow();
+  if (options_.road_bottom_row) road_bottom_ = std::clamp(*options_.road_bottom_row, 1, height_);
+  std::vector<std::vector<ImageSegment>> moving;
+  for (size_t i = 0; i < first_segments_.size(); ++i) {
+    if (stationary_[i]) continue;
+    std::vector<ImageSegment>& segs = first_segments_[i];
+    // Not the hood: it mirrors the road.
+    segs.erase(
+        std::remove_if(segs.begin(), segs.end(),
+                       [&](const ImageSegment& s) { return s.bottom_row >= road_bottom_ - 1; }),
+        segs.end());
+    moving.push_back(std::move(segs));
+  }
+  first_segments_.clear();
+  VanishingPointOptions vo = options_.vanishing_point;
+  vo.focal_px = intrinsics_.fu;
+  vo.bounds = SearchBounds();
+  const std::optional<PooledVanishingPoint> p = EstimatePooledVanishingPoint(moving, vo);
+  if (!p) {
+    return absl::FailedPreconditionError(
+        "no frame showed two or more straight lane markings below the horizon");
+  }
+  first_point_ = p->point;
+  first_done_ = true;
+  return absl::OkStatus();
+}
+
+cv::Rect2d CameraCalibrator::SearchBounds() const {
+  // A forward-looking road camera sees the vanishing point in its frame, or
+  // a little outside it: a quarter of the size to each side and above.
+  return {-0.25 * width_, -0.25 * height_, 1.5 * width_, 1.25 * height_};
+}
+
+MarkingSegmentOptions CameraCalibrator::SecondPassSegments() const {
+  MarkingSegmentOptions o;
+  o.horizon_row = first_point_.y();
+  o.height_m = options_.height_m;
+  o.top_row = static_cast<int>(std::ceil(first_point_.y() + std::max(10.0, 0.04 * height_)));
+  o.bottom_row = road_bottom_;
+  return o;
+}
+
+absl::StatusOr<FrameVanishingPoint> CameraCalibrator::AddSecondPass(
+    const cv::Mat& frame, std::vector<ImageSegment>* segments_out) {
+  if (!first_done_) return absl::FailedPreconditionError("the first pass is not finished");
+  if (frame.cols != width_ || frame.rows != height_) {
+    return absl::InvalidArgumentError(absl::StrCat("frame is ", frame.cols, "x", frame.rows,
+                                                   ", the first was ", width_, "x", height_));
+  }
+  const size_t index = static_cast<size_t>(second_frames_++);
+  ++frames_;
+  if (index < stationary_.size() && stationary_[index]) {
+    ++stationary_count_;
+    FrameVanishingPoint still;
+    still.result = VpFrameResult::kStationary;
+    return still;
+  }
+  std::vector<ImageSegment> segs = FindMarkingSegments(frame, SecondPassSegments());
+  VanishingPointOptions vo = options_.vanishing_point;
+  vo.focal_px = intrinsics_.fu;
+  vo.prior = first_point_;
+  vo.bounds = SearchBounds();
+  FrameVanishingPoint p = EstimateFrameVanishingPoint(segs, vo);
+  switch (p.result) {
+    case VpFrameResult::kOk:
+      points_.push_back(p.point);
+      segments_ += p.inliers;
+      break;
+    case VpFrameResult::kCurved:
+      ++curved_;
+      break;
+    case VpFrameResult::kNoMarkings:
+      ++no_markings_;
+      break;
+    case VpFrameResult::kStationary:
+      break;
+  }
+  if (segments_out) *segments_out = std::move(segs);
+  return p;
+}
+
+absl::StatusOr<CalibrationResult> CameraCalibrator::Finish() const {
+  const std::optional<CombinedVanishingPoint> c = CombineVanishingPoints(points_, 1.0);
+  if (!c) {
+    return absl::FailedPreconditionError(
+        absl::StrCat("none of ", frames_, " frames gave a vanishing point (", no_markings_,
+                     " without two consistent markings, ", curved_, " on curves, ",
+                     stationary_count_, " standing still)"));
+  }
+  if (c->frames_used < kMinFramesUsed) {
+    return absl::FailedPreconditionError(absl::StrCat(
+        "only ", c->frames_used, " of ", frames_, " frames gave a vanishing point (", no_markings_,
+        " without two consistent markings, ", curved_, " on curves, ", stationary_count_,
+        " standing still); at least ", kMinFramesUsed, " are needed"));
+  }
+  CalibrationResult r;
+  r.vanishing_point = *c;
+  r.first_pass_point = first_point_;
+  r.camera = CameraFromVanishingPoint(intrinsics_, c->point);
+  r.focal_assumed = focal_assumed_;
+  r.frames = frames_;
+  r.frames_no_markings = no_markings_;
+  r.frames_curved = curved_;
+  r.frames_stationary = stationary_count_;
+  r.segments = segments_;
+  r.road_bottom_row = road_bottom_;
+  r.far_point = r.camera.GroundToImage({0.0, 1e5});
+  absl::StatusOr<GroundView> view = ChooseGroundView(r.camera, options_.lane_width_m, road_bottom_);
+  if (!view.ok()) return view.status();
+  r.view = *view;
+  return r;
+}
+
+// ---------------------------------------------------------------------------
+// Online refinement
+
+std::optional<Eigen::Vector2d> LanesVanishingPoint(const std::vector<Lane>& lanes,
+                                                   double max_bend_px, double min_spread_deg) {
+  std::vector<Eigen::Vector2d> points, dirs;
+  std::vector<double> weights;
+  double lo = M_PI, hi = -M_PI;
+  for (const Lane& lane : lanes) {
+    const Eigen::Vector2d a = lane.image[0], b = lane.image[3];
+    const Eigen::Vector2d chord = b - a;
+    const double length = chord.norm();
+    if (length < 20.0) continue;
+    const Eigen::Vector2d d = chord / length;
+    const Eigen::Vector2d normal(-d.y(), d.x());
+    const double bend =
+        std::max(std::abs(normal.dot(lane.image[1] - a)), std::abs(normal.dot(lane.image[2] - a)));
+    if (bend > max_bend_px) continue;
+    points.push_back(0.5 * (a + b));
+    dirs.push_back(d);
+    weights.push_back(length);
+    const Eigen::Vector2d up = d.y() > 0 ? Eigen::Vector2d(-d) : d;
+    const double angle = std::atan2(up.x(), -up.y());
+    lo = std::min(lo, angle);
+    hi = std::max(hi, angle);
+  }
+  if (points.size() < 2 || hi - lo < min_spread_deg * kDegToRad) return std::nullopt;
+  return IntersectLines(points, dirs, weights);
+}
+
+OnlineCalibrator::OnlineCalibrator(const CameraModel& initial, OnlineCalibrationOptions options)
+    : initial_(initial), applied_(initial), options_(options), vp_(initial.VanishingPoint()) {}
+
+CameraModel OnlineCalibrator::camera() const { return CameraFromVanishingPoint(initial_, vp_); }
+
+bool OnlineCalibrator::Observe(const std::vector<Lane>& lanes) {
+  ++frames_seen_;
+  const std::optional<Eigen::Vector2d> p =
+      LanesVanishingPoint(lanes, options_.max_bend_px, options_.min_spread_deg);
+  if (!p) return false;
+  const double fu = initial_.fu, fv = initial_.fv;
+  const Eigen::Vector2d delta = *p - vp_;
+  const Eigen::Vector2d delta_deg(std::atan(delta.x() / fu) / kDegToRad,
+                                  std::atan(delta.y() / fv) / kDegToRad);
+  if (delta_deg.norm() > options_.gate_deg) return false;
+  ++frames_used_;
+  const double sq = delta_deg.squaredNorm();
+  if (frames_used_ * options_.gain < 1.0) {
+    var_deg2_ += (sq - var_deg2_) / frames_used_;
+  } else {
+    var_deg2_ += options_.gain * (sq - var_deg2_);
+  }
+  // A bounded step towards the frame's point.
+  const double max_u = fu * std::tan(options_.max_step_deg * kDegToRad);
+  const double max_v = fv * std::tan(options_.max_step_deg * kDegToRad);
+  const Eigen::Vector2d step(std::clamp(options_.gain * delta.x(), -max_u, max_u),
+                             std::clamp(options_.gain * delta.y(), -max_v, max_v));
+  vp_ += step;
+  // Never further than max_drift_deg from the initial camera.
+  CameraModel c = camera();
+  const double d = options_.max_drift_deg;
+  c.pitch_deg = std::clamp(c.pitch_deg, initial_.pitch_deg - d, initial_.pitch_deg + d);
+  c.yaw_deg = std::clamp(c.yaw_deg, initial_.yaw_deg - d, initial_.yaw_deg + d);
+  vp_ = c.VanishingPoint();
+  if (std::abs(c.pitch_deg - applied_.pitch_deg) >= options_.rederive_deg ||
+      std::abs(c.yaw_deg - applied_.yaw_deg) >= options_.rederive_deg) {
+    ++rederived_;
+    applied_ = c;
+    return true;
+  }
+  return false;
+}
+
+double OnlineCalibrator::uncertainty_deg() const {
+  if (frames_used_ == 0) return std::numeric_limits<double>::infinity();
+  const double n_eff = std::min<double>(frames_used_, (2.0 - options_.gain) / options_.gain);
+  return std::sqrt(var_deg2_ / n_eff);
+}
+
+double OnlineCalibrator::confidence() const {
+  if (frames_used_ == 0) return 0;
+  return std::clamp(1.0 - uncertainty_deg(), 0.0, 1.0);
+}
+
+}  // namespace lane

@@ -1,0 +1,245 @@
+// The whole detector: frame in, lane splines out.
+//
+//   frame (BGR) -> channel -> IPM -> filter -> threshold -> column-sum Hough
+//   -> RANSAC lines -> RANSAC splines -> post-processing -> image splines
+#ifndef LANE_DETECTOR_H_
+#define LANE_DETECTOR_H_
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "lane/geometry/bezier.h"
+#include "lane/geometry/camera.h"
+#include "lane/geometry/ipm.h"
+#include "lane/postprocess/postprocess.h"
+#include "lane/stages/filter.h"
+#include "lane/stages/line_detection.h"
+#include "lane/stages/line_fit.h"
+#include "lane/stages/spline_fit.h"
+#include "lane/stages/threshold.h"
+#include "lane/stages/two_lanes.h"
+
+namespace lane {
+
+// kAll: every visible boundary. kTwo: the ego lane's left and right boundary.
+enum class Mode { kAll, kTwo };
+const char* ModeName(Mode mode);
+std::optional<Mode> ParseMode(const std::string& name);
+
+// Which channel of a BGR frame feeds the detector. The paper uses red: it
+// shows white and yellow paint brighter against asphalt than grey does.
+// kMinRedGreen is min(red, green) per pixel, the paper's "use the colour"
+// (section IV): white and yellow paint are bright in both red and green,
+// whereas red vehicles, tail lights and brake lights (bright in red only),
+// vegetation (green only) and sky or blue signs are not.
+enum class Channel { kRed, kGreen, kBlue, kGray, kMinRedGreen };
+const char* ChannelName(Channel channel);
+std::optional<Channel> ParseChannel(const std::string& name);
+
+struct DetectorOptions {
+  Mode mode = Mode::kAll;
+  Channel channel = Channel::kRed;
+  FilterOptions filter;
+  ThresholdOptions threshold;
+  HoughOptions hough;
+  LineRansacOptions line_ransac;
+  SplineRansacOptions spline_ransac;
+  PostprocessOptions postprocess;
+  TwoLaneOptions two_lanes;
+  // Seed of the RANSAC sampler. The same frame, options and seed always give
+  // the same lanes.
+  uint64_t seed = 1;
+  // Keep the intermediate images and candidates in Detection::debug.
+  bool keep_intermediates = false;
+
+  // The reference defaults for a mode (2-lanes uses narrower windows, a
+  // higher quantile and more spline iterations).
+  static DetectorOptions ForMode(Mode mode);
+  absl::Status Validate() const;
+};
+
+// A marking's paint colour (lane/track/marking_reader.h, MarkingColorOf).
+enum class MarkingColor { kUnknown, kWhite, kYellow };
+const char* MarkingColorName(MarkingColor color);  // "unknown", "white", "yellow"
+// A marking's pattern (lane/track/marking_reader.h, MarkingTypeOf); kRoadEdge: a
+// boundary without paint (a curb, the asphalt's edge).
+enum class MarkingType { kUnknown, kSolid, kDashed, kDouble, kRoadEdge };
+// "unknown", "solid", "dashed", "double", "road_edge"
+const char* MarkingTypeName(MarkingType type);
+
+struct Lane {
+  // Cubic Bezier control points of the same boundary in three frames:
+  std::array<Eigen::Vector2d, 4> image;   // image pixels
+  std::array<Eigen::Vector2d, 4> ipm;     // IPM pixels (may lie outside the view after extension)
+  std::array<Eigen::Vector2d, 4> ground;  // metres: x lateral (right +), y ahead
+  double score = 0;                       // spline score in the top view
+  // With tracking (lane/track/frame_tracker.h): the track's id (stable while tracked,
+  // never reused within a tracker), whether it is confirmed, its colour and
+  // its type. -1, false, unknown, unknown without.
+  int id = -1;
+  bool confirmed = false;
+  // With tracking: not detected in this frame; the confirmed track's
+  // prediction, reported for a few frames after it was last seen
+  // (LaneTrackingOptions::coast_frames).
+  bool predicted = false;
+  MarkingColor color = MarkingColor::kUnknown;
+  MarkingType type = MarkingType::kUnknown;
+};
+
+// The ego lane: the nearest boundary on each side of the camera.
+struct EgoLane {
+  double offset_m = 0;  // camera from the lane centre, positive to the right
+  double width_m = 0;
+  double heading_deg = 0;      // lane direction from the optical axis on the ground, right +
+  double curvature_per_m = 0;  // positive when the lane bends right
+  int left_index = -1;         // into the frame's lanes
+  int right_index = -1;
+  int left_id = -1;  // tracking ids, -1 without tracking
+  int right_id = -1;
+  double left_distance_m = 0;  // camera to each boundary, laterally
+  double right_distance_m = 0;
+  // Lateral speed of the camera in the lane (m/s, right +), from tracking;
+  // 0 without.
+  double offset_rate_mps = 0;
+  // Time to line crossing below departure_tlc_s while moving towards that
+  // line faster than departure_min_rate_mps.
+  bool departing = false;
+};
+
+// Wall time of each stage, milliseconds.
+struct StageTimings {
+  double ipm_ms = 0;
+  double filter_ms = 0;
+  double threshold_ms = 0;
+  double lines_ms = 0;  // column-sum Hough and RANSAC lines
+  double splines_ms = 0;
+  double postprocess_ms = 0;
+  double total_ms = 0;
+};
+
+struct Intermediates {
+  cv::Mat ipm;          // CV_32F top view, mean removed
+  cv::Mat filtered;     // CV_32F filter response
+  cv::Mat thresholded;  // CV_32F after the quantile threshold
+  float threshold = 0;
+  std::vector<ColumnPeak> peaks;
+  std::vector<IpmLine> lines;       // from the column peaks, then from the prior
+  std::vector<Bezier> ipm_splines;  // after RANSAC, before post-processing
+};
+
+struct Detection {
+  std::vector<Lane> lanes;  // sorted left to right at the bottom of the image
+  // With tracking (lane/track/frame_tracker.h): the ego lane, or none when not found.
+  std::optional<EgoLane> ego;
+  StageTimings timings;
+  std::optional<Intermediates> debug;
+};
+
+// What the detector reads of a frame: rows [top, bottom) (every column) and
+// which pixels. The detector never reads outside these rows, so a decoder
+// that produces only them (lane/decode's DecodeImageRegion) gives exactly the
+// lanes of a whole frame with the same pixels there.
+struct FrameNeeds {
+  enum class Pixels {
+    kBgr,  // all three channels: the colour check, or a channel computed from
+           // them (grey is the BT.601 grey of the decoded colour, as for a
+           // whole frame: a JPEG's own luma differs from it by rounding,
+           // enough to change RANSAC's draws)
+    kRed,  // the red channel alone (channel red, colour check off)
+  };
+  int top = 0;
+  int bottom = 0;
+  Pixels pixels = Pixels::kBgr;
+};
+
+// What a tracker expects in the next frame (lane/track/sequence_tracker.h,
+// SequenceTracker::Prior): each confirmed lane's predicted line in the top
+// view, with a search window around it. Detect fits a RANSAC line in the
+// window of each predicted lane that the column-sum Hough did not find this
+// frame, as if a peak had been there, so that a lane whose column sum fell
+// short (a worn or occluded marking, a dashed line between its dashes) is
+// found again. The window still needs evidence: the line and spline RANSAC
+// and the post-processing checks decide on it as on any other candidate,
+// and nothing is added where the window is empty.
+struct DetectionPrior {
+  struct Window {
+    IpmLine line;  // top on row 0, bottom on the last row of the top view
+    double half_width_m = 0.5;
+  };
+  std::vector<Window> windows;
+};
+
+// Immutable after Create; Detect is const and safe to call from many threads.
+class Detector {
+ public:
+  static absl::StatusOr<Detector> Create(const CameraModel& camera, const IpmOptions& ipm,
+                                         const DetectorOptions& options);
+
+  // `frame` must be CV_8UC3 (BGR) or CV_8UC1 (the detector's channel, or grey)
+  // of the camera's size; only rows Needs().top .. Needs().bottom - 1 are
+  // read, the others may hold anything. INVALID_ARGUMENT otherwise.
+  // `prior` (may be null): a tracker's prediction for this frame.
+  absl::StatusOr<Detection> Detect(const cv::Mat& frame,
+                                   const DetectionPrior* prior = nullptr) const;
+
+  const IpmMapping& ipm() const { return ipm_; }
+  const DetectorOptions& options() const { return options_; }
+  const FilterKernels& kernels() const { return kernels_; }
+  // The rows and pixels this detector reads of a frame (from its calibration
+  // and options, computed once).
+  const FrameNeeds& Needs() const { return needs_; }
+  // Bytes this detector holds between frames (its precomputed mapping and
+  // kernels); each Detect call allocates its working images on top.
+  size_t MemoryBytes() const;
+
+  // The single channel the detector reads from a frame, as a copy.
+  cv::Mat ExtractChannel(const cv::Mat& frame) const;
+  // The same channel as a view, without a copy (kMinRedGreen and kGray are
+  // computed from the BGR pixels where they are read).
+  ChannelView ViewChannel(const cv::Mat& frame) const;
+
+ private:
+  // The stages of Detect (detector.cc), in order.
+  absl::Status CheckFrame(const cv::Mat& frame) const;
+  cv::Mat TopView(const ChannelView& channel, cv::Mat* void_mask) const;
+  cv::Mat Filter(const cv::Mat& top_view, const cv::Mat& void_mask) const;
+  cv::Mat Threshold(const cv::Mat& filtered, float* threshold) const;
+  std::vector<IpmLine> FindLines(const cv::Mat& thresholded, std::mt19937_64& rng,
+                                 std::vector<ColumnPeak>* peaks) const;
+  // Lines in the prior's windows that `lines` does not already hold; the
+  // half width (px) of the spline window around each is appended to
+  // `half_widths_px`: its prior window, at most the usual spline window.
+  std::vector<IpmLine> FindPriorLines(const cv::Mat& thresholded, const DetectionPrior& prior,
+                                      const std::vector<IpmLine>& lines,
+                                      std::vector<double>* half_widths_px,
+                                      std::mt19937_64& rng) const;
+  // `half_widths_px`: each line's spline window (the prior's lines keep
+  // their narrower windows).
+  std::vector<SplineCandidate> FitSplines(const cv::Mat& thresholded,
+                                          const std::vector<IpmLine>& lines,
+                                          const std::vector<double>& half_widths_px,
+                                          std::mt19937_64& rng) const;
+  std::vector<Lane> ToLanes(const std::vector<SplineCandidate>& done) const;
+  // The camera's column in the top view (x = 0 at its near edge).
+  double CameraColumn() const;
+
+  Detector(IpmMapping ipm, DetectorOptions options, FilterKernels kernels)
+      : ipm_(std::move(ipm)), options_(std::move(options)), kernels_(std::move(kernels)) {}
+  FrameNeeds ComputeNeeds() const;
+
+  IpmMapping ipm_;
+  DetectorOptions options_;
+  FilterKernels kernels_;
+  FrameNeeds needs_;
+};
+
+}  // namespace lane
+
+#endif  // LANE_DETECTOR_H_

@@ -1,0 +1,548 @@
+#include "lane/geometry/ipm.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/core/hal/intrin.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "absl/strings/str_cat.h"
+#include "lane/base/four_sums.h"
+#include "lane/geometry/channel_view.h"
+
+namespace lane {
+
+namespace {
+
+// Top-view size along one axis for a ground range and resolution.
+int GroundPixels(double range_m, double metres_per_px) {
+  const double n = range_m / metres_per_px;
+  return n < 1e6 ? static_cast<int>(std::lround(n)) : 1000000;
+}
+
+// The bilinear taps of image point `p` (inside the image), scaled by `w`.
+template <class Add>
+void BilinearTaps(const Eigen::Vector2d& p, int image_width, int image_height, float w, Add add) {
+  const int x0 = std::clamp(static_cast<int>(p.x()), 0, std::max(0, image_width - 2));
+  const int y0 = std::clamp(static_cast<int>(p.y()), 0, std::max(0, image_height - 2));
+  const float fx = static_cast<float>(std::clamp(p.x() - x0, 0.0, 1.0));
+  const float fy = static_cast<float>(std::clamp(p.y() - y0, 0.0, 1.0));
+  add(x0, y0, w * (1 - fx) * (1 - fy));
+  add(x0 + 1, y0, w * fx * (1 - fy));
+  add(x0, y0 + 1, w * (1 - fx) * fy);
+  add(x0 + 1, y0 + 1, w * fx * fy);
+}
+
+// p[0] = 0, p[k + 1] = px[0] + ... + px[k] for k < n: exact integers, 16
+// pixels at a time where the CPU has 128-bit vectors (a running sum is a
+// chain of dependent adds, and at 1640x100 pixels a frame it was a third of
+// the area top view's time).
+void RowPrefixSums(const uint8_t* px, int n, int32_t* p) {
+  p[0] = 0;
+  int k = 0;
+  int32_t acc = 0;
+#if CV_SIMD128
+  using namespace cv;  // NOLINT: OpenCV's universal intrinsics (v_*)
+  v_uint32x4 carry = v_setzero_u32();
+  for (; k + 16 <= n; k += 16) {
+    v_uint16x8 lo, hi;
+    v_expand(v_load(px + k), lo, hi);
+    // Prefix sums within each half (at most 16 * 255: no overflow in u16).
+    lo += v_rotate_left<1>(lo);
+    lo += v_rotate_left<2>(lo);
+    lo += v_rotate_left<4>(lo);
+    hi += v_rotate_left<1>(hi);
+    hi += v_rotate_left<2>(hi);
+    hi += v_rotate_left<4>(hi);
+    hi += v_setall_u16(v_extract_n<7>(lo));
+    v_uint32x4 a, b, c, d;
+    v_expand(lo, a, b);
+    v_expand(hi, c, d);
+    a += carry;
+    b += carry;
+    c += carry;
+    d += carry;
+    v_store(reinterpret_cast<unsigned*>(p + k + 1), a);
+    v_store(reinterpret_cast<unsigned*>(p + k + 5), b);
+    v_store(reinterpret_cast<unsigned*>(p + k + 9), c);
+    v_store(reinterpret_cast<unsigned*>(p + k + 13), d);
+    carry = v_broadcast_element<3>(d);
+  }
+  acc = p[k];
+#endif
+  for (; k < n; ++k) p[k + 1] = acc += px[k];
+}
+
+// At most this many sub-samples per axis of one top-view pixel in area
+// sampling: beyond, the average is good enough and the taps only cost time.
+constexpr int kMaxSubsamples = 12;
+
+}  // namespace
+
+absl::Status IpmOptions::Validate() const {
+  if (!std::isfinite(horizon_margin_px) || horizon_margin_px < 0) {
+    return absl::InvalidArgumentError("ipm.horizon_margin_px must be a finite number >= 0");
+  }
+  if (view == IpmView::kGround) {
+    const GroundView& g = ground;
+    const double v[] = {g.x_min_m, g.x_max_m,         g.y_min_m,
+                        g.y_max_m, g.metres_per_px_x, g.metres_per_px_y};
+    for (double x : v) {
+      if (!std::isfinite(x)) return absl::InvalidArgumentError("ipm.ground values must be finite");
+    }
+    if (!(g.x_max_m > g.x_min_m) || !(g.y_min_m > 0) || !(g.y_max_m > g.y_min_m)) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "ipm.ground must have x_max_m > x_min_m and y_max_m > y_min_m > 0 (metres ahead of "
+          "the camera), got x ",
+          g.x_min_m, "..", g.x_max_m, ", y ", g.y_min_m, "..", g.y_max_m));
+    }
+    if (!(g.metres_per_px_x >= 0.001 && g.metres_per_px_x <= 10 && g.metres_per_px_y >= 0.001 &&
+          g.metres_per_px_y <= 10)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("ipm.ground.metres_per_px_x and _y must lie in [0.001, 10] metres, got ",
+                       g.metres_per_px_x, " and ", g.metres_per_px_y));
+    }
+    const int w = GroundPixels(g.x_max_m - g.x_min_m, g.metres_per_px_x);
+    const int h = GroundPixels(g.y_max_m - g.y_min_m, g.metres_per_px_y);
+    if (w < 8 || h < 8 || w > 2048 || h > 2048) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "ipm.ground gives a ", w, "x", h,
+          " pixel top view; ranges / metres_per_px must give 8..2048 pixels each way"));
+    }
+    return absl::OkStatus();
+  }
+  if (width < 8 || height < 8 || width > 2048 || height > 2048) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("ipm size must be within 8..2048 pixels, got ", width, "x", height));
+  }
+  const double v[] = {roi.left, roi.right, roi.top, roi.bottom};
+  for (double x : v) {
+    if (!std::isfinite(x)) return absl::InvalidArgumentError("ipm.roi values must be finite");
+  }
+  if (roi.right <= roi.left || roi.bottom <= roi.top) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("ipm.roi must have right > left and bottom > top, got left=", roi.left,
+                     " right=", roi.right, " top=", roi.top, " bottom=", roi.bottom));
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<IpmMapping> IpmMapping::Create(const CameraModel& camera,
+                                              const IpmOptions& options) {
+  if (auto s = camera.Validate(); !s.ok()) return s;
+  if (auto s = options.Validate(); !s.ok()) return s;
+
+  IpmMapping m;
+  m.camera_ = camera;
+  m.options_ = options;
+  const double horizon = camera.HorizonRow();
+  const double top_limit = horizon + options.horizon_margin_px;
+
+  if (options.view == IpmView::kGround) {
+    // The ground rectangle as given; the ROI is the bounding box of its
+    // projection, clipped to the image and to below the horizon.
+    const GroundView& g = options.ground;
+    m.width_ = GroundPixels(g.x_max_m - g.x_min_m, g.metres_per_px_x);
+    m.height_ = GroundPixels(g.y_max_m - g.y_min_m, g.metres_per_px_y);
+    m.x_min_ = g.x_min_m;
+    m.x_max_ = g.x_max_m;
+    m.y_min_ = g.y_min_m;
+    m.y_max_ = g.y_max_m;
+    m.mpp_x_ = (m.x_max_ - m.x_min_) / m.width_;
+    m.mpp_y_ = (m.y_max_ - m.y_min_) / m.height_;
+    Roi box{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+            std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+    for (const double x : {g.x_min_m, g.x_max_m}) {
+      for (const double y : {g.y_min_m, g.y_max_m}) {
+        const Eigen::Vector2d p = camera.GroundToImage({x, y});
+        if (!p.allFinite() || !(p.y() > horizon)) {
+          return absl::InvalidArgumentError(
+              absl::StrCat("ipm.ground corner (", x, ", ", y,
+                           ") m does not project below the horizon: is the camera's pitch right?"));
+        }
+        box.left = std::min(box.left, p.x());
+        box.right = std::max(box.right, p.x());
+        box.top = std::min(box.top, p.y());
+        box.bottom = std::max(box.bottom, p.y());
+      }
+    }
+    Roi roi;
+    roi.left = std::max(box.left, 0.0);
+    roi.right = std::min(box.right, camera.image_width - 1.0);
+    roi.top = std::max(box.top, std::max(0.0, top_limit));
+    roi.bottom = std::min(box.bottom, camera.image_height - 1.0);
+    if (roi.right - roi.left < 2 || roi.bottom - roi.top < 2) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "ipm.ground (x ", g.x_min_m, "..", g.x_max_m, " m, y ", g.y_min_m, "..", g.y_max_m,
+          " m) projects to image rows ", box.top, "..", box.bottom, ", columns ", box.left, "..",
+          box.right, ": no usable part inside the ", camera.image_width, "x", camera.image_height,
+          " image below the horizon (row ", horizon, " + margin ", options.horizon_margin_px, ")"));
+    }
+    m.roi_ = roi;
+  } else {
+    // Clip the ROI to the image and to below the horizon.
+    Roi roi = options.roi;
+    roi.left = std::max(roi.left, 0.0);
+    roi.right = std::min(roi.right, camera.image_width - 1.0);
+    roi.bottom = std::min(roi.bottom, camera.image_height - 1.0);
+    roi.top = std::max(roi.top, top_limit);
+    if (roi.right - roi.left < 2 || roi.bottom - roi.top < 2) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "ipm.roi (left=", options.roi.left, " right=", options.roi.right,
+          " top=", options.roi.top, " bottom=", options.roi.bottom,
+          ") has no usable part inside the ", camera.image_width, "x", camera.image_height,
+          " image below the horizon (row ", horizon, " + margin ", options.horizon_margin_px, ")"));
+    }
+    m.roi_ = roi;
+    m.width_ = options.width;
+    m.height_ = options.height;
+
+    // Ground footprint of the ROI: its corners and the vanishing point's column
+    // on its top and bottom rows.
+    const double vp_u = std::clamp(camera.VanishingPoint().x(), roi.left, roi.right);
+    const Eigen::Vector2d corners[] = {{roi.left, roi.top},     {roi.right, roi.top},
+                                       {vp_u, roi.top},         {roi.left, roi.bottom},
+                                       {roi.right, roi.bottom}, {vp_u, roi.bottom}};
+    m.x_min_ = m.y_min_ = std::numeric_limits<double>::infinity();
+    m.x_max_ = m.y_max_ = -std::numeric_limits<double>::infinity();
+    for (const auto& c : corners) {
+      const Eigen::Vector2d g = camera.ImageToGround(c);
+      if (!g.allFinite() || g.y() <= 0) {
+        return absl::InvalidArgumentError("ipm.roi maps to points behind the camera");
+      }
+      m.x_min_ = std::min(m.x_min_, g.x());
+      m.x_max_ = std::max(m.x_max_, g.x());
+      m.y_min_ = std::min(m.y_min_, g.y());
+      m.y_max_ = std::max(m.y_max_, g.y());
+    }
+    m.mpp_x_ = (m.x_max_ - m.x_min_) / m.width_;
+    m.mpp_y_ = (m.y_max_ - m.y_min_) / m.height_;
+    if (!(m.mpp_x_ > 0) || !(m.mpp_y_ > 0)) {
+      return absl::InvalidArgumentError("ipm.roi has an empty ground footprint");
+    }
+  }
+  m.BuildTaps();
+  if (m.valid_count_ == 0) return absl::InvalidArgumentError("ipm maps to no image pixel");
+  return m;
+}
+
+void IpmMapping::BuildTaps() {
+  // The per-pixel quads, computed once per calibration.
+  const int n = width_ * height_;
+  const Roi& roi = roi_;
+  const int iw = camera_.image_width;
+  const int ih = camera_.image_height;
+  const auto inside = [&roi](const Eigen::Vector2d& img) {
+    return img.allFinite() && img.x() >= roi.left && img.x() <= roi.right && img.y() >= roi.top &&
+           img.y() <= roi.bottom;
+  };
+  struct XyQuad {
+    int x = -1, y = -1;  // top-left image pixel; x < 0: invalid
+    float w[4] = {0, 0, 0, 0};
+  };
+  std::vector<XyQuad> xy(n);
+  valid_ = cv::Mat::zeros(height_, width_, CV_8U);
+  valid_count_ = 0;
+  int x0 = iw, x1 = -1, y0 = ih, y1 = -1;  // the band: every quad's 2x2
+  for (int r = 0; r < height_; ++r) {
+    for (int c = 0; c < width_; ++c) {
+      const Eigen::Vector2d img = IpmToImage(Eigen::Vector2d(c, r));
+      if (!inside(img)) continue;
+      XyQuad& q = xy[r * width_ + c];
+      if (options_.interpolation == Interpolation::kNearest) {
+        const int x = std::clamp(static_cast<int>(std::lround(img.x())), 0, iw - 1);
+        const int y = std::clamp(static_cast<int>(std::lround(img.y())), 0, ih - 1);
+        q.x = std::min(x, std::max(0, iw - 2));
+        q.y = std::min(y, std::max(0, ih - 2));
+        q.w[(x - q.x) + 2 * (y - q.y)] = 1.f;
+      } else {  // bilinear; area uses the quads for validity (BuildSegments samples)
+        BilinearTaps(img, iw, ih, 1.f, [&q](int x, int y, float w) {
+          if (q.x < 0) {
+            q.x = x;
+            q.y = y;
+          }
+          q.w[(x - q.x) + 2 * (y - q.y)] = std::max(0.f, w);
+        });
+      }
+      if (!(q.w[0] > 0 || q.w[1] > 0 || q.w[2] > 0 || q.w[3] > 0)) {
+        q.x = -1;
+        continue;
+      }
+      valid_.at<uint8_t>(r, c) = 255;
+      ++valid_count_;
+      x0 = std::min(x0, q.x);
+      y0 = std::min(y0, q.y);
+      x1 = std::max(x1, q.x + 1);
+      y1 = std::max(y1, q.y + 1);
+    }
+  }
+  const bool any = valid_count_ > 0;
+  tap_row0_ = any ? y0 : 0;
+  tap_rows_ = any ? y1 - y0 + 1 : 0;
+  tap_col0_ = any ? x0 : 0;
+  tap_cols_ = any ? x1 - x0 + 1 : 0;
+  quads_.clear();
+  quads_.reserve(valid_count_);
+  for (int i = 0; i < n; ++i) {
+    const XyQuad& q = xy[i];
+    if (q.x < 0) continue;
+    quads_.push_back({i,
+                      static_cast<int16_t>(q.y - tap_row0_),
+                      static_cast<int16_t>(q.x - tap_col0_),
+                      {q.w[0], q.w[1], q.w[2], q.w[3]}});
+  }
+  cv::bitwise_not(valid_, invalid_);
+  invalid_pixels_.clear();
+  for (int i = 0; i < n; ++i) {
+    if (invalid_.data[i] != 0) invalid_pixels_.push_back(i);  // valid_ is continuous
+  }
+  invalid_pixels_.shrink_to_fit();
+  if (options_.interpolation == Interpolation::kArea) {
+    BuildSegments();
+    // Area sampling reads the sub-rows alone: the quads only marked validity
+    // (valid_), and a session need not hold them (0.44 MiB for the CULane
+    // view).
+    quads_.clear();
+    quads_.shrink_to_fit();
+  }
+}
+
+void IpmMapping::BuildSegments() {
+  // The footprint of IPM pixel (c, r) is the image of the ground cell
+  // [c - 0.5, c + 0.5] x [r - 0.5, r + 0.5]. Lines of constant ground y are
+  // (nearly) horizontal in the image (the camera does not roll), so the
+  // footprint is cut into `nv` sub-rows of constant y, each a horizontal
+  // segment of the image between the images of its left and right corners:
+  // a box along the image row, and linear interpolation between the two
+  // image rows around it. nv follows the footprint's height in image rows,
+  // so every image row of the footprint is read.
+  struct Box {
+    int row;       // the upper image row
+    float u0, u1;  // prefix coordinates of the box
+    float w0, w1;  // weights of the upper and the lower row
+  };
+  const int n = width_ * height_;
+  const int iw = camera_.image_width;
+  const int ih = camera_.image_height;
+  std::vector<Box> boxes;
+  boxes.reserve(2 * n);
+  seg_start_.assign(n + 1, 0);
+  seg_row0_ = ih;
+  seg_row1_ = -1;
+  int col1 = 0;
+  for (int r = 0; r < height_; ++r) {
+    for (int c = 0; c < width_; ++c) {
+      const int i = r * width_ + c;
+      seg_start_[i] = static_cast<int32_t>(boxes.size());
+      if (valid_.at<uint8_t>(r, c) == 0) continue;  // invalid
+      const double v_top = IpmToImage({c, r - 0.5}).y(), v_bot = IpmToImage({c, r + 0.5}).y();
+      const int nv =
+          std::clamp(static_cast<int>(std::ceil(std::abs(v_bot - v_top))), 1, kMaxSubsamples);
+      const size_t first = boxes.size();
+      double total = 0;
+      for (int b = 0; b < nv; ++b) {
+        const double t = r - 0.5 + (b + 0.5) / nv;
+        Eigen::Vector2d a = IpmToImage({c - 0.5, t}), z = IpmToImage({c + 0.5, t});
+        if (!a.allFinite() || !z.allFinite()) continue;
+        if (a.x() > z.x()) std::swap(a, z);
+        const double v = 0.5 * (a.y() + z.y());
+        // Clipped to the image; a segment narrower than a pixel is widened
+        // around its centre to one pixel (then it reads like bilinear).
+        double u0 = std::max(0.0, a.x()), u1 = std::min(iw - 1.0, z.x());
+        if (u1 - u0 < 1.0) {
+          const double m = std::clamp(0.5 * (u0 + u1), 0.5, iw - 1.5);
+          u0 = m - 0.5;
+          u1 = m + 0.5;
+        }
+        if (!(v >= 0 && v <= ih - 1)) continue;
+        const int v0 = std::min(static_cast<int>(v), ih - 2);
+        const double fv = v - v0;
+        // Pixel k covers [k - 0.5, k + 0.5]: the box [u0, u1] in prefix
+        // coordinates is [u0 + 0.5, u1 + 0.5]. Weights as floats, as they
+        // are applied.
+        Box box{v0, static_cast<float>(u0 + 0.5), static_cast<float>(u1 + 0.5),
+                static_cast<float>(1 - fv), static_cast<float>(fv)};
+        if (1 - fv > 0) total += 1 - fv;
+        if (fv > 0) total += fv;
+        seg_row0_ = std::min(seg_row0_, v0);
+        seg_row1_ = std::max(seg_row1_, v0 + 1);
+        col1 = std::max(col1, static_cast<int>(std::ceil(u1 + 0.5)) + 1);
+        boxes.push_back(box);
+      }
+      for (size_t k = first; k < boxes.size(); ++k) {
+        Box& bx = boxes[k];
+        const double width = bx.u1 - bx.u0;
+        bx.w0 = bx.w0 > 0 ? static_cast<float>(bx.w0 / total / width) : 0.f;
+        bx.w1 = bx.w1 > 0 ? static_cast<float>(bx.w1 / total / width) : 0.f;
+      }
+    }
+  }
+  seg_start_[n] = static_cast<int32_t>(boxes.size());
+  seg_cols_ = std::min(col1, iw) + 1;
+  // The prefix lookups, resolved: column k of a prefix coordinate u and the
+  // fraction beyond it, as Apply's interpolation reads them.
+  const auto column = [this](float u) { return std::min(static_cast<int>(u), seg_cols_ - 2); };
+  segments_.clear();
+  segments_.reserve(boxes.size());
+  for (const Box& bx : boxes) {
+    const int k0 = column(bx.u0), k1 = column(bx.u1);
+    segments_.push_back(
+        {(bx.row - seg_row0_) * seg_cols_ + k0, k1 - k0, bx.u0 - k0, bx.u1 - k1, bx.w0, bx.w1});
+  }
+  seg_empty_.clear();
+  for (int i = 0; i < n; ++i) {
+    if (seg_start_[i] == seg_start_[i + 1]) seg_empty_.push_back(i);
+  }
+  seg_empty_.shrink_to_fit();
+}
+
+cv::Mat IpmMapping::ApplySegments(const cv::Mat& image, int channel, int channel2) const {
+  // The channel over the rows and columns read, then the prefix sums of each
+  // of its rows: P[k] = sum of pixels 0 .. k - 1 (exact in int32: at most
+  // 16384 * 255).
+  const int cols = seg_cols_;
+  const int rows = seg_row1_ - seg_row0_ + 1;
+  thread_local cv::Mat scratch, scratch2;
+  const cv::Mat band = ChannelBand(image, cv::Rect(0, seg_row0_, cols - 1, rows), channel, channel2,
+                                   scratch, scratch2);
+  thread_local std::vector<int32_t> prefix;
+  prefix.resize(static_cast<size_t>(rows) * cols);
+  for (int v = 0; v < rows; ++v) {
+    RowPrefixSums(band.ptr<uint8_t>(v), cols - 1, prefix.data() + static_cast<size_t>(v) * cols);
+  }
+  // The box average of one row: prefix difference between the two
+  // interpolated prefix positions.
+  const auto box = [](const int32_t* p, int len, float f0, float f1) {
+    const float at1 = p[len] + f1 * static_cast<float>(p[len + 1] - p[len]);
+    const float at0 = p[0] + f0 * static_cast<float>(p[1] - p[0]);
+    return at1 - at0;
+  };
+  cv::Mat out(height_, width_, CV_32F);
+  float* dst = out.ptr<float>(0);
+  const int n = width_ * height_;
+  const int32_t* base = prefix.data();
+  // The mean for the empty pixels in four partial sums (the additions do
+  // not wait on each other; the mean, rounded to float, is the same).
+  double part[4] = {0, 0, 0, 0};
+  for (int i = 0; i < n; ++i) {
+    const int a = seg_start_[i], b = seg_start_[i + 1];
+    if (a == b) continue;
+    float value = 0;
+    for (int k = a; k < b; ++k) {
+      const SubRow& sr = segments_[k];
+      const int32_t* p = base + sr.off0;
+      value += sr.w0 * box(p, sr.len, sr.f0, sr.f1);
+      value += sr.w1 * box(p + cols, sr.len, sr.f0, sr.f1);
+    }
+    value *= 1.f / 255.f;
+    dst[i] = value;
+    part[i & 3] += value;
+  }
+  const double sum = (part[0] + part[1]) + (part[2] + part[3]);
+  const float mean = static_cast<float>(sum / valid_count_);
+  for (const int32_t i : seg_empty_) dst[i] = mean;
+  return out;
+}
+
+double IpmMapping::mean_taps() const {
+  if (valid_count_ == 0) return 0.0;
+  if (options_.interpolation == Interpolation::kArea) {
+    double rows = 0;  // each sub-row reads two image rows
+    for (const SubRow& sr : segments_) rows += (sr.w0 > 0) + (sr.w1 > 0);
+    return rows / valid_count_;
+  }
+  double taps = 0;
+  for (const Quad& q : quads_) taps += (q.w[0] > 0) + (q.w[1] > 0) + (q.w[2] > 0) + (q.w[3] > 0);
+  return taps / valid_count_;
+}
+
+cv::Mat IpmMapping::ChannelBand(const cv::Mat& image, const cv::Rect& rect, int channel,
+                                int channel2, cv::Mat& scratch, cv::Mat& scratch2) {
+  const cv::Mat src = image(rect);
+  if (src.channels() == 1) return src;
+  if (channel2 == kGrayOfBgr) {
+    cv::cvtColor(src, scratch, cv::COLOR_BGR2GRAY);  // BT.601 in fixed point, as GrayOfBgr
+  } else if (channel2 >= 0) {
+    cv::extractChannel(src, scratch, channel);
+    cv::extractChannel(src, scratch2, channel2);
+    cv::min(scratch, scratch2, scratch);
+  } else {
+    cv::extractChannel(src, scratch, channel);
+  }
+  return scratch;
+}
+
+cv::Mat IpmMapping::Apply(const cv::Mat& image, int channel, int channel2) const {
+  CV_Assert(image.depth() == CV_8U && image.cols == camera_.image_width &&
+            image.rows == camera_.image_height && channel >= 0 && channel < image.channels() &&
+            channel2 < image.channels() && (channel2 != kGrayOfBgr || image.channels() == 3));
+  if (options_.interpolation == Interpolation::kArea)
+    return ApplySegments(image, channel, channel2);
+  // Every pixel is written below: a valid one from its quad, an invalid one
+  // (outside the ROI) with the valid ones' mean.
+  cv::Mat out(height_, width_, CV_32F);
+  float* dst = out.ptr<float>(0);  // continuous: freshly allocated
+  // Each quad's 2x2 from `base` (the band's top-left), `dx` bytes to the next
+  // column and `dy` to the next row. A quad's zero weights add an exact 0:
+  // the sum equals that of its non-zero taps alone. The mean for the invalid
+  // pixels is added in four partial sums (four_sums.h; the mean, rounded to
+  // float, is the same).
+  const auto gather = [&](const uint8_t* base, int dx, size_t dy) {
+    const auto pixel = [&](const Quad& q) {
+      const uint8_t* p = base + q.row * dy + q.col * dx;
+      float v = 0.f;
+      v += q.w[0] * p[0];
+      v += q.w[1] * p[dx];
+      v += q.w[2] * p[dy];
+      v += q.w[3] * p[dy + dx];
+      v *= 1.f / 255.f;
+      dst[q.pixel] = v;
+      return static_cast<double>(v);
+    };
+    return internal::SumInFourParts(quads_.size(), [&](size_t k) { return pixel(quads_[k]); });
+  };
+  double sum = 0;
+  if (channel2 == -1 && image.channels() > 1) {
+    // One channel of a colour frame: read in place (no extracted band).
+    const int cn = image.channels();
+    sum = gather(image.ptr<uint8_t>(tap_row0_) + tap_col0_ * cn + channel, cn, image.step[0]);
+  } else {
+    thread_local cv::Mat scratch, scratch2;
+    const cv::Mat band = ChannelBand(image, cv::Rect(tap_col0_, tap_row0_, tap_cols_, tap_rows_),
+                                     channel, channel2, scratch, scratch2);
+    sum = gather(band.ptr<uint8_t>(0), 1, band.step[0]);
+  }
+  const float mean = static_cast<float>(sum / valid_count_);
+  for (const int32_t i : invalid_pixels_) dst[i] = mean;
+  return out;
+}
+
+Eigen::Vector2d IpmMapping::IpmToGround(const Eigen::Vector2d& ipm) const {
+  return {x_min_ + (ipm.x() + 0.5) * mpp_x_, y_max_ - (ipm.y() + 0.5) * mpp_y_};
+}
+
+Eigen::Vector2d IpmMapping::GroundToIpm(const Eigen::Vector2d& ground) const {
+  return {(ground.x() - x_min_) / mpp_x_ - 0.5, (y_max_ - ground.y()) / mpp_y_ - 0.5};
+}
+
+Eigen::Vector2d IpmMapping::IpmToImage(const Eigen::Vector2d& ipm) const {
+  return camera_.GroundToImage(IpmToGround(ipm));
+}
+
+Eigen::Vector2d IpmMapping::ImageToIpm(const Eigen::Vector2d& image) const {
+  return GroundToIpm(camera_.ImageToGround(image));
+}
+
+std::pair<int, int> IpmMapping::ImageRows() const {
+  if (options_.interpolation == Interpolation::kArea) return {seg_row0_, seg_row1_};
+  return {tap_row0_, tap_row0_ + tap_rows_ - 1};
+}
+
+size_t IpmMapping::MemoryBytes() const {
+  return quads_.capacity() * sizeof(Quad) + seg_start_.capacity() * sizeof(seg_start_[0]) +
+         seg_empty_.capacity() * sizeof(seg_empty_[0]) + segments_.capacity() * sizeof(SubRow) +
+         valid_.total() * valid_.elemSize() + invalid_.total() * invalid_.elemSize() +
+         invalid_pixels_.capacity() * sizeof(invalid_pixels_[0]);
+}
+
+}  // namespace lane

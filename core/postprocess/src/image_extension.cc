@@ -1,0 +1,290 @@
+#include "lane/postprocess/image_extension.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace lane {
+namespace {
+
+Eigen::Vector2d Normal(const Eigen::Vector2d& t) { return Eigen::Vector2d(-t.y(), t.x()); }
+
+bool InImage(const Eigen::Vector2d& p, const ChannelView& image) {
+  return image.Inside(p.x(), p.y());
+}
+
+// Image pixels per metre across the road (ground x) at image point `p`.
+double PixelsPerMetreAcross(const CameraModel& camera, const Eigen::Vector2d& p) {
+  const Eigen::Vector2d g = camera.ImageToGround(p);
+  if (!g.allFinite() || g.y() <= 0) return 0;
+  const Eigen::Vector2d q = camera.GroundToImage(g + Eigen::Vector2d(1, 0));
+  return q.allFinite() ? (q - p).norm() : 0;
+}
+
+struct Bar {
+  double offset = 0;    // along the normal, pixels
+  double contrast = 0;  // peak minus the brighter side
+};
+
+// The strongest bar of the smoothed profile across `p` (normal `n`).
+std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
+                           const Eigen::Vector2d& p, const Eigen::Vector2d& n,
+                           const ImageExtendOptions& o) {
+  const double ppm = PixelsPerMetreAcross(camera, p);
+  if (!(ppm > 0)) return std::nullopt;
+  const double width_px = o.marking_width_m * ppm;
+  const double sigma = QuantizedSigma(std::max(0.7, std::min(o.sigma_px, 0.5 * width_px)));
+  const double side = std::max(width_px, 2.5 * sigma);
+  const double half = std::clamp(o.search_m * ppm, o.min_search_px, o.max_search_px);
+  const int h = static_cast<int>(std::lround(half + side + 3 * sigma));
+  thread_local std::vector<float> raw;
+  thread_local std::vector<double> smooth;
+  raw.resize(2 * h + 1);
+  if (!image.SampleAlong(p, n, h, raw.data())) return std::nullopt;  // it leaves the image
+  SmoothProfile(raw, sigma, smooth);
+  // Best bar within +-half of the centre.
+  const int s = static_cast<int>(std::lround(side));
+  std::optional<Bar> best;
+  const int lo = h - static_cast<int>(std::lround(half)),
+            hi = h + static_cast<int>(std::lround(half));
+  for (int i = std::max(lo, s + 1); i <= std::min(hi, static_cast<int>(raw.size()) - s - 2); ++i) {
+    if (!(smooth[i] >= smooth[i - 1] && smooth[i] >= smooth[i + 1])) continue;
+    const double c = smooth[i] - std::max(smooth[i - s], smooth[i + s]);
+    if (c <= 0 || (best && c <= best->contrast)) continue;
+    double off = i;
+    const double l = smooth[i - 1], m = smooth[i], r = smooth[i + 1];
+    const double denom = l - 2 * m + r;
+    if (denom < 0) off += std::clamp(0.5 * (l - r) / denom, -0.5, 0.5);
+    best = Bar{off - h, c};
+  }
+  return best;
+}
+
+// LocalizeInImage's profile samples per smoothing sigma.
+constexpr double kSamplesPerSigma = 4.0;
+
+}  // namespace
+
+std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& image,
+                                      const CameraModel& camera, int n, double search_m,
+                                      double sigma_m, double min_sigma_px, double max_search_px,
+                                      double min_cos) {
+  std::vector<Eigen::Vector2d> pts;
+  for (int i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) / (n - 1);
+    const Eigen::Vector2d p = spline.Eval(t);
+    Eigen::Vector2d tangent = spline.Derivative(t);
+    if (tangent.norm() < 1e-9 || !InImage(p, image)) continue;
+    tangent.normalize();
+    const double ppm = PixelsPerMetreAcross(camera, p);
+    if (!(ppm > 0)) continue;
+    const Eigen::Vector2d normal = Normal(tangent);
+    const double sigma = QuantizedSigma(std::max(min_sigma_px, sigma_m * ppm));
+    const double half = std::clamp(search_m * ppm, 2.0, max_search_px);
+    // The profile is sampled every `spacing` pixels, kSamplesPerSigma
+    // samples per sigma (one pixel while sigma <= 4 px): near the camera a
+    // 10 cm sigma spans 5-10 px, and a 1 px raster only multiplied the
+    // samples and the taps.
+    const double spacing = std::max(1.0, sigma / kSamplesPerSigma);
+    const double sigma_samples = spacing > 1.0 ? kSamplesPerSigma : sigma;
+    thread_local std::vector<float> profile;
+    SampleProfile(image, p, spacing * normal, half / spacing, profile);
+    const auto peak = FindProfilePeak(profile, sigma_samples);
+    if (!peak) continue;
+    const double offset = spacing * peak->offset;
+    const Eigen::Vector2d q = p + offset * normal;
+    if (!pts.empty()) {
+      const Eigen::Vector2d step = q - pts.back();
+      if (step.norm() < 1e-9 || step.normalized().dot(tangent) < min_cos) continue;
+    }
+    pts.push_back(q);
+  }
+  if (pts.size() < 4) return std::nullopt;
+  return FitBezier(pts);
+}
+
+namespace {
+
+// Whether the ground step from image point a to b runs within max_deg of the
+// road's direction (the ground y axis).
+bool AlongTheRoad(const CameraModel& camera, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                  double max_deg) {
+  if (max_deg <= 0) return true;
+  const Eigen::Vector2d ga = camera.ImageToGround(a), gb = camera.ImageToGround(b);
+  if (!ga.allFinite() || !gb.allFinite() || ga.y() <= 0 || gb.y() <= 0) return false;
+  return AngleFromVerticalDeg(gb - ga) <= max_deg;
+}
+
+}  // namespace
+
+double GroundAngleFromRoadDeg(const Bezier& spline, const CameraModel& camera) {
+  const Eigen::Vector2d a = camera.ImageToGround(spline.p[0]);
+  const Eigen::Vector2d b = camera.ImageToGround(spline.p[3]);
+  if (!a.allFinite() || !b.allFinite() || a.y() <= 0 || b.y() <= 0) return 90.0;
+  return AngleFromVerticalDeg(b - a);
+}
+
+ExtensionRows ImageExtensionRows(const CameraModel& camera, const Roi& roi,
+                                 const PostprocessOptions& pp) {
+  const double horizon = camera.HorizonRow();
+  ExtensionRows rows;
+  rows.min_row =
+      pp.extend_min_row >= 0 ? pp.extend_min_row : horizon + 0.15 * (roi.bottom - horizon);
+  rows.max_row =
+      pp.extend_max_row >= 0 ? pp.extend_max_row : roi.bottom + 0.2 * (roi.bottom - horizon);
+  return rows;
+}
+
+ImageExtendOptions ImageExtendOptionsFrom(const PostprocessOptions& pp, double scale,
+                                          double min_row, double max_row, double marking_width_m) {
+  ImageExtendOptions o;
+  o.step_px = pp.extend_step_px * scale;
+  o.search_m = pp.extend_search_m;
+  o.min_search_px = 4 * scale;
+  o.max_search_px = 2 * pp.extend_search_px * scale;
+  o.marking_width_m = marking_width_m;
+  o.sigma_px = pp.profile_sigma_px * scale;
+  o.continuation_threshold = pp.continuation_threshold;
+  o.max_gap_m = pp.extend_gap_m;
+  o.min_cos_up = pp.extend_min_cos_up;
+  o.min_cos_down = pp.extend_min_cos_down;
+  o.max_ground_angle_deg = pp.ipm_max_angle_from_vertical_deg;
+  o.min_row = min_row;
+  o.max_row = max_row;
+  o.extrapolate_down = pp.extend_to_max_row;
+  return o;
+}
+
+double ImageBarContrast(const Bezier& spline, const ChannelView& image, const CameraModel& camera,
+                        const ImageExtendOptions& options, int samples) {
+  double sum = 0;
+  int n = 0;
+  ImageExtendOptions o = options;
+  o.search_m = 0.5 * options.marking_width_m;  // at the spline, not beside it
+  o.min_search_px = 2;
+  for (int i = 0; i < samples; ++i) {
+    const double t = (i + 0.5) / samples;
+    const Eigen::Vector2d p = spline.Eval(t);
+    Eigen::Vector2d d = spline.Derivative(t);
+    if (d.norm() < 1e-9 || !InImage(p, image)) continue;
+    const auto bar = FindBar(image, camera, p, Normal(d.normalized()), o);
+    sum += bar ? bar->contrast : 0.0;
+    ++n;
+  }
+  return n > 0 ? sum / n : 0.0;
+}
+
+std::optional<Bezier> ClipToImageContent(const Bezier& spline, const ChannelView& image) {
+  constexpr int kSamples = 40;
+  // "Black": no pixel of the 5x5 neighbourhood above this (of 255).
+  constexpr float kBlack = 12.f;
+  const float black = image.image.depth() == CV_32F ? kBlack / 255.f : kBlack;
+  const auto on_content = [&](const Eigen::Vector2d& p) {
+    if (!InImage(p, image)) return false;
+    const int x = static_cast<int>(std::lround(p.x())), y = static_cast<int>(std::lround(p.y()));
+    for (int dy = -2; dy <= 2; ++dy) {
+      for (int dx = -2; dx <= 2; ++dx) {
+        const int xx = std::clamp(x + dx, 0, image.cols() - 1);
+        const int yy = std::clamp(y + dy, image.top(), image.bottom() - 1);
+        if (image.At(xx, yy) > black) return true;
+      }
+    }
+    return false;
+  };
+  const std::vector<Eigen::Vector2d> pts = spline.Sample(kSamples);
+  int best_start = 0, best_len = 0;
+  for (int i = 0; i < kSamples;) {
+    if (!on_content(pts[i])) {
+      ++i;
+      continue;
+    }
+    int j = i;
+    while (j < kSamples && on_content(pts[j])) ++j;
+    if (j - i > best_len) {
+      best_len = j - i;
+      best_start = i;
+    }
+    i = j;
+  }
+  if (best_len == kSamples) return spline;
+  if (best_len < 4) return std::nullopt;
+  return FitBezier(
+      std::vector<Eigen::Vector2d>(pts.begin() + best_start, pts.begin() + best_start + best_len));
+}
+
+Bezier ExtendInImage(const Bezier& spline, const ChannelView& image, const CameraModel& camera,
+                     const ImageExtendOptions& options) {
+  const double reference = ImageBarContrast(spline, image, camera, options);
+  if (!(reference > 0)) return spline;
+  const double min_contrast = options.continuation_threshold * reference;
+  const double max_row = std::min(options.max_row, image.bottom() - 1.0);
+
+  // Walks from `start` along `dir`; returns the supported points, in order.
+  const auto walk = [&](const Eigen::Vector2d& start, Eigen::Vector2d dir, double min_cos,
+                        Eigen::Vector2d* last_dir) {
+    std::vector<Eigen::Vector2d> added;
+    if (dir.norm() < 1e-9) return added;
+    dir.normalize();
+    const Eigen::Vector2d main_dir = dir;
+    Eigen::Vector2d cur = start;     // where the next step starts from
+    Eigen::Vector2d anchor = start;  // the last supported point
+    double gap_m = 0;
+    for (int step = 0; step < options.max_steps; ++step) {
+      const Eigen::Vector2d guess = cur + options.step_px * dir;
+      if (!InImage(guess, image) || guess.y() < options.min_row || guess.y() > max_row) break;
+      const Eigen::Vector2d g0 = camera.ImageToGround(cur), g1 = camera.ImageToGround(guess);
+      const double step_m = (g0.allFinite() && g1.allFinite()) ? (g1 - g0).norm() : 1e9;
+      const auto bar = FindBar(image, camera, guess, Normal(dir), options);
+      bool supported = bar && bar->contrast >= min_contrast;
+      Eigen::Vector2d q = guess;
+      if (supported) {
+        q = guess + bar->offset * Normal(dir);
+        const Eigen::Vector2d d = q - anchor;
+        supported = d.norm() > 1e-9 && d.normalized().dot(main_dir) >= min_cos &&
+                    InImage(q, image) &&
+                    AlongTheRoad(camera, anchor, q, options.max_ground_angle_deg);
+      }
+      if (supported) {
+        dir = (dir + (q - cur).normalized()).normalized();
+        added.push_back(q);
+        anchor = q;
+        cur = q;
+        gap_m = 0;
+      } else {
+        gap_m += step_m;
+        if (gap_m > options.max_gap_m) break;
+        cur = guess;  // through the gap, straight on
+      }
+    }
+    if (last_dir) *last_dir = dir;
+    return added;
+  };
+  const auto up = walk(spline.p[0], -spline.Derivative(0), options.min_cos_up, nullptr);
+  Eigen::Vector2d down_dir = spline.Derivative(1);
+  auto down = walk(spline.p[3], spline.Derivative(1), options.min_cos_down, &down_dir);
+  if (options.extrapolate_down) {
+    // The final straight segment: through the last two evidence points (the
+    // spline's end tangent when the walk found none), down to max_row.
+    const Eigen::Vector2d end = down.empty() ? spline.p[3] : down.back();
+    Eigen::Vector2d d = down.size() >= 2 ? Eigen::Vector2d(down.back() - down[down.size() - 2])
+                                         : spline.Derivative(1);
+    if (d.y() > 1e-6) {
+      d /= d.y();  // per image row
+      const double rows = max_row - end.y();
+      const int n = static_cast<int>(std::ceil(rows / options.step_px));
+      for (int i = 1; i <= n; ++i) {
+        const Eigen::Vector2d q = end + std::min(rows, i * options.step_px) * d;
+        if (q.x() < 0 || q.x() > image.cols() - 1) break;
+        down.push_back(q);  // clipped to the image content afterwards
+      }
+    }
+  }
+  if (up.empty() && down.empty()) return spline;
+  std::vector<Eigen::Vector2d> pts(up.rbegin(), up.rend());
+  for (const auto& p : spline.Sample(20)) pts.push_back(p);
+  pts.insert(pts.end(), down.begin(), down.end());
+  if (auto fit = FitBezier(pts)) return *fit;
+  return spline;
+}
+
+}  // namespace lane

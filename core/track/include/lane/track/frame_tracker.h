@@ -1,0 +1,66 @@
+// One camera's frames through the detector and the tracker: the one place
+// where a tracked frame goes prior -> detect with the prior -> read the
+// markings -> track (docs/tracking.md). Every caller uses it: lane detect
+// --track, the server's streams, the bench's in-process reference, the
+// drive evaluation and the benchmarks.
+//
+// Two steps, so that frames can be detected concurrently and tracked in
+// order:
+//   Measure  on any thread: the detection, searched along the tracker's
+//            predicted lanes, and each lane's colour and type;
+//   Commit   in frame order: the tracker takes the measured lanes (ids,
+//            confirmed flags, voted colours and types, predicted lanes of
+//            confirmed tracks missed for a few frames, the ego lane).
+// Process does both, for one thread.
+#ifndef LANE_TRACK_FRAME_TRACKER_H_
+#define LANE_TRACK_FRAME_TRACKER_H_
+
+#include <opencv2/core.hpp>
+#include <optional>
+
+#include "absl/base/thread_annotations.h"
+#include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
+#include "lane/detector.h"
+#include "lane/geometry/camera.h"
+#include "lane/track/sequence_tracker.h"
+
+namespace lane {
+
+class FrameTracker {
+ public:
+  // `camera`: the camera whose ground the ego lane is measured on.
+  explicit FrameTracker(const CameraModel& camera, LaneTrackingOptions lanes = {},
+                        EgoOptions ego = {});
+
+  // Step 1. Detects `frame` with `detector`, searching the tracker's
+  // predicted lanes too (its state after the last committed frame: with k
+  // frames in flight, up to k frames old; a prior only adds search windows,
+  // which still need evidence in the frame), and reads each lane's colour
+  // and type in the rows the detector read (Detector::Needs: a frame decoded
+  // only there reads as a whole one). Safe to call from several threads at
+  // once, and concurrently with Commit.
+  absl::StatusOr<Detection> Measure(const Detector& detector, const cv::Mat& frame) const;
+
+  // Step 2, in frame order. `detection` (from Measure) gets its lanes' ids,
+  // confirmed flags and voted colours and types, the predicted lanes of
+  // confirmed tracks missed for a few frames, drawn in `detector`'s top view,
+  // and its ego lane. `time_s`: the frame's capture time, if it has one
+  // (else the previous frame's + 1 / default_fps).
+  void Commit(const Detector& detector, Detection& detection, std::optional<double> time_s);
+
+  // Measure, then Commit.
+  absl::StatusOr<Detection> Process(const Detector& detector, const cv::Mat& frame,
+                                    std::optional<double> time_s);
+
+  // Forgets every track (a new clip).
+  void Reset();
+
+ private:
+  mutable absl::Mutex mu_;
+  SequenceTracker tracker_ ABSL_GUARDED_BY(mu_);
+};
+
+}  // namespace lane
+
+#endif  // LANE_TRACK_FRAME_TRACKER_H_

@@ -1,0 +1,56 @@
+// Everything video-aware for one camera: the lane tracker, the ego lane and
+// the predicted lanes, frame after frame (docs/tracking.md).
+#ifndef LANE_TRACK_SEQUENCE_TRACKER_H_
+#define LANE_TRACK_SEQUENCE_TRACKER_H_
+
+#include <optional>
+#include <vector>
+
+#include "lane/detector.h"
+#include "lane/geometry/camera.h"
+#include "lane/geometry/ipm.h"
+#include "lane/track/ego_lane.h"
+#include "lane/track/lane_tracker.h"
+
+namespace lane {
+
+// Everything video-aware for one camera, frame after frame: each lane's
+// colour and type in the frame must already be in Lane::color and
+// Lane::type (MarkingColorOf, MarkingTypeOf); Track replaces them by the
+// track's votes and sets id and confirmed, and
+// returns the ego lane with its lateral speed and departure flag.
+class SequenceTracker {
+ public:
+  explicit SequenceTracker(const CameraModel& camera, LaneTrackingOptions lanes = {},
+                           EgoOptions ego = {})
+      : camera_(camera), lanes_(lanes), ego_options_(ego), ego_(ego) {}
+
+  // With `ipm` (the detector's top view), confirmed tracks missed for up to
+  // coast_frames frames are added to `lanes` from their prediction
+  // (Lane::predicted), confirmed lanes of the frame are drawn from their
+  // filtered curves (LaneTrackingOptions::report_filtered); `lanes` stays
+  // sorted left to right.
+  std::optional<EgoLane> Track(std::vector<Lane>& lanes, std::optional<double> time_s,
+                               const IpmMapping* ipm = nullptr);
+  void Reset();
+  const LaneTracker& lane_tracker() const { return lanes_; }
+
+  // What the tracker expects in the next frame, for the detector
+  // (Detector::Detect's prior): each confirmed track's line in the top view
+  // `ipm`, through its curve over the part of its extent inside the view,
+  // with a window of 0.3 m + 2.5 standard deviations of its predicted
+  // lateral position (DetectorOptions cap it at the line window). Empty
+  // before the first frame and after a reset.
+  DetectionPrior Prior(const IpmMapping& ipm) const;
+
+ private:
+  CameraModel camera_;
+  LaneTracker lanes_;
+  EgoOptions ego_options_;
+  EgoTracker ego_;
+  int resets_seen_ = 0;
+};
+
+}  // namespace lane
+
+#endif  // LANE_TRACK_SEQUENCE_TRACKER_H_

@@ -1,0 +1,44 @@
+#include "lane/track/frame_tracker.h"
+
+#include <utility>
+
+#include "lane/track/marking_reader.h"
+
+namespace lane {
+
+FrameTracker::FrameTracker(const CameraModel& camera, LaneTrackingOptions lanes, EgoOptions ego)
+    : tracker_(camera, lanes, ego) {}
+
+absl::StatusOr<Detection> FrameTracker::Measure(const Detector& detector,
+                                                const cv::Mat& frame) const {
+  DetectionPrior prior;
+  {
+    absl::MutexLock lock(&mu_);
+    prior = tracker_.Prior(detector.ipm());
+  }
+  absl::StatusOr<Detection> detection = detector.Detect(frame, &prior);
+  if (!detection.ok()) return detection;
+  const FrameNeeds& needs = detector.Needs();
+  ReadMarkings(frame, detector.ipm().camera(), detection->lanes, needs.top, needs.bottom);
+  return detection;
+}
+
+void FrameTracker::Commit(const Detector& detector, Detection& detection,
+                          std::optional<double> time_s) {
+  absl::MutexLock lock(&mu_);
+  detection.ego = tracker_.Track(detection.lanes, time_s, &detector.ipm());
+}
+
+absl::StatusOr<Detection> FrameTracker::Process(const Detector& detector, const cv::Mat& frame,
+                                                std::optional<double> time_s) {
+  absl::StatusOr<Detection> detection = Measure(detector, frame);
+  if (detection.ok()) Commit(detector, *detection, time_s);
+  return detection;
+}
+
+void FrameTracker::Reset() {
+  absl::MutexLock lock(&mu_);
+  tracker_.Reset();
+}
+
+}  // namespace lane

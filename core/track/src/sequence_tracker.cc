@@ -1,0 +1,173 @@
+#include "lane/track/sequence_tracker.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+namespace lane {
+namespace {
+
+// A lane drawn from a track's curve over its last extent: ground, image and
+// top-view Beziers (none when it does not project into the image).
+std::optional<Lane> LaneFromCurve(const GroundCurve& curve, const CameraModel& camera,
+                                  const IpmMapping& ipm) {
+  constexpr int kSamples = 12;
+  std::vector<Eigen::Vector2d> ground, image, top;
+  const double horizon = camera.HorizonRow();
+  for (int i = 0; i < kSamples; ++i) {
+    const double y = curve.y_near + (curve.y_far - curve.y_near) * i / (kSamples - 1);
+    const Eigen::Vector2d g(curve.X(y), y);
+    const Eigen::Vector2d p = camera.GroundToImage(g);
+    if (!p.allFinite() || p.y() <= horizon) continue;
+    ground.push_back(g);
+    image.push_back(p);
+    top.push_back(ipm.GroundToIpm(g));
+  }
+  if (ground.size() < 4) return std::nullopt;
+  // Image order as the detector's: from the bottom of the frame up.
+  const auto g = FitBezier(ground);
+  const auto m = FitBezier(image);
+  const auto t = FitBezier(top);
+  if (!g || !m || !t) return std::nullopt;
+  Lane lane;
+  lane.ground = g->p;
+  lane.image = m->p;
+  lane.ipm = t->p;
+  lane.predicted = true;
+  return lane;
+}
+
+}  // namespace
+
+std::optional<EgoLane> SequenceTracker::Track(std::vector<Lane>& lanes,
+                                              std::optional<double> time_s, const IpmMapping* ipm) {
+  std::vector<MarkingColor> colors;
+  std::vector<MarkingType> types;
+  for (const Lane& lane : lanes) {
+    colors.push_back(lane.color);
+    types.push_back(lane.type);
+  }
+  const std::vector<LaneIdentity> ids = lanes_.Update(lanes, time_s, colors, types);
+  for (size_t i = 0; i < lanes.size(); ++i) {
+    lanes[i].id = ids[i].id;
+    lanes[i].confirmed = ids[i].confirmed;
+    lanes[i].color = ids[i].color;
+    lanes[i].type = ids[i].type;
+  }
+  std::vector<LaneIdentity> all = ids;
+  if (ipm != nullptr) {
+    // Confirmed lanes of this frame: their track's filtered curve.
+    for (size_t i = 0; i < lanes.size() && lanes_.options().report_filtered; ++i) {
+      if (!ids[i].confirmed) continue;
+      const std::optional<Lane> filtered = LaneFromCurve(ids[i].curve, camera_, *ipm);
+      if (!filtered) continue;
+      lanes[i].image = filtered->image;
+      lanes[i].ground = filtered->ground;
+      lanes[i].ipm = filtered->ipm;
+    }
+    // Confirmed tracks missed for a few frames: their prediction.
+    for (const lane::Track& track : lanes_.tracks()) {
+      if (!track.Reported() || track.misses < 1 || track.misses > lanes_.options().coast_frames) {
+        continue;
+      }
+      // Not when a lane of this frame lies near it: the boundary was found
+      // (by another track); reporting both would draw it twice. A lane
+      // farther than duplicate_m whose track was already there when this
+      // one was last seen is another boundary (the asphalt's edge beside a
+      // solid line) and does not stand in for it.
+      bool found = false;
+      for (size_t i = 0; i < lanes.size() && !found; ++i) {
+        if (all[i].id < 0) continue;
+        const double distance = LateralDistance(track.curve, all[i].curve);
+        if (distance >= lanes_.options().coast_clearance_m) continue;
+        const lane::Track* other = nullptr;
+        for (const lane::Track& t : lanes_.tracks()) {
+          if (t.id == all[i].id) other = &t;
+        }
+        const bool coexisted = other != nullptr && other->born_frame <= track.last_hit_frame;
+        found = !(coexisted && distance >= lanes_.options().duplicate_m);
+      }
+      if (found) continue;
+      std::optional<Lane> lane = LaneFromCurve(track.curve, camera_, *ipm);
+      if (!lane) continue;
+      const LaneIdentity identity = IdentityOf(track);
+      lane->id = identity.id;
+      lane->confirmed = true;
+      lane->color = identity.color;
+      lane->type = identity.type;
+      lanes.push_back(*lane);
+      all.push_back(identity);
+    }
+    // Left to right, as the detector sorts.
+    std::vector<size_t> order(lanes.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    auto key = [&](size_t i) {
+      return all[i].id >= 0 ? all[i].curve.X(0.5 * (all[i].curve.y_near + all[i].curve.y_far))
+                            : 0.5 * (lanes[i].ground[0].x() + lanes[i].ground[3].x());
+    };
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return key(a) < key(b); });
+    std::vector<Lane> sorted_lanes;
+    std::vector<LaneIdentity> sorted_ids;
+    for (size_t i : order) {
+      sorted_lanes.push_back(lanes[i]);
+      sorted_ids.push_back(all[i]);
+    }
+    lanes = std::move(sorted_lanes);
+    all = std::move(sorted_ids);
+  }
+  // The ego lane from the confirmed lanes' filtered curves only: a
+  // one-frame streak on a car does not bound it, and the filter steadies
+  // the offset whose rate warns of a departure.
+  std::vector<std::optional<GroundCurve>> curves(lanes.size());
+  std::vector<int> track_ids(lanes.size(), -1);
+  std::vector<Eigen::Matrix3d> covariances(lanes.size(), Eigen::Matrix3d::Identity());
+  for (size_t i = 0; i < lanes.size(); ++i) {
+    if (!all[i].confirmed) continue;
+    curves[i] = all[i].curve;
+    track_ids[i] = all[i].id;
+    covariances[i] = all[i].covariance;
+  }
+  std::optional<EgoLane> ego =
+      EgoLaneOfCurves(curves, track_ids, camera_, ego_options_, &covariances);
+  if (lanes_.resets() != resets_seen_) {
+    ego_.Reset();
+    resets_seen_ = lanes_.resets();
+  }
+  ego_.Update(ego, lanes_.time_s());
+  return ego;
+}
+
+DetectionPrior SequenceTracker::Prior(const IpmMapping& ipm) const {
+  DetectionPrior prior;
+  const LaneTrackingOptions& o = lanes_.options();
+  const double dt = 1.0 / std::max(1e-3, o.default_fps);
+  for (const lane::Track& track : lanes_.tracks()) {
+    if (!track.Reported()) continue;
+    const double y0 = std::max(track.curve.y_near, ipm.y_min());
+    const double y1 = std::min(track.curve.y_far, ipm.y_max());
+    if (y1 - y0 < 1.0) continue;  // hardly in the view
+    const Eigen::Vector2d a = ipm.GroundToIpm({track.curve.X(y0), y0});
+    const Eigen::Vector2d b = ipm.GroundToIpm({track.curve.X(y1), y1});
+    if (!a.allFinite() || !b.allFinite() || std::abs(a.y() - b.y()) < 1.0) continue;
+    const std::optional<IpmLine> line = MakeIpmLine(a, b - a, ipm.height());
+    if (!line) continue;
+    DetectionPrior::Window w;
+    w.line = *line;
+    // The predicted lateral position's sd at mid extent, one frame on.
+    const double ym = 0.5 * (y0 + y1);
+    const Eigen::Vector3d j(1.0, ym, 0.5 * ym * ym);
+    const double var =
+        j.dot(track.covariance * j) + o.offset_noise * o.offset_noise * dt * (1 + track.misses);
+    w.half_width_m = 0.3 + 2.5 * std::sqrt(std::max(0.0, var));
+    prior.windows.push_back(w);
+  }
+  return prior;
+}
+
+void SequenceTracker::Reset() {
+  lanes_.Reset();
+  ego_.Reset();
+}
+
+}  // namespace lane
