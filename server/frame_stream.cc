@@ -33,7 +33,9 @@ struct FrameStream::Slot {
   std::shared_ptr<Session> session;  // set at receipt, or by the setup
   std::atomic<int> state{kQueued};   // kQueued -> kRunning | kDropped
   bool setup = false;                // create/confirm the session first
-  // Guarded by the stream's mu_:
+  // Guarded by the stream's mu_ (a slot is another object, so the
+  // compiler cannot check this; every access is in a *Locked method or
+  // under a MutexLock):
   bool done = false;                         // response ready (or stream_error / skipped)
   bool in_bound = true;                      // counts against max_inflight
   bool skipped = false;                      // abandoned: nothing to send
@@ -50,7 +52,7 @@ FrameStream::FrameStream(StreamDeps deps)
 FrameStream::~FrameStream() = default;
 
 void FrameStream::Start(const absl::Status& reject) {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   if (!reject.ok()) {
     FinishLocked(reject);
     return;
@@ -61,7 +63,7 @@ void FrameStream::Start(const absl::Status& reject) {
 }
 
 void FrameStream::BeginDrain() {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   if (phase_ != Phase::kCreated && phase_ != Phase::kOpen) return;
   const bool started = phase_ == Phase::kOpen;
   phase_ = Phase::kDraining;
@@ -69,7 +71,7 @@ void FrameStream::BeginDrain() {
 }
 
 void FrameStream::OnReadDone(bool ok) {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   reading_ = false;
   if (!ok) {
     // The client half-closed (or the read side failed). A drain gives way to
@@ -169,7 +171,7 @@ void FrameStream::Process(const std::shared_ptr<Slot>& slot) {
   }
   slot->request.reset();  // the frame's bytes are no longer needed
   {
-    std::lock_guard<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     slot->done = true;
     slot->skipped = abandon;
     if (slot->setup) {
@@ -188,7 +190,7 @@ void FrameStream::Process(const std::shared_ptr<Slot>& slot) {
 }
 
 void FrameStream::OnWriteDone(bool ok) {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   writing_ = false;
   if (!slots_.empty()) PopFrontLocked();  // the slot just written
   if (!ok || phase_ == Phase::kCancelled) {
@@ -201,7 +203,7 @@ void FrameStream::OnWriteDone(bool ok) {
 }
 
 void FrameStream::OnCancel() {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   if (phase_ == Phase::kFinished) return;
   phase_ = Phase::kCancelled;
   abandoned_.store(true, std::memory_order_release);
@@ -216,7 +218,7 @@ void FrameStream::OnDone() {
   // which every reaction holds while it touches the stream, states that order
   // in this code: nothing the reactions wrote is read or freed before they
   // have let go of the stream.
-  { std::lock_guard<std::mutex> lock(mu_); }
+  { absl::MutexLock lock(&mu_); }
   call_metrics_.Handled(grpc::StatusCode::CANCELLED);  // only if nothing was counted
   if (deps_.on_done) deps_.on_done(this);
   Unref();

@@ -23,10 +23,11 @@
 #include <deque>
 #include <functional>
 #include <memory>
-#include <mutex>
 #include <string>
 
+#include "absl/base/thread_annotations.h"
 #include "absl/status/status.h"
+#include "absl/synchronization/mutex.h"
 #include "frame_processor.h"
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "metrics.h"
@@ -90,16 +91,17 @@ class FrameStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc:
   // Runs on a worker.
   void Process(const std::shared_ptr<Slot>& slot);
 
-  void ReceiveLocked();
-  void ApplyPolicyLocked(const Session& session);
-  void MaybeReadLocked();
-  void MaybeWriteLocked();
-  void MaybeFinishLocked();
-  void FinishLocked(const absl::Status& status);
-  void FailLocked(const std::shared_ptr<Slot>& slot, const absl::Status& error);
-  void PopFrontLocked();
-  bool DropOldestQueuedLocked();
-  void AnswerLocked(Slot& slot, const absl::Status& status);
+  void ReceiveLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  void ApplyPolicyLocked(const Session& session) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  void MaybeReadLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  void MaybeWriteLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  void MaybeFinishLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  void FinishLocked(const absl::Status& status) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  void FailLocked(const std::shared_ptr<Slot>& slot, const absl::Status& error)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  void PopFrontLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  bool DropOldestQueuedLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  void AnswerLocked(Slot& slot, const absl::Status& status) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
 
   void Ref() { refs_.fetch_add(1, std::memory_order_relaxed); }
   void Unref();
@@ -114,19 +116,21 @@ class FrameStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc:
   // workers then skip the work.
   std::atomic<bool> abandoned_{false};
 
-  std::mutex mu_;
-  // Everything below is guarded by mu_.
-  Phase phase_ = Phase::kCreated;
-  grpc::ByteBuffer read_buffer_;
-  std::deque<std::shared_ptr<Slot>> slots_;  // received, not yet answered, in order
-  size_t inflight_ = 0;                      // slots that count against the bound
-  uint32_t max_inflight_ = 1;
-  Backpressure backpressure_ = Backpressure::kBlock;
-  std::string camera_id_;        // the first camera id seen on the stream
-  bool first_request_ = true;    // no request received yet
-  bool reading_ = false;         // a read is outstanding
-  bool writing_ = false;         // a write is outstanding
-  bool awaiting_setup_ = false;  // the first frame's session is being created
+  absl::Mutex mu_;
+  Phase phase_ ABSL_GUARDED_BY(mu_) = Phase::kCreated;
+  grpc::ByteBuffer read_buffer_ ABSL_GUARDED_BY(mu_);
+  // Received, not yet answered, in order.
+  std::deque<std::shared_ptr<Slot>> slots_ ABSL_GUARDED_BY(mu_);
+  // Slots that count against the bound.
+  size_t inflight_ ABSL_GUARDED_BY(mu_) = 0;
+  uint32_t max_inflight_ ABSL_GUARDED_BY(mu_) = 1;
+  Backpressure backpressure_ ABSL_GUARDED_BY(mu_) = Backpressure::kBlock;
+  // The first camera id seen on the stream.
+  std::string camera_id_ ABSL_GUARDED_BY(mu_);
+  bool first_request_ ABSL_GUARDED_BY(mu_) = true;    // no request received yet
+  bool reading_ ABSL_GUARDED_BY(mu_) = false;         // a read is outstanding
+  bool writing_ ABSL_GUARDED_BY(mu_) = false;         // a write is outstanding
+  bool awaiting_setup_ ABSL_GUARDED_BY(mu_) = false;  // the first frame's session is being created
 };
 
 }  // namespace lane::server

@@ -71,7 +71,7 @@ GrpcMetrics::Method& GrpcMetrics::ForMethod(const char* full_method, Type type) 
   // under service "unknown".
   const std::string_view name = full_method != nullptr ? full_method : "";
   const char* type_label = TypeLabel(type);
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   // The label set stays bounded whatever names callers pass: past
   // kMaxMethods series they share one "unknown" series.
   const bool known =

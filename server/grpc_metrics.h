@@ -28,8 +28,10 @@
 #include <chrono>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <string>
+
+#include "absl/base/thread_annotations.h"
+#include "absl/synchronization/mutex.h"
 
 namespace lane::server {
 
@@ -81,8 +83,8 @@ class GrpcMetrics {
   prometheus::Family<prometheus::Counter>& received_;
   prometheus::Family<prometheus::Counter>& sent_;
   prometheus::Family<prometheus::Histogram>& handling_;
-  std::mutex mu_;
-  std::map<std::string, std::unique_ptr<Method>> methods_;  // guarded by mu_
+  absl::Mutex mu_;
+  std::map<std::string, std::unique_ptr<Method>> methods_ ABSL_GUARDED_BY(mu_);
 };
 
 }  // namespace lane::server

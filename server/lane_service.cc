@@ -47,16 +47,16 @@ LaneServiceImpl::~LaneServiceImpl() {
   // of them may still have been in Unregister on another thread a moment
   // ago. Taking mu_ orders this destructor after it (gRPC's own ordering runs
   // through libgrpc++'s atomics, which a race detector does not see).
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
 }
 
 void LaneServiceImpl::SetServing() {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   if (state_ == State::kStarting) state_ = State::kServing;
 }
 
 void LaneServiceImpl::StartDrain() {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   state_ = State::kDraining;
   // Streams unregister themselves (under mu_) before they are deleted, so
   // every pointer here is alive.
@@ -64,25 +64,23 @@ void LaneServiceImpl::StartDrain() {
 }
 
 bool LaneServiceImpl::WaitForStreams(absl::Time deadline) {
-  std::unique_lock<std::mutex> lock(mu_);
-  return streams_cv_.wait_until(lock, absl::ToChronoTime(deadline),
-                                [this] { return streams_.empty(); });
+  absl::MutexLock lock(&mu_);
+  return mu_.AwaitWithDeadline(absl::Condition(this, &LaneServiceImpl::NoStreams), deadline);
 }
 
 size_t LaneServiceImpl::open_streams() const {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   return streams_.size();
 }
 
 void LaneServiceImpl::Unregister(FrameStream* stream) {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   streams_.erase(stream);
-  if (streams_.empty()) streams_cv_.notify_all();
 }
 
 absl::Status LaneServiceImpl::Admission(const grpc::ServerContextBase& context) const {
   if (absl::Status auth = CheckBearerToken(context, options_.auth_tokens); !auth.ok()) return auth;
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   switch (state_) {
     case State::kStarting:
       return wire::ServerStarting();
@@ -170,7 +168,7 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* LaneServiceImpl::St
   if (admitted) deps.on_done = [this](FrameStream* stream) { Unregister(stream); };
   auto* stream = new FrameStream(std::move(deps));
   if (admitted) {
-    std::lock_guard<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     if (state_ == State::kServing) {
       streams_.insert(stream);
     } else {

@@ -10,14 +10,14 @@
 
 #include <grpcpp/grpcpp.h>
 
-#include <condition_variable>
 #include <cstdint>
-#include <mutex>
 #include <string>
 #include <unordered_set>
 #include <vector>
 
+#include "absl/base/thread_annotations.h"
 #include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "frame_processor.h"
 #include "lane/v1/lane_service.grpc.pb.h"
@@ -103,10 +103,12 @@ class LaneServiceImpl final : public RawLaneService {
   WorkerPool& pool_;
   Metrics& metrics_;
 
-  mutable std::mutex mu_;
-  std::condition_variable streams_cv_;
-  State state_ = State::kStarting;            // guarded by mu_
-  std::unordered_set<FrameStream*> streams_;  // guarded by mu_
+  // WaitForStreams' condition.
+  bool NoStreams() const ABSL_SHARED_LOCKS_REQUIRED(mu_) { return streams_.empty(); }
+
+  mutable absl::Mutex mu_;
+  State state_ ABSL_GUARDED_BY(mu_) = State::kStarting;
+  std::unordered_set<FrameStream*> streams_ ABSL_GUARDED_BY(mu_);
 };
 
 }  // namespace lane::server

@@ -11,7 +11,6 @@
 #include <cstdlib>
 #include <iostream>
 #include <memory>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <string>
@@ -25,6 +24,7 @@
 #include "absl/flags/usage_config.h"
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
 #include "auth.h"
@@ -128,7 +128,7 @@ class Log {
   // `text` is the line in text format; `msg` and `fields` the JSON event.
   void Write(const char* level, const std::string& text, const std::string& msg,
              std::vector<Field> fields, const char* logger = "lane-server") {
-    std::lock_guard<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     if (!json_) {
       std::cerr << text << std::endl;
       return;
@@ -144,7 +144,7 @@ class Log {
   }
 
   const bool json_;
-  std::mutex mu_;
+  absl::Mutex mu_;  // one event at a time on stderr
 };
 
 // "--max-inflight-frames=8" -> "--max_inflight_frames=8": lane and
@@ -182,11 +182,9 @@ absl::Duration DecodeCpuBudgetFlag() {
   return old_name != absl::ZeroDuration() ? old_name : absl::GetFlag(FLAGS_decode_cpu_budget);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  // --help lists the flags of this file (the default filter expects a file
-  // named after the program).
+// --help lists the flags of this file (the default filter expects a file
+// named after the program); --version prints the build.
+void ConfigureUsage(const lane::server::BuildInfo& build) {
   absl::FlagsUsageConfig usage;
   usage.contains_help_flags = [](absl::string_view file) {
     return absl::EndsWith(file, "server/main.cc");
@@ -196,7 +194,6 @@ int main(int argc, char** argv) {
     const size_t at = file.rfind("server/main.cc");
     return std::string(at == absl::string_view::npos ? file : file.substr(at));
   };
-  const lane::server::BuildInfo build = lane::server::CurrentBuildInfo();
   usage.version_string = [build] {
     return "lane-server " + build.version + " (git " + build.git_revision + ", " +
            build.build_type + ")\n";
@@ -204,56 +201,31 @@ int main(int argc, char** argv) {
   absl::SetFlagsUsageConfig(usage);
   // absl prints the program's name before this.
   absl::SetProgramUsageMessage("lane-marker detection over gRPC. See docs/service.md.");
-  std::vector<std::string> normalized = NormalizeFlagNames(argc, argv);
-  std::vector<char*> normalized_argv;
-  for (std::string& arg : normalized) normalized_argv.push_back(arg.data());
-  absl::ParseCommandLine(static_cast<int>(normalized_argv.size()), normalized_argv.data());
-  const std::string log_format = absl::GetFlag(FLAGS_log_format);
-  if (log_format != "text" && log_format != "json") {
-    std::cerr << "lane-server: --log_format must be text or json, got '" << log_format << "'\n";
-    return 2;
-  }
-  Log log(log_format == "json");
-  if (log_format == "json") {
-    grpc_log_target = &log;
-    gpr_set_log_function(GrpcLogToJson);
-  }
+}
 
-  // SIGTERM and SIGINT are taken by a thread of ours (sigwait), so block them
-  // before any other thread exists: every thread inherits the mask.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGTERM);
-  sigaddset(&signals, SIGINT);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-
-  cv::setNumThreads(absl::GetFlag(FLAGS_opencv_threads));
-  if (const int keep = absl::GetFlag(FLAGS_malloc_keep_mib); keep > 0) {
-    const int bytes = std::min(keep, 1024) * 1024 * 1024;
-    // Blocks up to half of it (a raw 3840x2160 BGR frame, 24.9 MB, fits at
-    // the default) come from the heaps and are reused; freed memory up to it
-    // stays mapped; heaps grow a quarter of it at a time.
-    mallopt(M_MMAP_THRESHOLD, std::min(bytes / 2, 32 * 1024 * 1024));  // glibc's maximum
-    mallopt(M_TRIM_THRESHOLD, bytes);
-    mallopt(M_TOP_PAD, bytes / 4);
-  }
-
+// The flags, read once, as the server's options; nothing is clamped here
+// (ServerOptions::Validate says what is wrong). Errors: the token file.
+absl::StatusOr<lane::server::ServerOptions> ServerOptionsFromFlags(
+    const lane::server::BuildInfo& build) {
   lane::server::ServerOptions options;
   options.address = absl::GetFlag(FLAGS_address);
   options.metrics_address = absl::GetFlag(FLAGS_metrics_address);
   options.workers = absl::GetFlag(FLAGS_workers);
   options.max_queued_tasks =
-      static_cast<size_t>(std::max(1, absl::GetFlag(FLAGS_max_queued_tasks)));
+      static_cast<size_t>(std::max(0, absl::GetFlag(FLAGS_max_queued_tasks)));
   options.max_inflight_frames =
-      static_cast<uint32_t>(std::max(1, absl::GetFlag(FLAGS_max_inflight_frames)));
-  options.max_sessions = static_cast<size_t>(std::max(1, absl::GetFlag(FLAGS_max_sessions)));
+      static_cast<uint32_t>(std::max(0, absl::GetFlag(FLAGS_max_inflight_frames)));
+  options.max_sessions = static_cast<size_t>(std::max(0, absl::GetFlag(FLAGS_max_sessions)));
   options.session_ttl = absl::GetFlag(FLAGS_session_ttl);
   options.max_frame_pixels = absl::GetFlag(FLAGS_max_frame_pixels);
   options.decode_cpu_budget = DecodeCpuBudgetFlag();
   options.max_receive_message_bytes = absl::GetFlag(FLAGS_max_receive_message_bytes);
-  options.max_session_memory_bytes =
-      static_cast<uint64_t>(std::max<int64_t>(0, absl::GetFlag(FLAGS_max_session_memory_mib))) *
-      1024 * 1024;
+  const int64_t memory_mib = absl::GetFlag(FLAGS_max_session_memory_mib);
+  if (memory_mib < 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--max_session_memory_mib ", memory_mib, ": must not be negative"));
+  }
+  options.max_session_memory_bytes = static_cast<uint64_t>(memory_mib) * 1024 * 1024;
   options.keepalive_time = absl::GetFlag(FLAGS_keepalive_time);
   options.keepalive_timeout = absl::GetFlag(FLAGS_keepalive_timeout);
   options.keepalive_min_client_interval = absl::GetFlag(FLAGS_keepalive_min_client_interval);
@@ -264,16 +236,15 @@ int main(int argc, char** argv) {
   options.tls_cert_path = absl::GetFlag(FLAGS_tls_cert);
   options.tls_key_path = absl::GetFlag(FLAGS_tls_key);
   options.tls_client_ca_path = absl::GetFlag(FLAGS_tls_client_ca);
-  options.max_concurrent_streams = std::max(0, absl::GetFlag(FLAGS_max_concurrent_streams));
+  options.max_concurrent_streams = absl::GetFlag(FLAGS_max_concurrent_streams);
   options.metrics_camera_labels =
-      static_cast<size_t>(std::clamp(absl::GetFlag(FLAGS_metrics_camera_labels), 0, 10000));
+      static_cast<size_t>(std::max(0, absl::GetFlag(FLAGS_metrics_camera_labels)));
   // Tokens: never a command-line literal (visible in ps), never logged.
   if (const std::string path = absl::GetFlag(FLAGS_auth_tokens_file); !path.empty()) {
     absl::StatusOr<std::vector<std::string>> tokens = lane::server::ReadTokenFile(path);
     if (!tokens.ok()) {
-      const std::string message = absl::StrCat("--auth_tokens_file: ", tokens.status().message());
-      log.Error("lane-server: " + message, message);
-      return 1;
+      return absl::InvalidArgumentError(
+          absl::StrCat("--auth_tokens_file: ", tokens.status().message()));
     }
     options.auth_tokens = *std::move(tokens);
   }
@@ -283,17 +254,26 @@ int main(int argc, char** argv) {
     }
   }
   options.build = build;
+  return options;
+}
 
-  auto registry = std::make_shared<prometheus::Registry>();
-  absl::StatusOr<std::unique_ptr<lane::server::LaneServer>> started =
-      lane::server::LaneServer::Start(options, registry);
-  if (!started.ok()) {
-    const std::string message(started.status().message());
-    log.Error(absl::StrCat("lane-server: ", started.status().ToString()), message,
-              {{"code", absl::StatusCodeToString(started.status().code())}});
-    return 1;
+// OpenCV's threads and glibc's allocator for a server of worker threads.
+void ConfigureProcess() {
+  cv::setNumThreads(absl::GetFlag(FLAGS_opencv_threads));
+  if (const int keep = absl::GetFlag(FLAGS_malloc_keep_mib); keep > 0) {
+    const int bytes = std::min(keep, 1024) * 1024 * 1024;
+    // Blocks up to half of it (a raw 3840x2160 BGR frame, 24.9 MB, fits at
+    // the default) come from the heaps and are reused; freed memory up to it
+    // stays mapped; heaps grow a quarter of it at a time.
+    mallopt(M_MMAP_THRESHOLD, std::min(bytes / 2, 32 * 1024 * 1024));  // glibc's maximum
+    mallopt(M_TRIM_THRESHOLD, bytes);
+    mallopt(M_TOP_PAD, bytes / 4);
   }
-  lane::server::LaneServer& server = **started;
+}
+
+// The start-up event: ports, default session, security, workers.
+void LogStarted(Log& log, const lane::server::LaneServer& server,
+                const lane::server::ServerOptions& options) {
   std::string text =
       absl::StrCat("lane-server ", options.build.version, ": gRPC on port ", server.port());
   std::vector<Log::Field> fields = {{"version", options.build.version},
@@ -322,8 +302,21 @@ int main(int argc, char** argv) {
   fields.emplace_back("bearer_tokens", options.auth_tokens.size());
   fields.emplace_back("workers", options.workers);
   log.Info(text, "started", std::move(fields));
+}
 
-  // First signal: drain. Second signal: exit at once.
+// SIGTERM and SIGINT are taken by a thread of ours (sigwait), so they are
+// blocked before any other thread exists: every thread inherits the mask.
+sigset_t BlockDrainSignals() {
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  return signals;
+}
+
+// First signal: drain. Second signal: exit at once.
+void HandleDrainSignals(lane::server::LaneServer& server, Log& log, sigset_t signals) {
   std::thread([&server, &log, signals] {
     int signal = 0;
     sigwait(&signals, &signal);
@@ -335,7 +328,51 @@ int main(int argc, char** argv) {
              {{"signal", signal}});
     std::_Exit(1);
   }).detach();
+}
 
+}  // namespace
+
+int main(int argc, char** argv) {
+  const lane::server::BuildInfo build = lane::server::CurrentBuildInfo();
+  ConfigureUsage(build);
+  std::vector<std::string> normalized = NormalizeFlagNames(argc, argv);
+  std::vector<char*> normalized_argv;
+  for (std::string& arg : normalized) normalized_argv.push_back(arg.data());
+  absl::ParseCommandLine(static_cast<int>(normalized_argv.size()), normalized_argv.data());
+  const std::string log_format = absl::GetFlag(FLAGS_log_format);
+  if (log_format != "text" && log_format != "json") {
+    std::cerr << "lane-server: --log_format must be text or json, got '" << log_format << "'\n";
+    return 2;
+  }
+  Log log(log_format == "json");
+  if (log_format == "json") {
+    grpc_log_target = &log;
+    gpr_set_log_function(GrpcLogToJson);
+  }
+  const sigset_t signals = BlockDrainSignals();
+  ConfigureProcess();
+
+  absl::StatusOr<lane::server::ServerOptions> options = ServerOptionsFromFlags(build);
+  if (options.ok()) {
+    if (absl::Status s = options->Validate(); !s.ok()) options = s;
+  }
+  if (!options.ok()) {
+    const std::string message(options.status().message());
+    log.Error("lane-server: " + message, message);
+    return 2;
+  }
+  auto registry = std::make_shared<prometheus::Registry>();
+  absl::StatusOr<std::unique_ptr<lane::server::LaneServer>> started =
+      lane::server::LaneServer::Start(*options, registry);
+  if (!started.ok()) {
+    const std::string message(started.status().message());
+    log.Error(absl::StrCat("lane-server: ", started.status().ToString()), message,
+              {{"code", absl::StatusCodeToString(started.status().code())}});
+    return 1;
+  }
+  lane::server::LaneServer& server = **started;
+  LogStarted(log, server, *options);
+  HandleDrainSignals(server, log, signals);
   server.Wait();
   log.Info("lane-server: stopped", "stopped");
   return 0;

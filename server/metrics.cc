@@ -123,7 +123,7 @@ void Metrics::ObserveDetectorStages(const lane::StageTimings& t) {
 }
 
 Metrics::CameraSeries& Metrics::CameraSeriesFor(const std::string& camera_id) {
-  std::lock_guard<std::mutex> lock(camera_mu_);
+  absl::MutexLock lock(&camera_mu_);
   auto it = cameras_.find(camera_id);
   if (it != cameras_.end()) return it->second;
   // One series set per camera up to the limit, then "_other" (one more).

@@ -14,10 +14,11 @@
 
 #include <array>
 #include <map>
-#include <mutex>
 #include <string>
 #include <vector>
 
+#include "absl/base/thread_annotations.h"
+#include "absl/synchronization/mutex.h"
 #include "grpc_metrics.h"
 #include "lane/detector.h"
 #include "wire/status_map.h"
@@ -109,8 +110,8 @@ class Metrics {
   const size_t camera_labels_;
   prometheus::Family<prometheus::Counter>* camera_frames_ = nullptr;
   prometheus::Family<prometheus::Counter>* camera_zero_lanes_ = nullptr;
-  std::mutex camera_mu_;
-  std::map<std::string, CameraSeries> cameras_;  // guarded by camera_mu_
+  absl::Mutex camera_mu_;
+  std::map<std::string, CameraSeries> cameras_ ABSL_GUARDED_BY(camera_mu_);
 };
 
 }  // namespace lane::server

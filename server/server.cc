@@ -80,14 +80,60 @@ BuildInfo CurrentBuildInfo() {
   return info;
 }
 
+absl::Status ServerOptions::Validate() const {
+  const auto bad = [](absl::string_view flag, const auto& value, absl::string_view rule) {
+    return absl::InvalidArgumentError(absl::StrCat("--", flag, " ", value, ": ", rule));
+  };
+  const auto positive = [](absl::Duration d) { return d > absl::ZeroDuration(); };
+  if (address.empty()) return absl::InvalidArgumentError("--address must not be empty");
+  if (workers < 0 || workers > 1024) return bad("workers", workers, "must lie in 0..1024");
+  if (max_queued_tasks < 1) return bad("max_queued_tasks", max_queued_tasks, "must be at least 1");
+  if (max_inflight_frames < 1 || max_inflight_frames > 4096) {
+    return bad("max_inflight_frames", max_inflight_frames, "must lie in 1..4096");
+  }
+  if (max_sessions < 1) return bad("max_sessions", max_sessions, "must be at least 1");
+  if (!positive(session_ttl)) {
+    return bad("session_ttl", absl::FormatDuration(session_ttl), "must be positive ('inf': never)");
+  }
+  if (max_frame_pixels < 1) return bad("max_frame_pixels", max_frame_pixels, "must be positive");
+  if (!positive(decode_cpu_budget)) {
+    return bad("decode_cpu_budget", absl::FormatDuration(decode_cpu_budget), "must be positive");
+  }
+  if (max_receive_message_bytes < 1) {
+    return bad("max_receive_message_bytes", max_receive_message_bytes, "must be positive");
+  }
+  for (const auto& [flag, d] :
+       {std::pair<const char*, absl::Duration>{"keepalive_time", keepalive_time},
+        {"keepalive_timeout", keepalive_timeout},
+        {"keepalive_min_client_interval", keepalive_min_client_interval}}) {
+    if (!positive(d)) return bad(flag, absl::FormatDuration(d), "must be positive");
+  }
+  if (shutdown_deadline < absl::ZeroDuration()) {
+    return bad("shutdown_deadline", absl::FormatDuration(shutdown_deadline),
+               "must not be negative");
+  }
+  if (!default_config_path.empty() && default_camera_id.empty()) {
+    return absl::InvalidArgumentError("--default_camera_id must not be empty");
+  }
+  // The TLS files are checked as they are read (MakeCredentials).
+  if (max_concurrent_streams < 0) {
+    return bad("max_concurrent_streams", max_concurrent_streams, "must not be negative");
+  }
+  if (metrics_camera_labels > 10000) {
+    return bad("metrics_camera_labels", metrics_camera_labels, "must lie in 0..10000");
+  }
+  return absl::OkStatus();
+}
+
 LaneServer::LaneServer(const ServerOptions& options) : options_(options) {}
 
 LaneServer::~LaneServer() { Drain(); }
 
 absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
     const ServerOptions& options, std::shared_ptr<prometheus::Registry> registry) {
-  // Fail fast on bad TLS files or a bad default config, before anything
+  // Fail fast on bad options, TLS files or default config, before anything
   // listens.
+  if (absl::Status s = options.Validate(); !s.ok()) return s;
   absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> credentials = MakeCredentials(options);
   if (!credentials.ok()) return credentials.status();
   absl::StatusOr<lane::Config> default_config;
@@ -99,84 +145,12 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
                                                      default_config.status().message()));
     }
   }
-
   std::unique_ptr<LaneServer> server(new LaneServer(options));
   server->registry_ = registry ? std::move(registry) : std::make_shared<prometheus::Registry>();
-  server->metrics_ =
-      std::make_unique<Metrics>(*server->registry_, options.build, options.metrics_camera_labels);
-
-  SessionRegistry::Options registry_options;
-  registry_options.max_sessions = options.max_sessions;
-  registry_options.ttl = options.session_ttl;
-  registry_options.default_max_inflight_frames = std::max<uint32_t>(1, options.max_inflight_frames);
-  registry_options.max_frame_pixels = options.max_frame_pixels;
-  registry_options.max_receive_message_bytes =
-      static_cast<uint64_t>(std::max(0, options.max_receive_message_bytes));
-  registry_options.max_session_memory_bytes = options.max_session_memory_bytes;
-  Metrics* metrics = server->metrics_.get();
-  registry_options.on_size_change = [metrics](size_t n) {
-    metrics->SetSessions(static_cast<double>(n));
-  };
-  server->sessions_ = std::make_unique<SessionRegistry>(std::move(registry_options));
-
-  WorkerPool::Options pool_options;
-  pool_options.threads = options.workers;
-  pool_options.max_queued = options.max_queued_tasks;
-  server->pool_ = std::make_unique<WorkerPool>(pool_options);
-
-  ServiceOptions service_options;
-  service_options.frame_limits.max_frame_pixels = options.max_frame_pixels;
-  service_options.frame_limits.decode_cpu_budget = options.decode_cpu_budget;
-  service_options.max_receive_message_bytes =
-      static_cast<uint64_t>(std::max(0, options.max_receive_message_bytes));
-  service_options.auth_tokens = options.auth_tokens;
-  service_options.build = options.build;
-  server->service_ = std::make_unique<LaneServiceImpl>(service_options, *server->sessions_,
-                                                       *server->pool_, *server->metrics_);
-
-  grpc::EnableDefaultHealthCheckService(true);
-  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
-  grpc::ServerBuilder builder;
-  builder.AddListeningPort(options.address, *credentials, &server->port_);
-  builder.RegisterService(server->service_.get());
-  builder.SetMaxReceiveMessageSize(options.max_receive_message_bytes);
-  // gRPC sets SO_REUSEPORT by default: a second server on a busy port would
-  // then start and the kernel would split connections between the two. With
-  // it off, a busy port fails here.
-  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
-  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, ToMillis(options.keepalive_time));
-  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, ToMillis(options.keepalive_timeout));
-  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS,
-                             options.keepalive_permit_without_calls ? 1 : 0);
-  builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS,
-                             ToMillis(options.keepalive_min_client_interval));
-  if (options.max_concurrent_streams > 0) {
-    builder.AddChannelArgument(GRPC_ARG_MAX_CONCURRENT_STREAMS, options.max_concurrent_streams);
-  }
-  server->server_ = builder.BuildAndStart();
-  if (server->server_ == nullptr || server->port_ == 0) {
-    return absl::UnavailableError(absl::StrCat(
-        "cannot listen on ", options.address,
-        ": the port is in use by another process (or the address is not this host's)"));
-  }
-  // Start-up: NOT_SERVING (the lane service answers UNAVAILABLE) until ready.
-  server->server_->GetHealthCheckService()->SetServingStatus(false);
-
-  if (!options.metrics_address.empty()) {
-    absl::StatusOr<std::unique_ptr<HttpEndpoint>> http = HttpEndpoint::Start(
-        options.metrics_address, 2,
-        {server->registry_, std::make_shared<ProcessMetrics>(),
-         std::make_shared<CalibrationMetrics>(*server->sessions_)},
-        [s = server.get()] { return s->ready_.load(std::memory_order_acquire); });
-    if (!http.ok()) {
-      return absl::UnavailableError(
-          absl::StrCat("cannot serve metrics: ", http.status().message()));
-    }
-    server->http_ = std::move(*http);
-    server->metrics_port_ = server->http_->port();
-  }
-
-  if (default_config.ok() && !options.default_config_path.empty()) {
+  server->BuildService();
+  if (absl::Status s = server->StartGrpc(*credentials); !s.ok()) return s;
+  if (absl::Status s = server->StartHttp(); !s.ok()) return s;
+  if (!options.default_config_path.empty()) {
     absl::StatusOr<SessionRegistry::CreateResult> created =
         server->sessions_->Create(options.default_camera_id,
                                   SessionSpec{*default_config, StreamPolicy{}, DecodePolicy{},
@@ -187,33 +161,108 @@ absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
           "--default_config ", options.default_config_path, ": ", created.status().message()));
     }
   }
-
   if (options.session_ttl != absl::InfiniteDuration()) {
     server->sweeper_ = std::thread([s = server.get()] { s->SweepLoop(); });
   }
-
   server->service_->SetServing();
   server->server_->GetHealthCheckService()->SetServingStatus(true);
   server->ready_.store(true, std::memory_order_release);
   return server;
 }
 
+void LaneServer::BuildService() {
+  metrics_ = std::make_unique<Metrics>(*registry_, options_.build, options_.metrics_camera_labels);
+  SessionRegistry::Options registry_options;
+  registry_options.max_sessions = options_.max_sessions;
+  registry_options.ttl = options_.session_ttl;
+  registry_options.default_max_inflight_frames = options_.max_inflight_frames;
+  registry_options.max_frame_pixels = options_.max_frame_pixels;
+  registry_options.max_receive_message_bytes =
+      static_cast<uint64_t>(options_.max_receive_message_bytes);
+  registry_options.max_session_memory_bytes = options_.max_session_memory_bytes;
+  Metrics* metrics = metrics_.get();
+  registry_options.on_size_change = [metrics](size_t n) {
+    metrics->SetSessions(static_cast<double>(n));
+  };
+  sessions_ = std::make_unique<SessionRegistry>(std::move(registry_options));
+
+  WorkerPool::Options pool_options;
+  pool_options.threads = options_.workers;
+  pool_options.max_queued = options_.max_queued_tasks;
+  pool_ = std::make_unique<WorkerPool>(pool_options);
+
+  ServiceOptions service_options;
+  service_options.frame_limits.max_frame_pixels = options_.max_frame_pixels;
+  service_options.frame_limits.decode_cpu_budget = options_.decode_cpu_budget;
+  service_options.max_receive_message_bytes =
+      static_cast<uint64_t>(options_.max_receive_message_bytes);
+  service_options.auth_tokens = options_.auth_tokens;
+  service_options.build = options_.build;
+  service_ = std::make_unique<LaneServiceImpl>(service_options, *sessions_, *pool_, *metrics_);
+}
+
+absl::Status LaneServer::StartGrpc(const std::shared_ptr<grpc::ServerCredentials>& credentials) {
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  builder.AddListeningPort(options_.address, credentials, &port_);
+  builder.RegisterService(service_.get());
+  builder.SetMaxReceiveMessageSize(options_.max_receive_message_bytes);
+  // gRPC sets SO_REUSEPORT by default: a second server on a busy port would
+  // then start and the kernel would split connections between the two. With
+  // it off, a busy port fails here.
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, ToMillis(options_.keepalive_time));
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, ToMillis(options_.keepalive_timeout));
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS,
+                             options_.keepalive_permit_without_calls ? 1 : 0);
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS,
+                             ToMillis(options_.keepalive_min_client_interval));
+  if (options_.max_concurrent_streams > 0) {
+    builder.AddChannelArgument(GRPC_ARG_MAX_CONCURRENT_STREAMS, options_.max_concurrent_streams);
+  }
+  server_ = builder.BuildAndStart();
+  if (server_ == nullptr || port_ == 0) {
+    return absl::UnavailableError(absl::StrCat(
+        "cannot listen on ", options_.address,
+        ": the port is in use by another process (or the address is not this host's)"));
+  }
+  // Start-up: NOT_SERVING (the lane service answers UNAVAILABLE) until ready.
+  server_->GetHealthCheckService()->SetServingStatus(false);
+  return absl::OkStatus();
+}
+
+absl::Status LaneServer::StartHttp() {
+  if (options_.metrics_address.empty()) return absl::OkStatus();
+  absl::StatusOr<std::unique_ptr<HttpEndpoint>> http =
+      HttpEndpoint::Start(options_.metrics_address, 2,
+                          {registry_, std::make_shared<ProcessMetrics>(),
+                           std::make_shared<CalibrationMetrics>(*sessions_)},
+                          [this] { return ready_.load(std::memory_order_acquire); });
+  if (!http.ok()) {
+    return absl::UnavailableError(absl::StrCat("cannot serve metrics: ", http.status().message()));
+  }
+  http_ = std::move(*http);
+  metrics_port_ = http_->port();
+  return absl::OkStatus();
+}
+
 void LaneServer::SweepLoop() {
   const absl::Duration interval =
       std::clamp(options_.session_ttl / 4, absl::Milliseconds(10), absl::Seconds(1));
-  std::unique_lock<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   while (!stopping_) {
-    cv_.wait_for(lock, absl::ToChronoMilliseconds(interval), [this] { return stopping_; });
+    mu_.AwaitWithTimeout(absl::Condition(&stopping_), interval);
     if (stopping_) break;
-    lock.unlock();
+    mu_.Unlock();
     sessions_->EvictIdle();
-    lock.lock();
+    mu_.Lock();
   }
 }
 
 void LaneServer::BeginDrain() {
   {
-    std::lock_guard<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     if (draining_) return;
     draining_ = true;
     drain_deadline_ = absl::Now() + options_.shutdown_deadline;
@@ -229,9 +278,9 @@ void LaneServer::Drain() {
   BeginDrain();
   absl::Time deadline;
   {
-    std::unique_lock<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     if (shutting_down_) {
-      cv_.wait(lock, [this] { return drained_; });
+      mu_.Await(absl::Condition(&drained_));
       return;
     }
     shutting_down_ = true;
@@ -244,22 +293,15 @@ void LaneServer::Drain() {
   // Tasks still queued only release their streams (the calls are over).
   if (pool_ != nullptr) pool_->Shutdown();
   {
-    std::lock_guard<std::mutex> lock(mu_);
-    stopping_ = true;
+    absl::MutexLock lock(&mu_);
+    stopping_ = true;  // wakes the sweeper
   }
-  cv_.notify_all();
   if (sweeper_.joinable()) sweeper_.join();
   http_.reset();
-  {
-    std::lock_guard<std::mutex> lock(mu_);
-    drained_ = true;
-  }
-  cv_.notify_all();
+  absl::MutexLock lock(&mu_);
+  drained_ = true;  // wakes Wait and other Drains
 }
 
-void LaneServer::Wait() {
-  std::unique_lock<std::mutex> lock(mu_);
-  cv_.wait(lock, [this] { return drained_; });
-}
+void LaneServer::Wait() { absl::MutexLock lock(&mu_, absl::Condition(&drained_)); }
 
 }  // namespace lane::server

@@ -8,15 +8,15 @@
 #include <prometheus/registry.h>
 
 #include <atomic>
-#include <condition_variable>
 #include <cstdint>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "absl/base/thread_annotations.h"
 #include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "http_endpoint.h"
 #include "lane_service.h"
@@ -82,6 +82,11 @@ struct ServerOptions {
   // per-camera metrics (see Metrics::CountCameraFrame).
   size_t metrics_camera_labels = 0;
   BuildInfo build;
+
+  // OK, or INVALID_ARGUMENT naming the first option that makes no sense (by
+  // its lane-server flag). LaneServer::Start refuses options that fail it;
+  // nothing is clamped.
+  absl::Status Validate() const;
 };
 
 class LaneServer {
@@ -123,6 +128,11 @@ class LaneServer {
 
  private:
   explicit LaneServer(const ServerOptions& options);
+  // Start's steps: metrics, sessions, workers and the service; the gRPC
+  // server (not yet serving); the HTTP endpoint, if any.
+  void BuildService();
+  absl::Status StartGrpc(const std::shared_ptr<grpc::ServerCredentials>& credentials);
+  absl::Status StartHttp();
   void SweepLoop();
 
   const ServerOptions options_;
@@ -138,13 +148,12 @@ class LaneServer {
   std::atomic<bool> ready_{false};  // /readyz: serving and not draining
 
   std::thread sweeper_;
-  std::mutex mu_;
-  std::condition_variable cv_;
-  bool stopping_ = false;       // guarded by mu_: the sweeper stops
-  bool draining_ = false;       // guarded by mu_: BeginDrain has run
-  bool shutting_down_ = false;  // guarded by mu_: a Drain is past BeginDrain
-  bool drained_ = false;        // guarded by mu_
-  absl::Time drain_deadline_;   // guarded by mu_
+  absl::Mutex mu_;
+  bool stopping_ ABSL_GUARDED_BY(mu_) = false;       // the sweeper stops
+  bool draining_ ABSL_GUARDED_BY(mu_) = false;       // BeginDrain has run
+  bool shutting_down_ ABSL_GUARDED_BY(mu_) = false;  // a Drain is past BeginDrain
+  bool drained_ ABSL_GUARDED_BY(mu_) = false;
+  absl::Time drain_deadline_ ABSL_GUARDED_BY(mu_);
 };
 
 // The build described by compile-time constants (version, build type,

@@ -27,10 +27,7 @@ absl::Status SessionRegistry::ValidateCameraId(absl::string_view camera_id) {
   return absl::OkStatus();
 }
 
-absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std::string& camera_id,
-                                                                      const SessionSpec& spec,
-                                                                      bool replace) {
-  if (absl::Status s = ValidateCameraId(camera_id); !s.ok()) return s;
+absl::Status SessionRegistry::CheckSpec(const SessionSpec& spec) const {
   const lane::CameraModel& camera = spec.config.camera;
   if (int64_t{camera.image_width} * camera.image_height > options_.max_frame_pixels) {
     return wire::InvalidRequest(
@@ -45,6 +42,33 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
                      "-byte message, more than --max_receive_message_bytes ",
                      options_.max_receive_message_bytes, "; raise it on the server"));
   }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<std::shared_ptr<Session>> SessionRegistry::ExistingLocked(
+    const std::string& camera_id, const std::string& config_json, const StreamPolicy& stream,
+    const SessionSpec& spec, bool replace, absl::Time now) {
+  auto it = sessions_.find(camera_id);
+  if (it != sessions_.end()) {
+    const Session& existing = *it->second.session;
+    if (existing.config_json == config_json && existing.stream == stream &&
+        existing.decode == spec.decode && existing.calibration == spec.calibration &&
+        existing.tracking == spec.tracking) {
+      it->second.last_used = now;
+      return it->second.session;
+    }
+    if (!replace) return wire::SessionConfigConflict(camera_id, existing.version);
+  } else if (sessions_.size() >= options_.max_sessions) {
+    return wire::TooManySessions(options_.max_sessions);
+  }
+  return nullptr;
+}
+
+absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std::string& camera_id,
+                                                                      const SessionSpec& spec,
+                                                                      bool replace) {
+  if (absl::Status s = ValidateCameraId(camera_id); !s.ok()) return s;
+  if (absl::Status s = CheckSpec(spec); !s.ok()) return s;
   StreamPolicy stream = spec.stream;
   if (stream.max_inflight_frames == 0) {
     stream.max_inflight_frames = options_.default_max_inflight_frames;
@@ -53,28 +77,11 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
     return wire::InvalidRequest("stream.max_inflight_frames must be at most 4096");
   }
   std::string config_json = lane::ConfigToJson(spec.config);
-
-  // The checks that need no detector, so a confirmation costs nothing.
-  auto check_locked = [&](absl::Time now) -> absl::StatusOr<std::shared_ptr<Session>> {
-    auto it = sessions_.find(camera_id);
-    if (it != sessions_.end()) {
-      const Session& existing = *it->second.session;
-      if (existing.config_json == config_json && existing.stream == stream &&
-          existing.decode == spec.decode && existing.calibration == spec.calibration &&
-          existing.tracking == spec.tracking) {
-        it->second.last_used = now;
-        return it->second.session;
-      }
-      if (!replace) return wire::SessionConfigConflict(camera_id, existing.version);
-    } else if (sessions_.size() >= options_.max_sessions) {
-      return wire::TooManySessions(options_.max_sessions);
-    }
-    return nullptr;
-  };
-
   {
-    std::lock_guard<std::mutex> lock(mu_);
-    absl::StatusOr<std::shared_ptr<Session>> existing = check_locked(options_.clock());
+    // A confirmation costs nothing: no detector is built.
+    absl::MutexLock lock(&mu_);
+    absl::StatusOr<std::shared_ptr<Session>> existing =
+        ExistingLocked(camera_id, config_json, stream, spec, replace, options_.clock());
     if (!existing.ok()) return existing.status();
     if (*existing != nullptr) return CreateResult{*std::move(existing), Outcome::kUnchanged};
   }
@@ -85,14 +92,14 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
   if (!detector.ok()) {
     return wire::InvalidRequest(absl::StrCat("session config: ", detector.status().message()));
   }
-
   const uint64_t need = detector->MemoryBytes() + config_json.size();
 
   std::shared_ptr<Session> replaced;  // destroyed outside the lock
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   const absl::Time now = options_.clock();
   // Another call may have changed the entry meanwhile: check again.
-  absl::StatusOr<std::shared_ptr<Session>> existing = check_locked(now);
+  absl::StatusOr<std::shared_ptr<Session>> existing =
+      ExistingLocked(camera_id, config_json, stream, spec, replace, now);
   if (!existing.ok()) return existing.status();
   if (*existing != nullptr) return CreateResult{*std::move(existing), Outcome::kUnchanged};
 
@@ -115,7 +122,7 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
 }
 
 std::shared_ptr<Session> SessionRegistry::Find(absl::string_view camera_id) {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   auto it = sessions_.find(camera_id);
   if (it == sessions_.end()) return nullptr;
   it->second.last_used = options_.clock();
@@ -123,7 +130,7 @@ std::shared_ptr<Session> SessionRegistry::Find(absl::string_view camera_id) {
 }
 
 absl::StatusOr<SessionRegistry::Entry> SessionRegistry::Get(absl::string_view camera_id) {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   auto it = sessions_.find(camera_id);
   if (it == sessions_.end()) return wire::SessionNotFound(camera_id);
   it->second.last_used = options_.clock();
@@ -131,7 +138,7 @@ absl::StatusOr<SessionRegistry::Entry> SessionRegistry::Get(absl::string_view ca
 }
 
 std::vector<SessionRegistry::Entry> SessionRegistry::List() const {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   std::vector<Entry> out;
   out.reserve(sessions_.size());
   for (const auto& [id, entry] : sessions_) out.push_back(entry);
@@ -140,7 +147,7 @@ std::vector<SessionRegistry::Entry> SessionRegistry::List() const {
 
 absl::Status SessionRegistry::Delete(absl::string_view camera_id) {
   std::shared_ptr<Session> doomed;  // destroyed outside the lock
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   auto it = sessions_.find(camera_id);
   if (it == sessions_.end()) return wire::SessionNotFound(camera_id);
   doomed = std::move(it->second.session);
@@ -153,7 +160,7 @@ absl::Status SessionRegistry::Delete(absl::string_view camera_id) {
 size_t SessionRegistry::EvictIdle() {
   if (options_.ttl == absl::InfiniteDuration()) return 0;
   std::vector<std::shared_ptr<Session>> doomed;  // destroyed outside the lock
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   const absl::Time cutoff = options_.clock() - options_.ttl;
   for (auto it = sessions_.begin(); it != sessions_.end();) {
     if (it->second.last_used <= cutoff) {
@@ -182,12 +189,12 @@ uint64_t SessionRegistry::RawFrameRequestBytes(const lane::CameraModel& camera) 
 }
 
 uint64_t SessionRegistry::memory_bytes() const {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   return memory_bytes_;
 }
 
 size_t SessionRegistry::size() const {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   return sessions_.size();
 }
 

@@ -10,12 +10,13 @@
 #include <functional>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <vector>
 
+#include "absl/base/thread_annotations.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "session.h"
 
@@ -97,13 +98,23 @@ class SessionRegistry {
   static absl::Status ValidateCameraId(absl::string_view camera_id);
 
  private:
-  void NotifySizeLocked();
+  // What Create checks of the camera before anything else: its frame size
+  // against --max_frame_pixels and a raw frame against the message size.
+  absl::Status CheckSpec(const SessionSpec& spec) const;
+  // The checks that need no detector: the camera's session if it is the
+  // same (marked used at `now`), nullptr if one may be created or replaced,
+  // or why not (a conflict without `replace`, the session cap).
+  absl::StatusOr<std::shared_ptr<Session>> ExistingLocked(
+      const std::string& camera_id, const std::string& config_json, const StreamPolicy& stream,
+      const SessionSpec& spec, bool replace, absl::Time now) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  void NotifySizeLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
 
   const Options options_;
-  mutable std::mutex mu_;
-  std::map<std::string, Entry, std::less<>> sessions_;  // guarded by mu_
-  uint64_t next_version_ = 1;                           // guarded by mu_
-  uint64_t memory_bytes_ = 0;  // sum of SessionBytes over sessions_, guarded by mu_
+  mutable absl::Mutex mu_;
+  std::map<std::string, Entry, std::less<>> sessions_ ABSL_GUARDED_BY(mu_);
+  uint64_t next_version_ ABSL_GUARDED_BY(mu_) = 1;
+  // The sum of SessionBytes over sessions_.
+  uint64_t memory_bytes_ ABSL_GUARDED_BY(mu_) = 0;
 };
 
 }  // namespace lane::server

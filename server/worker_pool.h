@@ -4,13 +4,14 @@
 #ifndef LANE_SERVER_WORKER_POOL_H_
 #define LANE_SERVER_WORKER_POOL_H_
 
-#include <condition_variable>
 #include <cstddef>
 #include <deque>
 #include <functional>
-#include <mutex>
 #include <thread>
 #include <vector>
+
+#include "absl/base/thread_annotations.h"
+#include "absl/synchronization/mutex.h"
 
 namespace lane::server {
 
@@ -46,15 +47,18 @@ class WorkerPool {
  private:
   bool Push(std::function<void()> task, bool bounded);
   void Run();
+  // A worker's wait ends: a task is queued, or the pool stops.
+  bool WorkOrStopping() const ABSL_SHARED_LOCKS_REQUIRED(mu_) {
+    return stopping_ || !queue_.empty();
+  }
 
   const size_t max_queued_;
   int num_threads_ = 0;
-  std::mutex shutdown_mu_;  // serialises Shutdown
-  mutable std::mutex mu_;
-  std::condition_variable cv_;
-  std::deque<std::function<void()>> queue_;  // guarded by mu_
-  bool stopping_ = false;                    // guarded by mu_
-  std::vector<std::thread> threads_;
+  absl::Mutex shutdown_mu_;  // serialises Shutdown
+  mutable absl::Mutex mu_;
+  std::deque<std::function<void()>> queue_ ABSL_GUARDED_BY(mu_);
+  bool stopping_ ABSL_GUARDED_BY(mu_) = false;
+  std::vector<std::thread> threads_ ABSL_GUARDED_BY(shutdown_mu_);
 };
 
 }  // namespace lane::server

@@ -219,8 +219,15 @@ void TakeRed(const JSAMPLE* rgb, unsigned char* red, int pixels) {
   for (; x < pixels; ++x) red[x] = rgb[3 * x];
 }
 
-// May leave by longjmp (through Fail or libjpeg's error_exit).
-void DecodeSteps(JpegState* state) {
+// DecodeSteps' parts. Each may leave by longjmp (through Fail or libjpeg's
+// error_exit); they hold nothing that needs a destructor.
+
+// The header read and checked, the output chosen, the decompressor started.
+// As cv::imdecode: libjpeg's default DCT (islow), fancy upsampling and block
+// smoothing; BGR straight from libjpeg-turbo, grey from Y alone. Red: from a
+// grey file the grey itself, else the R of libjpeg's RGB, through a few rows
+// of scratch. Returns whether red goes through RGB.
+bool StartDecode(JpegState* state) {
   j_decompress_ptr cinfo = &state->cinfo;
   jpeg_create_decompress(cinfo);
   cinfo->mem->max_memory_to_use = state->max_memory;
@@ -245,10 +252,6 @@ void DecodeSteps(JpegState* state) {
       state->color_space = static_cast<int>(cinfo->jpeg_color_space);
       Fail(state, Failure::kColorSpace);
   }
-  // As cv::imdecode: libjpeg's default DCT (islow), fancy upsampling and
-  // block smoothing; BGR straight from libjpeg-turbo, grey from Y alone.
-  // Red: from a grey file the grey itself, else the R of libjpeg's RGB,
-  // through a few rows of scratch.
   const bool grey_file = cinfo->jpeg_color_space == JCS_GRAYSCALE;
   const bool via_rgb = state->output == Output::kRed && !grey_file;
   const int components = state->output == Output::kBgr ? 3 : 1;
@@ -263,13 +266,18 @@ void DecodeSteps(JpegState* state) {
       cinfo->output_components != (via_rgb ? 3 : components)) {
     Fail(state, Failure::kUnexpected);
   }
+  return via_rgb;
+}
 
-  // Columns: one more on either side than asked, where the frame has one
-  // (see the top of the file), and at least 2 * max_h_samp_factor + 1: with
-  // a component 2 samples wide or less libjpeg-turbo falls back from fancy
-  // to plain upsampling, which changes every pixel. libjpeg then rounds the
-  // start down to an iMCU.
-  int crop_first = 0;  // the first column libjpeg writes
+// Columns: one more on either side than asked, where the frame has one (see
+// the top of the file), and at least 2 * max_h_samp_factor + 1: with a
+// component 2 samples wide or less libjpeg-turbo falls back from fancy to
+// plain upsampling, which changes every pixel. libjpeg then rounds the start
+// down to an iMCU. Sets decoded_left/right; returns the first column libjpeg
+// writes.
+int CropColumns(JpegState* state) {
+  j_decompress_ptr cinfo = &state->cinfo;
+  int crop_first = 0;
   state->decoded_left = 0;
   state->decoded_right = state->out_width;
   int begin = std::max(0, state->left - 1);
@@ -292,25 +300,31 @@ void DecodeSteps(JpegState* state) {
     state->decoded_left = crop_first == 0 ? 0 : crop_first + 1;
     state->decoded_right = crop_end == state->out_width ? crop_end : crop_end - 1;
   }
+  return crop_first;
+}
+
+// Scratch rows: the RGB of a red region; the last row of the frame when
+// reading to the end. None when neither is needed.
+JSAMPARRAY ScratchRows(JpegState* state, bool via_rgb) {
+  j_decompress_ptr cinfo = &state->cinfo;
+  if (!via_rgb && !(state->read_to_end && state->bottom < state->out_height)) return nullptr;
   const auto row_width = static_cast<int>(cinfo->output_width);  // after the crop
-  unsigned char* const first_column =
-      state->out + static_cast<size_t>(crop_first) * static_cast<size_t>(components);
+  JSAMPARRAY scratch = (*cinfo->mem->alloc_sarray)(
+      reinterpret_cast<j_common_ptr>(cinfo), JPOOL_IMAGE,
+      static_cast<JDIMENSION>(row_width * cinfo->output_components + kScratchOffset), kRowsPerCall);
+  // libjpeg-turbo's SIMD colour conversion writes a 32-byte aligned row with
+  // non-temporal stores, which TakeRed would then wait for (0.15 ms at
+  // 640x280, as much again as the transform of the region saves), and
+  // alloc_sarray's rows are aligned: the scratch rows are moved off it.
+  for (int i = 0; i < kRowsPerCall; ++i) scratch[i] += kScratchOffset;
+  return scratch;
+}
 
-  // Scratch rows: the RGB of a red region; the last row of the frame when
-  // reading to the end.
-  JSAMPARRAY scratch = nullptr;
-  if (via_rgb || (state->read_to_end && state->bottom < state->out_height)) {
-    scratch = (*cinfo->mem->alloc_sarray)(
-        reinterpret_cast<j_common_ptr>(cinfo), JPOOL_IMAGE,
-        static_cast<JDIMENSION>(row_width * cinfo->output_components + kScratchOffset),
-        kRowsPerCall);
-    // libjpeg-turbo's SIMD colour conversion writes a 32-byte aligned row
-    // with non-temporal stores, which TakeRed would then wait for (0.15 ms
-    // at 640x280, as much again as the transform of the region saves), and
-    // alloc_sarray's rows are aligned: the scratch rows are moved off it.
-    for (int i = 0; i < kRowsPerCall; ++i) scratch[i] += kScratchOffset;
-  }
-
+// Rows [top, bottom) into the output, from its column `first_column` on.
+void ReadRegionRows(JpegState* state, bool via_rgb, unsigned char* first_column,
+                    JSAMPARRAY scratch) {
+  j_decompress_ptr cinfo = &state->cinfo;
+  const auto row_width = static_cast<int>(cinfo->output_width);
   if (state->top > 0) {
     const auto skip = static_cast<JDIMENSION>(state->top);
     if (jpeg_skip_scanlines(cinfo, skip) != skip) Fail(state, Failure::kNoProgress);
@@ -334,6 +348,17 @@ void DecodeSteps(JpegState* state) {
       }
     }
   }
+}
+
+void DecodeSteps(JpegState* state) {
+  j_decompress_ptr cinfo = &state->cinfo;
+  const bool via_rgb = StartDecode(state);
+  const int components = state->output == Output::kBgr ? 3 : 1;
+  const int crop_first = CropColumns(state);
+  unsigned char* const first_column =
+      state->out + static_cast<size_t>(crop_first) * static_cast<size_t>(components);
+  JSAMPARRAY scratch = ScratchRows(state, via_rgb);
+  ReadRegionRows(state, via_rgb, first_column, scratch);
   if (state->bottom < state->out_height) {
     // Stopping early: jpeg_destroy_decompress aborts.
     if (!state->read_to_end) return;

@@ -48,7 +48,7 @@ Config NonDefaultConfig() {
   c.detector.filter.zero_border_x_px = 7;
   c.detector.threshold.quantile = 0.98;
   c.detector.hough.min_peak = 0.0051;
-  c.detector.line_ransac.iterations = 55;
+  c.detector.line_ransac.ransac.iterations = 55;
   c.detector.line_ransac.inlier_distance_px = 0.7;
   c.detector.spline_ransac.k1 = 1.7;
   c.detector.spline_ransac.jitter_px = 3;
@@ -152,7 +152,7 @@ TEST(ConfigTest, RoundTripKeepsEveryValue) {
   EXPECT_EQ(parsed->detector.seed, 18446744073709551615ull);
   EXPECT_EQ(parsed->detector.threshold.quantile, 0.98);
   EXPECT_EQ(parsed->detector.hough.min_peak, 0.0051);
-  EXPECT_EQ(parsed->detector.line_ransac.iterations, 55);
+  EXPECT_EQ(parsed->detector.line_ransac.ransac.iterations, 55);
   EXPECT_EQ(parsed->detector.spline_ransac.jitter_px, 3);
   EXPECT_FALSE(parsed->detector.postprocess.localize_in_image);
   EXPECT_EQ(parsed->detector.postprocess.extend_max_row, 470.25);
@@ -267,7 +267,7 @@ TEST(ConfigTest, ExplicitKeysOverrideTheModeDefaultsWhateverTheOrder) {
   ASSERT_TRUE(parsed.ok()) << parsed.status();
   EXPECT_EQ(parsed->detector.mode, Mode::kTwo);
   EXPECT_EQ(parsed->detector.threshold.quantile, 0.9);
-  EXPECT_EQ(parsed->detector.spline_ransac.iterations, 7);
+  EXPECT_EQ(parsed->detector.spline_ransac.ransac.iterations, 7);
   // The keys not given keep the 2-lanes defaults.
   EXPECT_EQ(parsed->detector.line_ransac.window_half_width_m, two.line_ransac.window_half_width_m);
   EXPECT_EQ(parsed->detector.spline_ransac.window_half_width_m,
@@ -445,6 +445,27 @@ TEST(ConfigTest, NewDetectorOptionsRoundTripAndAreValidated) {
                           R"({"detector": {"filter": {"bar_side_m": -0.1}}})"}) {
     EXPECT_EQ(ParseConfig(bad).status().code(), absl::StatusCode::kInvalidArgument) << bad;
   }
+}
+
+}  // namespace
+}  // namespace lane
+
+namespace lane {
+namespace {
+
+// The RANSAC options are checked where a config is parsed and a detector
+// built, not only in the RANSAC tests.
+TEST(ConfigTest, RansacFloorAboveItsTrialsIsRefused) {
+  const absl::StatusOr<Config> parsed =
+      ParseConfig(R"({"detector": {"spline_ransac": {"iterations": 3, "min_iterations": 5}}})");
+  ASSERT_FALSE(parsed.ok());
+  EXPECT_NE(parsed.status().message().find(
+                "spline_ransac.min_iterations (5) must not exceed iterations (3)"),
+            std::string::npos)
+      << parsed.status();
+  DetectorOptions options;
+  options.line_ransac.ransac.min_iterations = 41;
+  EXPECT_FALSE(Detector::Create(CameraModel{}, IpmOptions{}, options).ok());
 }
 
 }  // namespace

@@ -228,10 +228,10 @@ TEST(SplineFitTest, AdaptiveStopEndsEarlyOnACleanMarkingOnly) {
   const Bezier& truth = scene.truth;
   const IpmLine& line = scene.line;
   SplineRansacOptions all;
-  all.confidence = 0;
+  all.ransac.confidence = 0;
   SplineRansacOptions adaptive;
-  adaptive.confidence = 0.999;
-  adaptive.min_iterations = 5;
+  adaptive.ransac.confidence = 0.999;
+  adaptive.ransac.min_iterations = 5;
   int fast_trials = 0;
   for (uint64_t seed = 1; seed <= 10; ++seed) {
     std::mt19937_64 r1(seed), r2(seed);

@@ -207,17 +207,17 @@ TEST(RansacTest, AdaptiveStopEndsOnceTheBestModelIsLikelyFound) {
   }
   EXPECT_LT(total_trials, 20 * 30);
 
-  // min_trials holds the loop open; without SupportFraction, or with
+  // min_iterations holds the loop open; without SupportFraction, or with
   // confidence 0, it runs every trial.
   const Scene scene = MakeScene(4);
   const LineThroughTwo inner(scene.points, 0.2);
   const WithSupport estimator(inner, scene.points.size());
   RansacOptions options{200};
   options.confidence = 0.99;
-  options.min_trials = 50;
+  options.min_iterations = 50;
   std::mt19937_64 r1(1), r2(1), r3(1);
   EXPECT_EQ(Ransac(estimator, scene.points, scene.weights, options, r1).trials, 50);
-  options.min_trials = 1;
+  options.min_iterations = 1;
   EXPECT_EQ(Ransac(inner, scene.points, scene.weights, options, r2).trials, 200);
   options.confidence = 0;
   EXPECT_EQ(Ransac(estimator, scene.points, scene.weights, options, r3).trials, 200);
@@ -248,13 +248,20 @@ TEST(RansacTest, UpperBoundIndexEqualsTheLibrarySearch) {
 
 TEST(RansacTest, OptionsAreValidated) {
   EXPECT_TRUE(RansacOptions{}.Validate().ok());
-  EXPECT_FALSE(RansacOptions{0}.Validate().ok());
+  EXPECT_TRUE(RansacOptions{0}.Validate().ok());  // only an initial model scored
+  EXPECT_FALSE(RansacOptions{-1}.Validate().ok());
+  EXPECT_FALSE(RansacOptions{10001}.Validate().ok());
+  // The adaptive stop's floor cannot lie above the trials, and the message
+  // names the config file's keys.
+  const absl::Status above = RansacOptions{3, 0.999, 5}.Validate("line_ransac");
+  EXPECT_EQ(above.message(), "line_ransac.min_iterations (5) must not exceed iterations (3)");
+  EXPECT_TRUE((RansacOptions{5, 0.999, 5}.Validate().ok()));
   RansacOptions o;
   o.confidence = 1.0;
   EXPECT_FALSE(o.Validate().ok());
   o.confidence = 0.999;
   EXPECT_TRUE(o.Validate().ok());
-  o.min_trials = 0;
+  o.min_iterations = 0;
   EXPECT_FALSE(o.Validate().ok());
 }
 

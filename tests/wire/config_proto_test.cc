@@ -36,7 +36,7 @@ TEST(ConvertTest, ModeSelectsItsDefaultsThenFieldsOverride) {
   const lane::DetectorOptions two = lane::DetectorOptions::ForMode(lane::Mode::kTwo);
   EXPECT_EQ(config->detector.mode, lane::Mode::kTwo);
   EXPECT_EQ(config->detector.threshold.quantile, two.threshold.quantile);
-  EXPECT_EQ(config->detector.spline_ransac.iterations, 11);
+  EXPECT_EQ(config->detector.spline_ransac.ransac.iterations, 11);
   EXPECT_DOUBLE_EQ(config->camera.pitch_deg, 12.5);
   EXPECT_DOUBLE_EQ(config->ipm.roi.top, 230);
   EXPECT_DOUBLE_EQ(config->ipm.roi.left, lane::Roi{}.left);

@@ -91,9 +91,9 @@ DetectorOptions DetectorOptions::ForMode(Mode mode) {
     o.hough.min_peak *= 1.5;  // reference: 6 instead of 4
     o.hough.group_distance_m = 1.7;
     o.line_ransac.window_half_width_m = 0.9;
-    o.line_ransac.iterations = 40;
+    o.line_ransac.ransac.iterations = 40;
     o.spline_ransac.window_half_width_m = 0.67;
-    o.spline_ransac.iterations = 75;
+    o.spline_ransac.ransac.iterations = 75;
     o.spline_ransac.k2 = 1.0;
     // The ego lane's band (+-2.9 m) holds its two boundaries: 2 x 0.25 m of
     // kept pixels in 5.8 m is 8.6 % of a row (threshold.h).

@@ -136,17 +136,12 @@ absl::Status LineRansacOptions::Validate() const {
   if (!(window_half_width_m > 0 && window_half_width_m < 20)) {
     return absl::InvalidArgumentError("line_ransac.window_half_width_m must lie in (0, 20) metres");
   }
-  if (iterations < 1 || iterations > 10000) {
-    return absl::InvalidArgumentError("line_ransac.iterations must lie in 1..10000");
+  if (absl::Status s = ransac.Validate("line_ransac"); !s.ok()) return s;
+  if (ransac.iterations < 1) {
+    return absl::InvalidArgumentError("line_ransac.iterations must be at least 1");
   }
   if (!(inlier_distance_px > 0 && inlier_distance_px < 20)) {
     return absl::InvalidArgumentError("line_ransac.inlier_distance_px must lie in (0, 20)");
-  }
-  if (!(confidence >= 0 && confidence < 1)) {
-    return absl::InvalidArgumentError("line_ransac.confidence must lie in [0, 1)");
-  }
-  if (min_iterations < 1 || min_iterations > 10000) {
-    return absl::InvalidArgumentError("line_ransac.min_iterations must lie in 1..10000");
   }
   if (min_inliers < 2) return absl::InvalidArgumentError("line_ransac.min_inliers must be >= 2");
   if (!(max_angle_from_vertical_deg > 0 && max_angle_from_vertical_deg <= 90)) {
@@ -203,9 +198,7 @@ std::optional<IpmLine> FitLineAmong(const cv::Mat& thresholded, const WeightedPo
                                     const LineRansacOptions& options, std::mt19937_64& rng) {
   if (static_cast<int>(pts.points.size()) < options.min_inliers) return std::nullopt;
   const LineEstimator estimator(pts, thresholded.rows, options);
-  const auto report =
-      Ransac(estimator, pts.points, pts.weights,
-             RansacOptions{options.iterations, options.confidence, options.min_iterations}, rng);
+  const auto report = Ransac(estimator, pts.points, pts.weights, options.ransac, rng);
   if (!report.model) return std::nullopt;
 
   // Refit on the inliers the score counted, weighted by their response.

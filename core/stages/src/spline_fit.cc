@@ -210,15 +210,7 @@ absl::Status SplineRansacOptions::Validate() const {
     return absl::InvalidArgumentError(
         "spline_ransac.window_half_width_m must lie in (0, 20) metres");
   }
-  if (iterations < 0 || iterations > 10000) {
-    return absl::InvalidArgumentError("spline_ransac.iterations must lie in 0..10000");
-  }
-  if (!(confidence >= 0 && confidence < 1)) {
-    return absl::InvalidArgumentError("spline_ransac.confidence must lie in [0, 1)");
-  }
-  if (min_iterations < 1 || min_iterations > 10000) {
-    return absl::InvalidArgumentError("spline_ransac.min_iterations must lie in 1..10000");
-  }
+  if (absl::Status s = ransac.Validate("spline_ransac"); !s.ok()) return s;
   if (!std::isfinite(k1) || !std::isfinite(k2) || k1 < 0 || k2 < 0) {
     return absl::InvalidArgumentError("spline_ransac.k1 and k2 must be finite and >= 0");
   }
@@ -247,9 +239,7 @@ std::optional<SplineFit> FitSplineAroundLine(const cv::Mat& thresholded, const I
   const WindowedRaster raster(thresholded, &line, half_width_px, options.jitter_px);
   const SplineEstimator estimator(raster, pts, options);
   const Bezier initial = Bezier::Line(line.top, line.bottom);
-  const auto report = Ransac(
-      estimator, pts.points, pts.weights,
-      RansacOptions{options.iterations, options.confidence, options.min_iterations}, rng, initial);
+  const auto report = Ransac(estimator, pts.points, pts.weights, options.ransac, rng, initial);
   if (!report.model || !(report.score > 0)) return std::nullopt;
   return SplineFit{*report.model, report.score, report.trials};
 }

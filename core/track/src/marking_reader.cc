@@ -148,20 +148,18 @@ bool ReadableForType(const cv::Mat& frame) {
   return !frame.empty() && (frame.type() == CV_8UC3 || frame.type() == CV_8UC1);
 }
 
-MarkingType TypeWithMaps(const cv::Mat& frame, const Lane& lane, const CameraModel& camera,
-                         const PlaneMaps& maps, int top_row, int bottom_row) {
-  if (!ReadableForType(frame)) return MarkingType::kUnknown;
-  const int bottom = bottom_row < 0 ? frame.rows : std::min(bottom_row, frame.rows);
+// Points of the lane's image spline every kTypeStep metres of road (from the
+// spline mapped to the ground), near to far, below the horizon: fine enough
+// for gaps of 1.5 m and more.
+constexpr double kTypeStep = 0.4;
+std::vector<Eigen::Vector2d> SamplesAlongRoad(const Lane& lane, const CameraModel& camera,
+                                              const PlaneMaps& maps) {
   Bezier image;
   for (int k = 0; k < 4; ++k) image.p[k] = lane.image[k];
-  // Samples every kStep metres of road along the lane (fine enough for gaps
-  // of 1.5 m and more) (from the image spline
-  // mapped to the ground), near to far.
-  constexpr double kStep = 0.4;
   const std::vector<Eigen::Vector2d> dense = image.Sample(120);
   std::vector<Eigen::Vector2d> samples;
   samples.reserve(dense.size());
-  double run = kStep;
+  double run = kTypeStep;
   Eigen::Vector2d previous = Eigen::Vector2d::Zero();
   bool have_previous = false;
   const double horizon = camera.HorizonRow();
@@ -171,103 +169,118 @@ MarkingType TypeWithMaps(const cv::Mat& frame, const Lane& lane, const CameraMod
     if (have_previous) run += (g - previous).norm();
     previous = g;
     have_previous = true;
-    if (run >= kStep) {
+    if (run >= kTypeStep) {
       samples.push_back(p);
       run = 0;
     }
   }
-  int n = 0, on = 0, steps = 0, resolvable = 0, doubles = 0;
-  std::vector<bool> pattern;  // bar or not, near to far
-  pattern.reserve(samples.size());
-  std::vector<int> peaks;  // a twin check's peaks (reused)
-  peaks.reserve(10);
-  for (const Eigen::Vector2d& p : samples) {
-    const int row = static_cast<int>(std::lround(p.y()));
-    if (row < top_row || row >= bottom) continue;
-    const std::optional<BarWindows> b = BarWindowsAt(maps, p, frame.cols, 1.5);
-    if (!b) continue;
-    const int u = b->u, half = b->half, off = b->off, span = b->span;
-    const double w = b->width_px;
-    ++n;
-    // The paint against the road on both sides, at the spline's column or,
-    // when that fails, up to half a marking width either side: the spline
-    // is placed to a pixel or so, and far away a marking is 2-3 pixels wide
-    // (a solid line read off its paint would show gaps).
-    auto road_left = [&](int c) { return GreyMean(frame, row, c - off - span, c - off); };
-    auto road_right = [&](int c) { return GreyMean(frame, row, c + off, c + off + span); };
-    auto bar_at = [&](int c, double left_road, double right_road) {
-      return GreyMean(frame, row, c - half, c + half) - std::max(left_road, right_road) >= 12.0;
-    };
-    const double left = road_left(u);
-    const double right = road_right(u);
-    bool bar = bar_at(u, left, right);
-    const int reach = std::max(1, static_cast<int>(std::lround(0.5 * w)));
-    for (int d = -reach; d <= reach && !bar; ++d) {
-      const int c = u + d;
-      if (d != 0 && c - off - span >= 0 && c + off + span < frame.cols) {
-        bar = bar_at(c, road_left(c), road_right(c));
-      }
-    }
-    // Two bars side by side: the profile across +-0.3 m has two peaks
-    // 0.1..0.45 m apart with the road showing between them. A double
-    // line's centre (where its lane runs) is that dip, not a bar, so the
-    // check runs where there is no bar, and on every other bar sample (a
-    // double line runs on: half of them tell as much for half the reads).
-    bool twin = false;
-    const bool check = w >= 4.0 && (!bar || (n % 2) == 0);
-    if (check) {
-      // Along the row, 3 cm on the road is 0.2 w pixels (w: 15 cm).
-      std::array<double, 21> profile;
-      for (int k = -10; k <= 10; ++k) {
-        const int c = static_cast<int>(std::lround(p.x() + 0.2 * w * k));
-        profile[static_cast<size_t>(k + 10)] =
-            c >= 0 && c < frame.cols ? GreyAt(frame, row, c) : 0.0;
-      }
-      const double floor = std::min(profile.front(), profile.back());
-      peaks.clear();
-      for (int k = 1; k + 1 < static_cast<int>(profile.size()); ++k) {
-        const double v = profile[static_cast<size_t>(k)];
-        if (v >= floor + 12 && v >= profile[static_cast<size_t>(k - 1)] &&
-            v > profile[static_cast<size_t>(k + 1)]) {
-          peaks.push_back(k);
-        }
-      }
-      for (size_t a = 0; a + 1 < peaks.size() && !twin; ++a) {
-        const int k0 = peaks[a], k1 = peaks[a + 1];
-        const double gap_m = 0.03 * (k1 - k0);
-        if (gap_m < 0.1 || gap_m > 0.45) continue;
-        // The dip goes at least half way down to the road's level (texture
-        // on one line does not).
-        double dip = 1e9;
-        for (int k = k0 + 1; k < k1; ++k) dip = std::min(dip, profile[static_cast<size_t>(k)]);
-        const double low_peak =
-            std::min(profile[static_cast<size_t>(k0)], profile[static_cast<size_t>(k1)]);
-        twin = low_peak >= floor + 20 && dip <= floor + 0.5 * (low_peak - floor);
-      }
-    }
-    const bool painted = bar || twin;
-    if (check && painted) {
-      ++resolvable;
-      doubles += twin;
-    }
-    if (!painted && std::abs(left - right) >= 15.0) ++steps;
-    on += painted;
-    pattern.push_back(painted);
+  return samples;
+}
+
+// Two bars side by side at point p of row `row` (w: a 15 cm marking's width
+// in pixels): the profile across +-0.3 m has two peaks 0.1..0.45 m apart
+// with the road showing between them. `peaks` is scratch space.
+bool TwinBarsAt(const cv::Mat& frame, const Eigen::Vector2d& p, int row, double w,
+                std::vector<int>& peaks) {
+  // Along the row, 3 cm on the road is 0.2 w pixels (w: 15 cm).
+  std::array<double, 21> profile;
+  for (int k = -10; k <= 10; ++k) {
+    const int c = static_cast<int>(std::lround(p.x() + 0.2 * w * k));
+    profile[static_cast<size_t>(k + 10)] = c >= 0 && c < frame.cols ? GreyAt(frame, row, c) : 0.0;
   }
-  if (n < 12) return MarkingType::kUnknown;
-  const double on_share = static_cast<double>(on) / n;
+  const double floor = std::min(profile.front(), profile.back());
+  peaks.clear();
+  for (int k = 1; k + 1 < static_cast<int>(profile.size()); ++k) {
+    const double v = profile[static_cast<size_t>(k)];
+    if (v >= floor + 12 && v >= profile[static_cast<size_t>(k - 1)] &&
+        v > profile[static_cast<size_t>(k + 1)]) {
+      peaks.push_back(k);
+    }
+  }
+  for (size_t a = 0; a + 1 < peaks.size(); ++a) {
+    const int k0 = peaks[a], k1 = peaks[a + 1];
+    const double gap_m = 0.03 * (k1 - k0);
+    if (gap_m < 0.1 || gap_m > 0.45) continue;
+    // The dip goes at least half way down to the road's level (texture on
+    // one line does not).
+    double dip = 1e9;
+    for (int k = k0 + 1; k < k1; ++k) dip = std::min(dip, profile[static_cast<size_t>(k)]);
+    const double low_peak =
+        std::min(profile[static_cast<size_t>(k0)], profile[static_cast<size_t>(k1)]);
+    if (low_peak >= floor + 20 && dip <= floor + 0.5 * (low_peak - floor)) return true;
+  }
+  return false;
+}
+
+// What the samples along a lane showed.
+struct TypeEvidence {
+  int n = 0;                  // samples read
+  int on = 0;                 // painted (a bar or two)
+  int steps = 0;              // unpainted with a brightness step across
+  int resolvable = 0;         // painted samples checked for twin bars
+  int doubles = 0;            // of those, twin bars
+  std::vector<bool> pattern;  // painted or not, near to far
+};
+
+// Sample `index` (0-based among those read) at p: whether it is paint,
+// counted into `evidence`.
+void ReadTypeSample(const cv::Mat& frame, const Eigen::Vector2d& p, int row, const BarWindows& b,
+                    TypeEvidence& evidence, std::vector<int>& peaks) {
+  const int u = b.u, half = b.half, off = b.off, span = b.span;
+  const double w = b.width_px;
+  const int n = ++evidence.n;
+  // The paint against the road on both sides, at the spline's column or,
+  // when that fails, up to half a marking width either side: the spline is
+  // placed to a pixel or so, and far away a marking is 2-3 pixels wide (a
+  // solid line read off its paint would show gaps).
+  auto road_left = [&](int c) { return GreyMean(frame, row, c - off - span, c - off); };
+  auto road_right = [&](int c) { return GreyMean(frame, row, c + off, c + off + span); };
+  auto bar_at = [&](int c, double left_road, double right_road) {
+    return GreyMean(frame, row, c - half, c + half) - std::max(left_road, right_road) >= 12.0;
+  };
+  const double left = road_left(u);
+  const double right = road_right(u);
+  bool bar = bar_at(u, left, right);
+  const int reach = std::max(1, static_cast<int>(std::lround(0.5 * w)));
+  for (int d = -reach; d <= reach && !bar; ++d) {
+    const int c = u + d;
+    if (d != 0 && c - off - span >= 0 && c + off + span < frame.cols) {
+      bar = bar_at(c, road_left(c), road_right(c));
+    }
+  }
+  // A double line's centre (where its lane runs) is the dip between its
+  // bars, not a bar, so the twin check runs where there is no bar, and on
+  // every other bar sample (a double line runs on: half of them tell as
+  // much for half the reads).
+  const bool check = w >= 4.0 && (!bar || (n % 2) == 0);
+  const bool twin = check && TwinBarsAt(frame, p, row, w, peaks);
+  const bool painted = bar || twin;
+  if (check && painted) {
+    ++evidence.resolvable;
+    evidence.doubles += twin;
+  }
+  if (!painted && std::abs(left - right) >= 15.0) ++evidence.steps;
+  evidence.on += painted;
+  evidence.pattern.push_back(painted);
+}
+
+// The marking's type from what its samples showed.
+MarkingType TypeOfEvidence(const TypeEvidence& e) {
+  if (e.n < 12) return MarkingType::kUnknown;
+  const double on_share = static_cast<double>(e.on) / e.n;
   if (on_share < 0.15) {
-    return steps >= 0.5 * n ? MarkingType::kRoadEdge : MarkingType::kUnknown;
+    return e.steps >= 0.5 * e.n ? MarkingType::kRoadEdge : MarkingType::kUnknown;
   }
-  if (resolvable >= 6 && doubles >= 0.4 * resolvable) return MarkingType::kDouble;
+  if (e.resolvable >= 6 && e.doubles >= 0.4 * e.resolvable) return MarkingType::kDouble;
   // Painted runs and the gaps between them (not the ends: paint fades into
   // the distance, and the view ends).
+  const std::vector<bool>& pattern = e.pattern;
   double longest_on = 0, longest_gap = 0, current = 0;
   bool seen_paint = false;
   for (size_t i = 0; i <= pattern.size(); ++i) {
     const bool end = i == pattern.size();
     if (!end && (i == 0 || pattern[i] == pattern[i - 1])) {
-      current += kStep;
+      current += kTypeStep;
       continue;
     }
     // A run of pattern[i - 1] ends here.
@@ -277,7 +290,7 @@ MarkingType TypeWithMaps(const cv::Mat& frame, const Lane& lane, const CameraMod
     } else if (seen_paint && !end) {
       longest_gap = std::max(longest_gap, current);
     }
-    current = kStep;
+    current = kTypeStep;
   }
   // A long stretch of paint is a solid line (another stretch may be hidden
   // by a vehicle); short dashes with gaps between them are a dashed line
@@ -285,6 +298,24 @@ MarkingType TypeWithMaps(const cv::Mat& frame, const Lane& lane, const CameraMod
   if (longest_on > 6.5 || (on_share >= 0.85 && longest_gap < 1.0)) return MarkingType::kSolid;
   if (longest_gap >= 1.5 && longest_on >= 0.5) return MarkingType::kDashed;
   return MarkingType::kUnknown;
+}
+
+MarkingType TypeWithMaps(const cv::Mat& frame, const Lane& lane, const CameraModel& camera,
+                         const PlaneMaps& maps, int top_row, int bottom_row) {
+  if (!ReadableForType(frame)) return MarkingType::kUnknown;
+  const int bottom = bottom_row < 0 ? frame.rows : std::min(bottom_row, frame.rows);
+  const std::vector<Eigen::Vector2d> samples = SamplesAlongRoad(lane, camera, maps);
+  TypeEvidence evidence;
+  evidence.pattern.reserve(samples.size());
+  std::vector<int> peaks;  // a twin check's peaks (reused)
+  peaks.reserve(10);
+  for (const Eigen::Vector2d& p : samples) {
+    const int row = static_cast<int>(std::lround(p.y()));
+    if (row < top_row || row >= bottom) continue;
+    const std::optional<BarWindows> b = BarWindowsAt(maps, p, frame.cols, 1.5);
+    if (b) ReadTypeSample(frame, p, row, *b, evidence, peaks);
+  }
+  return TypeOfEvidence(evidence);
 }
 
 }  // namespace

@@ -56,66 +56,81 @@ std::optional<EgoLane> SequenceTracker::Track(std::vector<Lane>& lanes,
   }
   std::vector<LaneIdentity> all = ids;
   if (ipm != nullptr) {
-    // Confirmed lanes of this frame: their track's filtered curve.
-    for (size_t i = 0; i < lanes.size() && lanes_.options().report_filtered; ++i) {
-      if (!ids[i].confirmed) continue;
-      const std::optional<Lane> filtered = LaneFromCurve(ids[i].curve, camera_, *ipm);
-      if (!filtered) continue;
-      lanes[i].image = filtered->image;
-      lanes[i].ground = filtered->ground;
-      lanes[i].ipm = filtered->ipm;
-    }
-    // Confirmed tracks missed for a few frames: their prediction.
-    for (const lane::Track& track : lanes_.tracks()) {
-      if (!track.Reported() || track.misses < 1 || track.misses > lanes_.options().coast_frames) {
-        continue;
-      }
-      // Not when a lane of this frame lies near it: the boundary was found
-      // (by another track); reporting both would draw it twice. A lane
-      // farther than duplicate_m whose track was already there when this
-      // one was last seen is another boundary (the asphalt's edge beside a
-      // solid line) and does not stand in for it.
-      bool found = false;
-      for (size_t i = 0; i < lanes.size() && !found; ++i) {
-        if (all[i].id < 0) continue;
-        const double distance = LateralDistance(track.curve, all[i].curve);
-        if (distance >= lanes_.options().coast_clearance_m) continue;
-        const lane::Track* other = nullptr;
-        for (const lane::Track& t : lanes_.tracks()) {
-          if (t.id == all[i].id) other = &t;
-        }
-        const bool coexisted = other != nullptr && other->born_frame <= track.last_hit_frame;
-        found = !(coexisted && distance >= lanes_.options().duplicate_m);
-      }
-      if (found) continue;
-      std::optional<Lane> lane = LaneFromCurve(track.curve, camera_, *ipm);
-      if (!lane) continue;
-      const LaneIdentity identity = IdentityOf(track);
-      lane->id = identity.id;
-      lane->confirmed = true;
-      lane->color = identity.color;
-      lane->type = identity.type;
-      lanes.push_back(*lane);
-      all.push_back(identity);
-    }
-    // Left to right, as the detector sorts.
-    std::vector<size_t> order(lanes.size());
-    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-    auto key = [&](size_t i) {
-      return all[i].id >= 0 ? all[i].curve.X(0.5 * (all[i].curve.y_near + all[i].curve.y_far))
-                            : 0.5 * (lanes[i].ground[0].x() + lanes[i].ground[3].x());
-    };
-    std::stable_sort(order.begin(), order.end(),
-                     [&](size_t a, size_t b) { return key(a) < key(b); });
-    std::vector<Lane> sorted_lanes;
-    std::vector<LaneIdentity> sorted_ids;
-    for (size_t i : order) {
-      sorted_lanes.push_back(lanes[i]);
-      sorted_ids.push_back(all[i]);
-    }
-    lanes = std::move(sorted_lanes);
-    all = std::move(sorted_ids);
+    DrawFiltered(lanes, ids, *ipm);
+    AddCoasting(lanes, all, *ipm);
+    SortLeftToRight(lanes, all);
   }
+  return EgoOfConfirmed(lanes, all);
+}
+
+void SequenceTracker::DrawFiltered(std::vector<Lane>& lanes, const std::vector<LaneIdentity>& ids,
+                                   const IpmMapping& ipm) const {
+  for (size_t i = 0; i < lanes.size() && lanes_.options().report_filtered; ++i) {
+    if (!ids[i].confirmed) continue;
+    const std::optional<Lane> filtered = LaneFromCurve(ids[i].curve, camera_, ipm);
+    if (!filtered) continue;
+    lanes[i].image = filtered->image;
+    lanes[i].ground = filtered->ground;
+    lanes[i].ipm = filtered->ipm;
+  }
+}
+
+void SequenceTracker::AddCoasting(std::vector<Lane>& lanes, std::vector<LaneIdentity>& all,
+                                  const IpmMapping& ipm) const {
+  const LaneTrackingOptions& o = lanes_.options();
+  for (const lane::Track& track : lanes_.tracks()) {
+    if (!track.Reported() || track.misses < 1 || track.misses > o.coast_frames) continue;
+    // Not when a lane of this frame lies near it: the boundary was found
+    // (by another track); reporting both would draw it twice. A lane
+    // farther than duplicate_m whose track was already there when this
+    // one was last seen is another boundary (the asphalt's edge beside a
+    // solid line) and does not stand in for it.
+    bool found = false;
+    for (size_t i = 0; i < lanes.size() && !found; ++i) {
+      if (all[i].id < 0) continue;
+      const double distance = LateralDistance(track.curve, all[i].curve);
+      if (distance >= o.coast_clearance_m) continue;
+      const lane::Track* other = nullptr;
+      for (const lane::Track& t : lanes_.tracks()) {
+        if (t.id == all[i].id) other = &t;
+      }
+      const bool coexisted = other != nullptr && other->born_frame <= track.last_hit_frame;
+      found = !(coexisted && distance >= o.duplicate_m);
+    }
+    if (found) continue;
+    std::optional<Lane> lane = LaneFromCurve(track.curve, camera_, ipm);
+    if (!lane) continue;
+    const LaneIdentity identity = IdentityOf(track);
+    lane->id = identity.id;
+    lane->confirmed = true;
+    lane->color = identity.color;
+    lane->type = identity.type;
+    lanes.push_back(*lane);
+    all.push_back(identity);
+  }
+}
+
+void SequenceTracker::SortLeftToRight(std::vector<Lane>& lanes,
+                                      std::vector<LaneIdentity>& all) const {
+  std::vector<size_t> order(lanes.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  auto key = [&](size_t i) {
+    return all[i].id >= 0 ? all[i].curve.X(0.5 * (all[i].curve.y_near + all[i].curve.y_far))
+                          : 0.5 * (lanes[i].ground[0].x() + lanes[i].ground[3].x());
+  };
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return key(a) < key(b); });
+  std::vector<Lane> sorted_lanes;
+  std::vector<LaneIdentity> sorted_ids;
+  for (size_t i : order) {
+    sorted_lanes.push_back(lanes[i]);
+    sorted_ids.push_back(all[i]);
+  }
+  lanes = std::move(sorted_lanes);
+  all = std::move(sorted_ids);
+}
+
+std::optional<EgoLane> SequenceTracker::EgoOfConfirmed(const std::vector<Lane>& lanes,
+                                                       const std::vector<LaneIdentity>& all) {
   // The ego lane from the confirmed lanes' filtered curves only: a
   // one-frame streak on a car does not bound it, and the filter steadies
   // the offset whose rate warns of a departure.

@@ -97,9 +97,9 @@ LANE_FIELDS(HoughOptions) {
 
 LANE_FIELDS(LineRansacOptions) {
   v.Field("window_half_width_m", s.window_half_width_m);
-  v.Field("iterations", s.iterations);
-  v.Field("confidence", s.confidence);
-  v.Field("min_iterations", s.min_iterations);
+  v.Field("iterations", s.ransac.iterations);
+  v.Field("confidence", s.ransac.confidence);
+  v.Field("min_iterations", s.ransac.min_iterations);
   v.Field("inlier_distance_px", s.inlier_distance_px);
   v.Field("min_inliers", s.min_inliers);
   v.Field("max_angle_from_vertical_deg", s.max_angle_from_vertical_deg);
@@ -107,9 +107,9 @@ LANE_FIELDS(LineRansacOptions) {
 
 LANE_FIELDS(SplineRansacOptions) {
   v.Field("window_half_width_m", s.window_half_width_m);
-  v.Field("iterations", s.iterations);
-  v.Field("confidence", s.confidence);
-  v.Field("min_iterations", s.min_iterations);
+  v.Field("iterations", s.ransac.iterations);
+  v.Field("confidence", s.ransac.confidence);
+  v.Field("min_iterations", s.ransac.min_iterations);
   v.Field("k1", s.k1);
   v.Field("k2", s.k2);
   v.Field("jitter_px", s.jitter_px);

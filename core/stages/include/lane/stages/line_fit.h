@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "lane/stages/ransac.h"
 
 namespace lane {
 
@@ -18,12 +19,11 @@ struct LineRansacOptions {
   // Half width of the window around each Hough line, metres across the road
   // (reference: 15 IPM px all-lanes, 8 px 2-lanes, at 8.9 px/m).
   double window_half_width_m = 1.7;
-  int iterations = 40;
-  // Adaptive stop (ransac.h): end after max(min_iterations, N) iterations,
-  // N = log(1 - confidence) / log(1 - e^4) for the best line's inlier share
-  // e of the window's weight. 0 = always `iterations`.
-  double confidence = 0.999;
-  int min_iterations = 5;
+  // The trials and the adaptive stop (ransac.h): at most 40 trials, ending
+  // after max(min_iterations, N), N = log(1 - confidence) / log(1 - e^4)
+  // for the best line's inlier share e of the window's weight. Config keys
+  // line_ransac.iterations, .confidence, .min_iterations.
+  RansacOptions ransac{40, 0.999, 5};
   // Distance from the line within which a pixel is an inlier, IPM pixels.
   // The reference uses 0.2 px; on a pixel grid that only keeps pixels whose
   // centres the line crosses, so we use 0.5 px (one pixel-wide band).

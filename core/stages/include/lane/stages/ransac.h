@@ -35,31 +35,41 @@
 namespace lane {
 
 struct RansacOptions {
-  // Trials (samples drawn and scored). The paper's 40 for lines and splines
-  // in all-lanes mode; fewer samples than kSampleSize end the loop early.
-  int max_trials = 40;
+  // Trials (samples drawn and scored), at most. The paper's 40 for lines
+  // and splines in all-lanes mode; fewer samples than kSampleSize end the
+  // loop early. 0: no sample is drawn, only a given initial model is scored.
+  int iterations = 40;
   // Adaptive stop (Fischler and Bolles; Hartley and Zisserman, Algorithm
   // 4.5): with a best model whose support is a share e of the weight, a
   // weighted sample of kSampleSize points is all support with probability
   // about e^kSampleSize, so N = log(1 - confidence) / log(1 - e^kSampleSize)
   // trials draw at least one such sample with that confidence. The loop ends
-  // once it has run max(min_trials, N) trials, and never more than max_trials.
-  // 0 turns it off: always max_trials. Needs the estimator's SupportFraction.
+  // once it has run max(min_iterations, N) trials, and never more than
+  // iterations. 0 turns it off: always `iterations`. Needs the estimator's
+  // SupportFraction.
   double confidence = 0.0;
-  int min_trials = 1;
+  int min_iterations = 1;
 
-  absl::Status Validate() const {
-    if (max_trials < 1 || max_trials > 100000) {
+  // OK, or INVALID_ARGUMENT naming the field as `where`.field (the config
+  // file's names): iterations in 0..10000, confidence in [0, 1),
+  // min_iterations in 1..10000 and at most iterations.
+  absl::Status Validate(absl::string_view where = "ransac") const {
+    if (iterations < 0 || iterations > 10000) {
       return absl::InvalidArgumentError(
-          absl::StrCat("RANSAC max_trials must lie in 1..100000, got ", max_trials));
+          absl::StrCat(where, ".iterations must lie in 0..10000, got ", iterations));
     }
     if (!(confidence >= 0 && confidence < 1)) {
       return absl::InvalidArgumentError(
-          absl::StrCat("RANSAC confidence must lie in [0, 1), got ", confidence));
+          absl::StrCat(where, ".confidence must lie in [0, 1), got ", confidence));
     }
-    if (min_trials < 1) {
+    if (min_iterations < 1 || min_iterations > 10000) {
       return absl::InvalidArgumentError(
-          absl::StrCat("RANSAC min_trials must be >= 1, got ", min_trials));
+          absl::StrCat(where, ".min_iterations must lie in 1..10000, got ", min_iterations));
+    }
+    if (iterations > 0 && min_iterations > iterations) {
+      return absl::InvalidArgumentError(absl::StrCat(where, ".min_iterations (", min_iterations,
+                                                     ") must not exceed iterations (", iterations,
+                                                     ")"));
     }
     return absl::OkStatus();
   }
@@ -140,7 +150,7 @@ struct HasIsInlier<E, std::void_t<decltype(std::declval<const E&>().IsInlier(
 };
 }  // namespace internal
 
-// Runs options.max_trials trials, or fewer with the adaptive stop. `initial`
+// Runs options.iterations trials, or fewer with the adaptive stop. `initial`
 // (if any) is scored first, so a good initial guess survives when no sample
 // beats it. report.trials counts the trials run.
 template <typename Estimator>
@@ -150,12 +160,12 @@ RansacReport<typename Estimator::Model> Ransac(
     const std::optional<typename Estimator::Model>& initial = std::nullopt) {
   RansacReport<typename Estimator::Model> report;
   // Trials the adaptive stop asks for, updated when the best model changes.
-  int needed = options.max_trials;
+  int needed = options.iterations;
   const auto update_needed = [&] {
     if constexpr (internal::HasSupportFraction<Estimator>::value) {
       if (options.confidence > 0 && report.model) {
         needed = AdaptiveTrials(options.confidence, estimator.SupportFraction(*report.model),
-                                Estimator::kSampleSize, options.max_trials);
+                                Estimator::kSampleSize, options.iterations);
       }
     }
   };
@@ -170,8 +180,8 @@ RansacReport<typename Estimator::Model> Ransac(
     for (size_t i = 0; i < weights.size(); ++i) cumulative[i] = (acc += std::max(0.0, weights[i]));
     std::vector<Eigen::Vector2d> sample(Estimator::kSampleSize);
     std::vector<int> idx(Estimator::kSampleSize);
-    for (int it = 0; it < options.max_trials; ++it) {
-      if (it >= options.min_trials && it >= needed) break;
+    for (int it = 0; it < options.iterations; ++it) {
+      if (it >= options.min_iterations && it >= needed) break;
       ++report.trials;
       if (!WeightedSample(cumulative, idx, rng)) break;
       for (int j = 0; j < Estimator::kSampleSize; ++j) sample[j] = points[idx[j]];

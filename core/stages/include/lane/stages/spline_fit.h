@@ -9,6 +9,7 @@
 #include "absl/status/status.h"
 #include "lane/geometry/bezier.h"
 #include "lane/stages/line_fit.h"
+#include "lane/stages/ransac.h"
 
 namespace lane {
 
@@ -16,11 +17,11 @@ struct SplineRansacOptions {
   // Half width of the window around each RANSAC line, metres across the road
   // (reference: 10 IPM px all-lanes, 6 px 2-lanes, at 8.9 px/m).
   double window_half_width_m = 1.1;
-  int iterations = 40;
-  // Adaptive stop (ransac.h), as LineRansacOptions'; a window pixel supports
-  // a spline when it lies within jitter_px columns of the rasterised curve.
-  double confidence = 0.999;
-  int min_iterations = 5;
+  // The trials and the adaptive stop (ransac.h): at most 40 trials, ending
+  // after max(min_iterations, N), as LineRansacOptions'; a window pixel
+  // supports a spline when it lies within jitter_px columns of the
+  // rasterised curve. 0 iterations: only the line's own spline is scored.
+  RansacOptions ransac{40, 0.999, 5};
   // Score = raw * (1 + k1 * l' + k2 * theta') (paper). k1 weighs length,
   // k2 straightness.
   double k1 = 1.5;

@@ -44,6 +44,19 @@ class SequenceTracker {
   DetectionPrior Prior(const IpmMapping& ipm) const;
 
  private:
+  // Track's steps after the lane tracker's update. With a top view: the
+  // confirmed lanes of the frame drawn from their filtered curves
+  // (report_filtered), the confirmed tracks missed for up to coast_frames
+  // frames added from their prediction, and all sorted left to right.
+  void DrawFiltered(std::vector<Lane>& lanes, const std::vector<LaneIdentity>& ids,
+                    const IpmMapping& ipm) const;
+  void AddCoasting(std::vector<Lane>& lanes, std::vector<LaneIdentity>& all,
+                   const IpmMapping& ipm) const;
+  void SortLeftToRight(std::vector<Lane>& lanes, std::vector<LaneIdentity>& all) const;
+  // The ego lane of the confirmed lanes, followed over frames.
+  std::optional<EgoLane> EgoOfConfirmed(const std::vector<Lane>& lanes,
+                                        const std::vector<LaneIdentity>& all);
+
   CameraModel camera_;
   LaneTracker lanes_;
   EgoOptions ego_options_;
