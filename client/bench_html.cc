@@ -177,10 +177,8 @@ std::string Row(const std::vector<std::string>& cells, const char* tag = "td") {
   return out + "</tr>\n";
 }
 
-}  // namespace
-
-std::string HtmlReport(const Report& r) {
-  std::ostringstream html;
+// The page's head (title and style) and the run's metadata table.
+void WriteHeadAndMeta(std::ostringstream& html, const Report& r) {
   html
       << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
       << "<title>lane-client bench " << Escape(r.meta.date_utc) << "</title>\n"
@@ -206,6 +204,10 @@ std::string HtmlReport(const Report& r) {
     html << "<tr><th class=\"l\">" << Escape(k) << "</th><td class=\"l\">" << Escape(v)
          << "</td></tr>\n";
   }
+}
+
+// The client latency table, a row per run, and the in-process reference.
+void WriteLatencyTable(std::ostringstream& html, const Report& r) {
   html << "</table>\n<h2>Latency, ms (client: due or sent to answer received)</h2>\n"
        << "<div class=\"wide\"><table>\n"
        << Row({"cameras", "target/s", "achieved/s", "min", "p50", "p90", "p95", "p99", "p99.9",
@@ -230,6 +232,10 @@ std::string HtmlReport(const Report& r) {
         r.inprocess->workers, r.inprocess->fps, Ms(r.inprocess->latency_ms.p50),
         Ms(r.inprocess->latency_ms.p99));
   }
+}
+
+// The server's split of each run (server, queue, decode, detect) and the errors by code.
+void WriteServerAndErrorTables(std::ostringstream& html, const Report& r) {
   html << "<h2>Server split, ms (from each answer's timings)</h2>\n<table>\n"
        << Row({"cameras", "server p50", "server p99", "queue p50", "queue p99", "decode p50",
                "decode p99", "detect p50", "detect p99"},
@@ -250,6 +256,10 @@ std::string HtmlReport(const Report& r) {
   }
   if (!any_error) html << "<tr><td class=\"l\" colspan=\"3\">none</td></tr>\n";
   html << "</table>\n";
+}
+
+// Per run: its warnings, its latency over time and its histogram.
+void WriteRunSections(std::ostringstream& html, const Report& r) {
   for (const LoadResult& run : r.runs) {
     html << "<h2>" << run.cameras << " camera(s)</h2>\n";
     for (const std::string& w : Warnings(r, run)) {
@@ -260,6 +270,16 @@ std::string HtmlReport(const Report& r) {
     }
     html << "<h3>Latency histogram</h3>\n" << HistogramSvg(run);
   }
+}
+
+}  // namespace
+
+std::string HtmlReport(const Report& r) {
+  std::ostringstream html;
+  WriteHeadAndMeta(html, r);
+  WriteLatencyTable(html, r);
+  WriteServerAndErrorTables(html, r);
+  WriteRunSections(html, r);
   html << "</body>\n</html>\n";
   return html.str();
 }

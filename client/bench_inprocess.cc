@@ -24,6 +24,82 @@ using Clock = std::chrono::steady_clock;
 
 double Ms(Clock::duration d) { return std::chrono::duration<double, std::milli>(d).count(); }
 
+// What the in-process workers share: frames, detector, interval, counts and latencies.
+struct InprocessRun {
+  InprocessRun(const std::vector<BenchFrame>& frames, const lane::Detector& detector,
+               const lane::CameraModel& camera)
+      : frames(frames), detector(detector), camera(camera) {}
+
+  const std::vector<BenchFrame>& frames;
+  const lane::Detector& detector;
+  const lane::CameraModel& camera;
+  lane::wire::DecodeOptions decode;
+  const lane::FrameNeeds* needs = nullptr;
+  bool tracked = false;
+  Clock::time_point start, measure_start, end;
+  std::atomic<size_t> next{0};
+  std::atomic<uint64_t> done_frames{0};
+  std::atomic<uint64_t> tracked_frames{0};
+  std::mutex mu;
+  std::vector<double> latency;
+  std::string failure;
+};
+
+// One worker: decodes and detects (or tracks) frames until the end, timing the measured ones.
+void RunWorker(InprocessRun& run) {
+  std::vector<double> own;
+  lane::FrameTracker tracker(run.camera);
+  while (true) {
+    const Clock::time_point t0 = Clock::now();
+    if (t0 >= run.end) break;
+    const BenchFrame& frame = run.frames[run.next.fetch_add(1) % run.frames.size()];
+    absl::StatusOr<cv::Mat> image = lane::wire::DecodeFrame(frame.request, run.decode, run.needs);
+    absl::Status status = image.status();
+    if (image.ok()) {
+      absl::StatusOr<lane::Detection> detection =
+          run.tracked ? tracker.Process(run.detector, *image, std::nullopt)
+                      : run.detector.Detect(*image);
+      status = detection.status();
+      if (detection.ok() && run.tracked && t0 >= run.measure_start) {
+        run.tracked_frames.fetch_add(1, std::memory_order_relaxed);
+      }
+    }
+    const Clock::time_point t1 = Clock::now();
+    if (!status.ok()) {
+      std::lock_guard<std::mutex> lock(run.mu);
+      run.failure = absl::StrCat(frame.name, ": ", status.message());
+      break;
+    }
+    if (t0 >= run.measure_start) {
+      own.push_back(Ms(t1 - t0));
+      run.done_frames.fetch_add(1, std::memory_order_relaxed);
+    }
+  }
+  std::lock_guard<std::mutex> lock(run.mu);
+  run.latency.insert(run.latency.end(), own.begin(), own.end());
+}
+
+// Reports the workers' progress every half second until the end.
+void ReportProgress(const InprocessRun& run, double total_s, const ProgressFn& progress) {
+  uint64_t last = 0;
+  auto last_time = run.start;
+  while (Clock::now() < run.end) {
+    std::this_thread::sleep_until(std::min(run.end, Clock::now() + std::chrono::milliseconds(500)));
+    const auto now = Clock::now();
+    const uint64_t n = run.done_frames.load();
+    Progress p;
+    p.phase = now < run.measure_start ? "in-process warm-up" : "in-process";
+    p.elapsed_s = std::chrono::duration<double>(now - run.start).count();
+    p.total_s = total_s;
+    p.ok = n;
+    const double dt = std::chrono::duration<double>(now - last_time).count();
+    p.fps = dt > 0 ? static_cast<double>(n - last) / dt : 0;
+    last = n;
+    last_time = now;
+    progress(p);
+  }
+}
+
 }  // namespace
 
 absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& frames,
@@ -36,93 +112,37 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
   absl::StatusOr<lane::Detector> detector =
       lane::Detector::Create(config->camera, config->ipm, config->detector);
   if (!detector.ok()) return detector.status();
-  lane::wire::DecodeOptions decode;
-  decode.width = config->camera.image_width;
-  decode.height = config->camera.image_height;
-  decode.max_pixels = std::numeric_limits<int64_t>::max();
+  InprocessRun run(frames, *detector, config->camera);
+  run.decode.width = config->camera.image_width;
+  run.decode.height = config->camera.image_height;
+  run.decode.max_pixels = std::numeric_limits<int64_t>::max();
   // As the service decodes the session's frames: what its detector reads,
   // unless the session asks for whole frames.
-  const lane::FrameNeeds* needs = session.decode().full_decode() ? nullptr : &detector->Needs();
+  run.needs = session.decode().full_decode() ? nullptr : &detector->Needs();
   // A stream of a tracked session (the default) also searches the tracker's
   // predicted lanes, reads each lane's colour and type and updates the
   // tracker (server/frame_processor.cc): the reference does the same work,
   // with a tracker per worker, so the ratio measures the service's overhead
   // and not tracking.
-  const bool tracked = !session.tracking().disabled();
+  run.tracked = !session.tracking().disabled();
 
   workers = std::max(1, workers);
-  const Clock::time_point start = Clock::now();
-  const Clock::time_point measure_start = start + absl::ToChronoNanoseconds(warmup);
-  const Clock::time_point end = measure_start + absl::ToChronoNanoseconds(duration);
-  std::atomic<size_t> next{0};
-  std::atomic<uint64_t> done_frames{0};
-  std::atomic<uint64_t> tracked_frames{0};
-  std::mutex mu;
-  std::vector<double> latency;
-  std::string failure;
+  run.start = Clock::now();
+  run.measure_start = run.start + absl::ToChronoNanoseconds(warmup);
+  run.end = run.measure_start + absl::ToChronoNanoseconds(duration);
   std::vector<std::thread> threads;
-  for (int w = 0; w < workers; ++w) {
-    threads.emplace_back([&] {
-      std::vector<double> own;
-      lane::FrameTracker tracker(config->camera);
-      while (true) {
-        const Clock::time_point t0 = Clock::now();
-        if (t0 >= end) break;
-        const BenchFrame& frame = frames[next.fetch_add(1) % frames.size()];
-        absl::StatusOr<cv::Mat> image = lane::wire::DecodeFrame(frame.request, decode, needs);
-        absl::Status status = image.status();
-        if (image.ok()) {
-          absl::StatusOr<lane::Detection> detection =
-              tracked ? tracker.Process(*detector, *image, std::nullopt) : detector->Detect(*image);
-          status = detection.status();
-          if (detection.ok() && tracked && t0 >= measure_start) {
-            tracked_frames.fetch_add(1, std::memory_order_relaxed);
-          }
-        }
-        const Clock::time_point t1 = Clock::now();
-        if (!status.ok()) {
-          std::lock_guard<std::mutex> lock(mu);
-          failure = absl::StrCat(frame.name, ": ", status.message());
-          break;
-        }
-        if (t0 >= measure_start) {
-          own.push_back(Ms(t1 - t0));
-          done_frames.fetch_add(1, std::memory_order_relaxed);
-        }
-      }
-      std::lock_guard<std::mutex> lock(mu);
-      latency.insert(latency.end(), own.begin(), own.end());
-    });
-  }
-  if (progress) {
-    uint64_t last = 0;
-    auto last_time = start;
-    while (Clock::now() < end) {
-      std::this_thread::sleep_until(std::min(end, Clock::now() + std::chrono::milliseconds(500)));
-      const auto now = Clock::now();
-      const uint64_t n = done_frames.load();
-      Progress p;
-      p.phase = now < measure_start ? "in-process warm-up" : "in-process";
-      p.elapsed_s = std::chrono::duration<double>(now - start).count();
-      p.total_s = absl::ToDoubleSeconds(warmup + duration);
-      p.ok = n;
-      const double dt = std::chrono::duration<double>(now - last_time).count();
-      p.fps = dt > 0 ? static_cast<double>(n - last) / dt : 0;
-      last = n;
-      last_time = now;
-      progress(p);
-    }
-  }
+  for (int w = 0; w < workers; ++w) threads.emplace_back([&run] { RunWorker(run); });
+  if (progress) ReportProgress(run, absl::ToDoubleSeconds(warmup + duration), progress);
   for (std::thread& t : threads) t.join();
-  if (!failure.empty()) return absl::InternalError(absl::StrCat("in-process: ", failure));
+  if (!run.failure.empty()) return absl::InternalError(absl::StrCat("in-process: ", run.failure));
   InprocessResult result;
   result.workers = workers;
-  result.frames = latency.size();
-  result.tracked = tracked;
-  result.tracked_frames = tracked_frames.load();
+  result.frames = run.latency.size();
+  result.tracked = run.tracked;
+  result.tracked_frames = run.tracked_frames.load();
   result.fps = static_cast<double>(result.frames) / absl::ToDoubleSeconds(duration);
-  result.latency_ms = Summarize(latency);
-  result.latency_samples = std::move(latency);
+  result.latency_ms = Summarize(run.latency);
+  result.latency_samples = std::move(run.latency);
   return result;
 }
 

@@ -173,6 +173,93 @@ FramesInfo DescribeFrames(const std::vector<BenchFrame>& frames, const std::stri
   return info;
 }
 
+namespace {
+
+// The frames sent: source, encoding, size and mean bytes.
+Json FramesJson(const FramesInfo& info) {
+  Json frames = Json::object();
+  frames["source"] = info.source;
+  frames["encoding"] = info.encoding;
+  frames["width"] = info.width;
+  frames["height"] = info.height;
+  frames["mean_bytes"] = std::round(info.mean_bytes);
+  return frames;
+}
+
+// A run's timeline: per interval its answers, errors and latency.
+Json TimelineJson(const std::vector<TimelinePoint>& points) {
+  Json timeline = Json::array();
+  for (const TimelinePoint& point : points) {
+    Json t = Json::object();
+    t["start_s"] = Round3(point.start_s);
+    t["end_s"] = Round3(point.end_s);
+    t["frames_ok"] = point.ok;
+    t["errors"] = point.errors;
+    t["latency_ms"] = LatencyJson(point.latency_ms);
+    timeline.push_back(std::move(t));
+  }
+  return timeline;
+}
+
+// One run (one camera count): throughput, errors, latencies, ratio and warnings.
+Json RunJson(const Report& r, const LoadResult& run) {
+  Json x = Json::object();
+  x["cameras"] = run.cameras;
+  x["target_fps"] = run.open_loop ? Json(run.target_fps) : Json();
+  x["achieved_fps"] = Round3(run.achieved_fps);
+  x["measured_s"] = Round3(run.measured_s);
+  x["frames_scheduled"] = run.frames_scheduled;
+  x["frames_sent"] = run.frames_sent;
+  x["frames_ok"] = run.frames_ok;
+  x["errors_total"] = run.errors_total;
+  x["errors"] = Json::object();
+  for (const auto& [code, n] : run.errors) x["errors"][code] = n;
+  x["dropped"] = run.dropped;
+  x["unsent"] = run.unsent;
+  x["latency_ms"] = LatencyJson(run.latency_ms);
+  x["server_ms"] = LatencyJson(run.server_ms);
+  x["server_queue_ms"] = LatencyJson(run.queue_ms);
+  x["server_decode_ms"] = LatencyJson(run.decode_ms);
+  x["server_detect_ms"] = LatencyJson(run.detect_ms);
+  x["max_send_lag_ms"] = Round3(run.max_send_lag_ms);
+  x["stream_failures"] = run.stream_failures;
+  x["ok_by_target"] = Json::object();
+  for (const auto& [target, n] : run.ok_by_target) x["ok_by_target"][target] = n;
+  const std::optional<double> ratio = r.Ratio(run);
+  x["service_vs_inprocess"] = ratio ? Json(Round3(*ratio)) : Json();
+  x["slo_met"] = r.slo_p99_ms ? Json(r.SloMet(run)) : Json();
+  x["warnings"] = Warnings(r, run);
+  if (r.show_timeline && !run.timeline.empty()) x["timeline"] = TimelineJson(run.timeline);
+  return x;
+}
+
+// The in-process reference's throughput and latency.
+Json InprocessJson(const InprocessResult& in) {
+  Json x = Json::object();
+  x["workers"] = in.workers;
+  x["fps"] = Round3(in.fps);
+  x["frames"] = in.frames;
+  x["tracked"] = in.tracked;
+  x["tracked_frames"] = in.tracked_frames;
+  x["fps_before"] = Round3(in.fps_before);
+  x["fps_after"] = Round3(in.fps_after);
+  x["latency_ms"] = LatencyJson(in.latency_ms);
+  return x;
+}
+
+// When, by what and on what the bench ran.
+Json MetaJson(const RunMetadata& m) {
+  Json meta = Json::object();
+  meta["date_utc"] = m.date_utc;
+  meta["client_version"] = m.client_version;
+  meta["server_version"] = m.server_version;
+  meta["command_line"] = m.command_line;
+  meta["machine"] = m.machine;
+  return meta;
+}
+
+}  // namespace
+
 std::string JsonReport(const Report& r) {
   Json j = Json::object();
   j["schema"] = kBenchReportSchema;
@@ -183,80 +270,14 @@ std::string JsonReport(const Report& r) {
   j["fps_per_camera"] = r.open_loop ? Json(r.fps) : Json();
   j["warmup_s"] = r.warmup_s;
   j["duration_s"] = r.duration_s;
-  Json frames = Json::object();
-  frames["source"] = r.frames.source;
-  frames["encoding"] = r.frames.encoding;
-  frames["width"] = r.frames.width;
-  frames["height"] = r.frames.height;
-  frames["mean_bytes"] = std::round(r.frames.mean_bytes);
-  j["frames"] = frames;
+  j["frames"] = FramesJson(r.frames);
   Json runs = Json::array();
-  for (const LoadResult& run : r.runs) {
-    Json x = Json::object();
-    x["cameras"] = run.cameras;
-    x["target_fps"] = run.open_loop ? Json(run.target_fps) : Json();
-    x["achieved_fps"] = Round3(run.achieved_fps);
-    x["measured_s"] = Round3(run.measured_s);
-    x["frames_scheduled"] = run.frames_scheduled;
-    x["frames_sent"] = run.frames_sent;
-    x["frames_ok"] = run.frames_ok;
-    x["errors_total"] = run.errors_total;
-    x["errors"] = Json::object();
-    for (const auto& [code, n] : run.errors) x["errors"][code] = n;
-    x["dropped"] = run.dropped;
-    x["unsent"] = run.unsent;
-    x["latency_ms"] = LatencyJson(run.latency_ms);
-    x["server_ms"] = LatencyJson(run.server_ms);
-    x["server_queue_ms"] = LatencyJson(run.queue_ms);
-    x["server_decode_ms"] = LatencyJson(run.decode_ms);
-    x["server_detect_ms"] = LatencyJson(run.detect_ms);
-    x["max_send_lag_ms"] = Round3(run.max_send_lag_ms);
-    x["stream_failures"] = run.stream_failures;
-    x["ok_by_target"] = Json::object();
-    for (const auto& [target, n] : run.ok_by_target) x["ok_by_target"][target] = n;
-    const std::optional<double> ratio = r.Ratio(run);
-    x["service_vs_inprocess"] = ratio ? Json(Round3(*ratio)) : Json();
-    x["slo_met"] = r.slo_p99_ms ? Json(r.SloMet(run)) : Json();
-    x["warnings"] = Warnings(r, run);
-    if (r.show_timeline && !run.timeline.empty()) {
-      Json timeline = Json::array();
-      for (const TimelinePoint& point : run.timeline) {
-        Json t = Json::object();
-        t["start_s"] = Round3(point.start_s);
-        t["end_s"] = Round3(point.end_s);
-        t["frames_ok"] = point.ok;
-        t["errors"] = point.errors;
-        t["latency_ms"] = LatencyJson(point.latency_ms);
-        timeline.push_back(std::move(t));
-      }
-      x["timeline"] = std::move(timeline);
-    }
-    runs.push_back(std::move(x));
-  }
+  for (const LoadResult& run : r.runs) runs.push_back(RunJson(r, run));
   j["runs"] = std::move(runs);
-  if (r.inprocess) {
-    Json x = Json::object();
-    x["workers"] = r.inprocess->workers;
-    x["fps"] = Round3(r.inprocess->fps);
-    x["frames"] = r.inprocess->frames;
-    x["tracked"] = r.inprocess->tracked;
-    x["tracked_frames"] = r.inprocess->tracked_frames;
-    x["fps_before"] = Round3(r.inprocess->fps_before);
-    x["fps_after"] = Round3(r.inprocess->fps_after);
-    x["latency_ms"] = LatencyJson(r.inprocess->latency_ms);
-    j["inprocess"] = std::move(x);
-  } else {
-    j["inprocess"] = Json();
-  }
+  j["inprocess"] = r.inprocess ? InprocessJson(*r.inprocess) : Json();
   j["slo_p99_ms"] = r.slo_p99_ms ? Json(*r.slo_p99_ms) : Json();
   j["slo_met"] = r.slo_p99_ms ? Json(r.AllSloMet()) : Json();
-  Json meta = Json::object();
-  meta["date_utc"] = r.meta.date_utc;
-  meta["client_version"] = r.meta.client_version;
-  meta["server_version"] = r.meta.server_version;
-  meta["command_line"] = r.meta.command_line;
-  meta["machine"] = r.meta.machine;
-  j["meta"] = std::move(meta);
+  j["meta"] = MetaJson(r.meta);
   return j.dump(2) + "\n";
 }
 

@@ -260,37 +260,35 @@ class StreamSink {
   uint64_t failed_ = 0;
 };
 
-int RunStream(const CLI::App& app, const StreamFlags& flags) {
-  if (flags.inputs.empty()) return lane_tools::UsageError(app, "no INPUT given");
-  const auto targets = SplitTargets(flags.target);
-  if (!targets.ok()) return lane_tools::UsageError(app, std::string(targets.status().message()));
-  if (targets->size() != 1) {
-    return lane_tools::UsageError(app, "stream takes one --target (use a dns:/// name to balance)");
-  }
-  absl::StatusOr<std::optional<v1::SessionConfig>> session =
-      SessionConfigFromFlags(flags.session, false);
-  if (!session.ok()) return Failure("stream", std::string(session.status().message()));
-
+// The streamer's options from the flags and the session config.
+StreamerOptions StreamerOptionsFrom(const StreamFlags& flags,
+                                    const std::optional<v1::SessionConfig>& session) {
   StreamerOptions options;
   options.camera_id = flags.camera;
-  options.session = *session;
+  options.session = session;
   options.replace = flags.replace;
   options.window = flags.window;
   if (flags.retry_timeout) options.give_up_after = *flags.retry_timeout;
   if (flags.stall_timeout) options.stall_timeout = *flags.stall_timeout;
+  return options;
+}
 
-  std::ofstream file;
-  if (flags.output && !lane_tools::OpenOutputFile(*flags.output, &file)) {
-    return Failure("stream", absl::StrCat("cannot write ", *flags.output));
-  }
-  std::ostream& out = file.is_open() ? static_cast<std::ostream&>(file) : std::cout;
-  std::unique_ptr<lane_tools::OverlayVideo> overlay_video;
+// --overlay and --overlay-video: video, writer and drawer (destroyed drawer first).
+struct StreamOverlays {
+  std::unique_ptr<lane_tools::OverlayVideo> video;
+  std::unique_ptr<OverlayWriter> writer;
+  std::unique_ptr<OverlayDrawer> drawer;
+};
+
+// Opens the overlay video and folder when asked; the exit status on failure (reported).
+std::optional<int> OpenOverlays(const CLI::App& app, const StreamFlags& flags,
+                                StreamOverlays* overlays) {
   if (flags.overlay_video) {
     if (const std::string e = lane_tools::OverlayVideo::CheckPath(*flags.overlay_video);
         !e.empty()) {
       return lane_tools::UsageError(app, e);
     }
-    overlay_video = std::make_unique<lane_tools::OverlayVideo>(
+    overlays->video = std::make_unique<lane_tools::OverlayVideo>(
         *flags.overlay_video, flags.read.fps > 0 ? flags.read.fps : 10.0);
   }
   std::string overlay_dir;
@@ -302,12 +300,46 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
     }
     overlay_dir = *overlay;
   }
-  std::unique_ptr<OverlayWriter> overlay_writer;
-  std::unique_ptr<OverlayDrawer> overlays;
   if (flags.overlay || flags.overlay_video) {
-    overlay_writer = std::make_unique<OverlayWriter>(overlay_dir, overlay_video.get());
-    overlays = std::make_unique<OverlayDrawer>(overlay_writer.get());
+    overlays->writer = std::make_unique<OverlayWriter>(overlay_dir, overlays->video.get());
+    overlays->drawer = std::make_unique<OverlayDrawer>(overlays->writer.get());
   }
+  return std::nullopt;
+}
+
+// Draws the queued overlays and closes the video; true if every overlay was written.
+bool FinishOverlays(const StreamFlags& flags, StreamOverlays& overlays) {
+  bool overlays_ok = overlays.drawer == nullptr || overlays.drawer->Finish();
+  if (overlays.video) {
+    if (const std::string e = overlays.video->Close(); !e.empty()) {
+      Note("stream", e);
+      overlays_ok = false;
+    } else if (!flags.quiet) {
+      Note("stream", absl::StrCat(overlays.video->frames(), " frames in ", *flags.overlay_video));
+    }
+  }
+  return overlays_ok;
+}
+
+int RunStream(const CLI::App& app, const StreamFlags& flags) {
+  if (flags.inputs.empty()) return lane_tools::UsageError(app, "no INPUT given");
+  const auto targets = SplitTargets(flags.target);
+  if (!targets.ok()) return lane_tools::UsageError(app, std::string(targets.status().message()));
+  if (targets->size() != 1) {
+    return lane_tools::UsageError(app, "stream takes one --target (use a dns:/// name to balance)");
+  }
+  absl::StatusOr<std::optional<v1::SessionConfig>> session =
+      SessionConfigFromFlags(flags.session, false);
+  if (!session.ok()) return Failure("stream", std::string(session.status().message()));
+  const StreamerOptions options = StreamerOptionsFrom(flags, *session);
+
+  std::ofstream file;
+  if (flags.output && !lane_tools::OpenOutputFile(*flags.output, &file)) {
+    return Failure("stream", absl::StrCat("cannot write ", *flags.output));
+  }
+  std::ostream& out = file.is_open() ? static_cast<std::ostream&>(file) : std::cout;
+  StreamOverlays overlays;
+  if (const std::optional<int> exit = OpenOverlays(app, flags, &overlays)) return *exit;
 
   FrameSource frames(flags.inputs, flags.raw, flags.read.Options());
   Streamer streamer(MakeChannel(targets->front()), options,
@@ -316,20 +348,12 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
   // terminal, never with --quiet or --no-progress.
   lane_tools::ProgressBar progress(!flags.quiet && !flags.no_progress);
   const int total = static_cast<int>(std::min<long long>(frames.KnownFrameCount(), 1 << 30));
-  StreamSink sink(out, options.camera_id, overlays.get(), streamer, progress, total);
+  StreamSink sink(out, options.camera_id, overlays.drawer.get(), streamer, progress, total);
   const absl::Status status =
       streamer.Run(MakeSource(&frames, options.camera_id),
                    [&sink](const StreamItem& item, const v1::FrameResponse* response,
                            double latency_ms) { sink(item, response, latency_ms); });
-  bool overlays_ok = overlays == nullptr || overlays->Finish();
-  if (overlay_video) {
-    if (const std::string e = overlay_video->Close(); !e.empty()) {
-      Note("stream", e);
-      overlays_ok = false;
-    } else if (!flags.quiet) {
-      Note("stream", absl::StrCat(overlay_video->frames(), " frames in ", *flags.overlay_video));
-    }
-  }
+  const bool overlays_ok = FinishOverlays(flags, overlays);
   progress.Clear();
   const StreamerStats& stats = streamer.stats();
   if (!flags.quiet) {

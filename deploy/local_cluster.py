@@ -287,113 +287,135 @@ def check_stream_run(output, errlog, names, rc, started, ended):
     return run
 
 
-def main():
-    args = parse_args()
-    bins = binaries()
-    out = os.path.abspath(args.out)
-    shutil.rmtree(out, ignore_errors=True)
-    os.makedirs(out)
-    deadline = 3 if args.short else 5
-
-    # Frames for the streams: rendered JPEGs, listed frames_per_run times in all.
+def render_stream_frames(lane, out, frames_per_run):
+    """Rendered JPEGs for the streams, listed frames_per_run times in all: (list file, names)."""
     frames_dir = os.path.join(out, "frames")
-    subprocess.run([bins["lane"], "render", "--config", os.path.join(REPO, "configs", "synthetic.json"),
+    subprocess.run([lane, "render", "--config", os.path.join(REPO, "configs", "synthetic.json"),
                     "--count", "20", "--seed", "7", "--format", "jpg", "--output", frames_dir],
                    check=True, stdout=subprocess.DEVNULL)
     files = sorted(f for f in os.listdir(frames_dir) if f.endswith(".jpg"))
-    names = [files[i % len(files)] for i in range(args.frames_per_run)]
+    names = [files[i % len(files)] for i in range(frames_per_run)]
     list_file = os.path.join(frames_dir, "run.txt")
     with open(list_file, "w") as f:
         f.write("\n".join(names) + "\n")
+    return list_file, names
 
-    ports = free_ports(2 * args.replicas)
-    replicas = [Replica(i, bins["server"], ports[2 * i], ports[2 * i + 1], out, deadline)
-                for i in range(args.replicas)]
-    targets = [r.target for r in replicas]
-    rr_target = "ipv4:" + ",".join(targets)  # one channel, round_robin over every replica
-    failures = []
-    loops = []
-    bench = None
-    stop_scraping = threading.Event()
 
-    def scraper():
-        while not stop_scraping.is_set():
-            for r in replicas:
+class Cluster:
+    """The replicas, the load on them, the fault schedule and what happened on the way."""
+
+    def __init__(self, args, bins, out, deadline):
+        self.args, self.bins, self.out, self.deadline = args, bins, out, deadline
+        ports = free_ports(2 * args.replicas)
+        self.replicas = [Replica(i, bins["server"], ports[2 * i], ports[2 * i + 1], out, deadline)
+                         for i in range(args.replicas)]
+        self.targets = [r.target for r in self.replicas]
+        self.failures, self.loops, self.events = [], [], []
+        self.bench = self.bench_rc = None
+        self.stop_scraping = threading.Event()
+        self.phase1 = []  # frames each replica received before the SIGTERM; [] when it failed
+        self.elapsed = 0
+        self.t0 = self.total = self.term_at = self.kill_at = self.victim = self.killed = None
+
+    def run(self, list_file, names):
+        """Starts the replicas and the load, runs the fault schedule and stops everything."""
+        try:
+            self.start_replicas()
+            self.start_load(list_file, names)
+            self.fault_schedule()
+            self.wait_for_load()
+        except RuntimeError:
+            self.elapsed, self.bench_rc, self.events, self.phase1 = 0, None, [], []
+        finally:
+            self.shutdown()
+
+    def scraper(self):
+        """Scrapes every replica's /metrics every 0.5 s until stopped."""
+        while not self.stop_scraping.is_set():
+            for r in self.replicas:
                 r.scrape()
-            stop_scraping.wait(0.5)
+            self.stop_scraping.wait(0.5)
 
-    try:
-        for r in replicas:
+    def start_replicas(self):
+        """Starts the replicas, waits until they serve and starts the scraper."""
+        for r in self.replicas:
             r.start()
-        if not wait_healthy(bins["client"], targets, 20):
-            failures.append("the replicas did not become healthy")
+        if not wait_healthy(self.bins["client"], self.targets, 20):
+            self.failures.append("the replicas did not become healthy")
             raise RuntimeError("start-up")
         log("%d replicas up: gRPC %s, metrics %s" % (
-            len(replicas), " ".join(targets),
-            " ".join(str(r.metrics_port) for r in replicas)))
-        threading.Thread(target=scraper, daemon=True).start()
+            len(self.replicas), " ".join(self.targets),
+            " ".join(str(r.metrics_port) for r in self.replicas)))
+        threading.Thread(target=self.scraper, daemon=True).start()
 
+    def start_load(self, list_file, names):
+        """Starts lane-client bench (open loop, round_robin) and the stream loops."""
+        args, out = self.args, self.out
+        rr_target = "ipv4:" + ",".join(self.targets)  # one channel, round_robin over every replica
         warmup = 1.0
-        total = warmup + args.duration
-        bench_cmd = [bins["client"], "bench", "--target", rr_target, "--connections", "1",
+        self.total = warmup + args.duration
+        bench_cmd = [self.bins["client"], "bench", "--target", rr_target, "--connections", "1",
                      "--cameras", str(args.cameras), "--fps", str(args.fps),
                      "--warmup", "%gs" % warmup, "--duration", "%gs" % args.duration,
                      "--drain-timeout", "5s", "--synthetic", "20", "--json",
                      "--output", os.path.join(out, "bench.json")]
         log("+ " + " ".join(bench_cmd[1:]))
-        t0 = time.monotonic()
-        bench = subprocess.Popen(bench_cmd, stdout=subprocess.DEVNULL,
-                                 stderr=open(os.path.join(out, "bench.log"), "w"))
+        self.t0 = time.monotonic()
+        self.bench = subprocess.Popen(bench_cmd, stdout=subprocess.DEVNULL,
+                                      stderr=open(os.path.join(out, "bench.log"), "w"))
         for i in range(args.streams):
-            loop = StreamLoop(i, bins["client"], targets, list_file, names, out)
-            loops.append(loop)
+            loop = StreamLoop(i, self.bins["client"], self.targets, list_file, names, out)
+            self.loops.append(loop)
             loop.start()
 
-        def at(fraction):
-            delay = t0 + fraction * total - time.monotonic()
-            if delay > 0:
-                time.sleep(delay)
+    def at(self, fraction):
+        """Sleeps until that fraction of the bench's whole time."""
+        delay = self.t0 + fraction * self.total - time.monotonic()
+        if delay > 0:
+            time.sleep(delay)
 
-        def busiest(candidates):
-            """The replica answering the most frames over the last 0.3 s: the
-            stream loops dominate that, so stopping it interrupts streams."""
-            before = []
-            for r in candidates:
-                r.scrape()
-                before.append(r.incarnations[-1]["last"]["frames_ok"])
-            time.sleep(0.3)
-            rates = []
-            for r, b in zip(candidates, before):
-                r.scrape()
-                rates.append(r.incarnations[-1]["last"]["frames_ok"] - b)
-            return candidates[rates.index(max(rates))]
+    def busiest(self, candidates):
+        """The replica answering the most frames over the last 0.3 s: the
+        stream loops dominate that, so stopping it interrupts streams."""
+        before = []
+        for r in candidates:
+            r.scrape()
+            before.append(r.incarnations[-1]["last"]["frames_ok"])
+        time.sleep(0.3)
+        rates = []
+        for r, b in zip(candidates, before):
+            r.scrape()
+            rates.append(r.incarnations[-1]["last"]["frames_ok"] - b)
+        return candidates[rates.index(max(rates))]
 
-        events = []
+    def fault_schedule(self):
+        """SIGTERM to the busiest replica at 40 %, SIGKILL and restart of another at 65 %."""
+        t0, events, failures, deadline = self.t0, self.events, self.failures, self.deadline
         # Phase 1 ends: the spread over all replicas, before anything is stopped.
-        at(0.4)
-        victim = busiest(replicas)
+        self.at(0.4)
+        self.victim = victim = self.busiest(self.replicas)
         # Frames received, not answered: on a loaded machine (CI shares its
         # cores; the ASan build is 3-5x slower) answers can lag the balancing
         # by seconds, and the spread checked is the client's.
-        phase1 = [r.totals()["received"] for r in replicas]
+        self.phase1 = [r.totals()["received"] for r in self.replicas]
         victim.proc.send_signal(signal.SIGTERM)
-        term_at = time.monotonic()
+        self.term_at = term_at = time.monotonic()
         events.append("t=%.1fs SIGTERM replica %d (%s)" % (term_at - t0, victim.index,
                                                           victim.target))
         log(events[-1])
 
-        at(0.65)
-        killed = busiest([r for r in replicas if r is not victim])
+        self.at(0.65)
+        self.killed = killed = self.busiest([r for r in self.replicas if r is not victim])
         killed.proc.kill()
         killed.proc.wait()
         killed.incarnations[-1]["exit"] = "SIGKILL"
-        kill_at = time.monotonic()
+        self.kill_at = time.monotonic()
         events.append("t=%.1fs SIGKILL replica %d (%s)" % (time.monotonic() - t0, killed.index,
                                                           killed.target))
         log(events[-1])
         time.sleep(1.0)
         killed.start()
-        if wait_healthy(bins["client"], [killed.target], 15):
+        if wait_healthy(self.bins["client"], [killed.target], 15):
             events.append("t=%.1fs replica %d restarted and SERVING" % (
                 time.monotonic() - t0, killed.index))
         else:
@@ -415,74 +437,75 @@ def main():
                 victim.index, deadline + 5))
             victim.proc.kill()
 
+    def wait_for_load(self):
+        """Waits for the bench, stops the stream loops and scrapes a last time."""
         try:
-            bench_rc = bench.wait(timeout=total + 30)
+            self.bench_rc = self.bench.wait(timeout=self.total + 30)
         except subprocess.TimeoutExpired:
-            bench.kill()
-            bench_rc = "timeout"
-            failures.append("lane-client bench did not finish")
-        for loop in loops:
+            self.bench.kill()
+            self.bench_rc = "timeout"
+            self.failures.append("lane-client bench did not finish")
+        for loop in self.loops:
             loop.stop.set()
-        for loop in loops:
+        for loop in self.loops:
             loop.join(timeout=150)
-        elapsed = time.monotonic() - t0
-        for r in replicas:
+        self.elapsed = time.monotonic() - self.t0
+        for r in self.replicas:
             r.scrape()
-    except RuntimeError:
-        elapsed = 0
-        bench_rc = None
-        events = []
-        phase1 = []
-    finally:
-        stop_scraping.set()
-        if bench is not None and bench.poll() is None:
-            bench.kill()
-        for r in replicas:
+
+    def shutdown(self):
+        """Stops the scraper, the bench and every replica still running."""
+        self.stop_scraping.set()
+        if self.bench is not None and self.bench.poll() is None:
+            self.bench.kill()
+        for r in self.replicas:
             if r.proc is not None and r.proc.poll() is None:
                 r.proc.send_signal(signal.SIGTERM)
-        for r in replicas:
+        for r in self.replicas:
             if r.proc is not None:
                 try:
-                    r.proc.wait(timeout=deadline + 5)
+                    r.proc.wait(timeout=self.deadline + 5)
                 except subprocess.TimeoutExpired:
                     r.proc.kill()
 
-    if not phase1:
-        print("\n".join("FAIL: " + f for f in failures))
-        return 1
 
-    # ---- Report ----------------------------------------------------------
+RUN_SUMS = ("lost", "duplicated", "out_of_order", "not_ok", "bad_name", "expected", "records", "resent")
+
+
+def collect_results(loops):
+    """The stream runs of every loop, their sums, and the runs that reconnected or failed."""
     runs = [run for loop in loops for run in loop.runs]
-    lost = sum(r["lost"] for r in runs)
-    dup = sum(r["duplicated"] for r in runs)
-    reorder = sum(r["out_of_order"] for r in runs)
-    not_ok = sum(r["not_ok"] for r in runs)
-    bad_name = sum(r["bad_name"] for r in runs)
-    stream_frames = sum(r["expected"] for r in runs)
-    records = sum(r["records"] for r in runs)
-    resent = sum(r["resent"] for r in runs)
-    reconnected = [r for r in runs if r["connections"] > 1 or r["retries"] > 0]
+    res = {key: sum(r[key] for r in runs) for key in RUN_SUMS}
+    res["runs"] = runs
+    res["reconnected"] = [r for r in runs if r["connections"] > 1 or r["retries"] > 0]
+    res["failed_runs"] = [r for r in runs if r["exit"] != 0]
+    return res
+
+
+def print_report(c, res):
+    """The report: the events, the streams' exactly-once figures, the bench's, each replica's."""
+    runs = res["runs"]
     open_at = lambda t: sum(1 for r in runs if r["started"] < t < r["ended"])
-    failed_runs = [r for r in runs if r["exit"] != 0]
-    print("local-cluster report (%s, %.0f s)" % ("short" if args.short else "full", elapsed))
+    print("local-cluster report (%s, %.0f s)" % ("short" if c.args.short else "full", c.elapsed))
     print("  replicas: " + ", ".join("%d=%s (metrics :%d)" % (r.index, r.target, r.metrics_port)
-                                     for r in replicas))
-    for e in events:
+                                     for r in c.replicas))
+    for e in c.events:
         print("  " + e)
     print("exactly-once (lane-client stream, round_robin over ipv4:%s (rotated per run), "
-          "%d loops):" % (",".join(targets), len(loops)))
+          "%d loops):" % (",".join(c.targets), len(c.loops)))
     print("  runs %d, frames %d, records %d: lost %d, duplicated %d, out of order %d, "
-          "not OK %d, wrong name %d" % (len(runs), stream_frames, records, lost, dup, reorder,
-                                        not_ok, bad_name))
+          "not OK %d, wrong name %d" % (len(runs), res["expected"], res["records"], res["lost"],
+                                        res["duplicated"], res["out_of_order"], res["not_ok"],
+                                        res["bad_name"]))
     print("  runs open at the SIGTERM %d, at the SIGKILL %d; runs that retried or reconnected %d "
           "(%d frames resent, max attempts %d); runs failed %d" % (
-              open_at(term_at), open_at(kill_at), len(reconnected), resent,
-              max([r["max_attempts"] for r in runs] or [0]), len(failed_runs)))
+              open_at(c.term_at), open_at(c.kill_at), len(res["reconnected"]), res["resent"],
+              max([r["max_attempts"] for r in runs] or [0]), len(res["failed_runs"])))
     try:
-        b = json.load(open(os.path.join(out, "bench.json")))
+        b = json.load(open(os.path.join(c.out, "bench.json")))
         run = b["runs"][0]
         print("load (lane-client bench, open loop %d cameras x %g fps, %g s, exit %s):" % (
-            run["cameras"], args.fps, args.duration, bench_rc))
+            run["cameras"], c.args.fps, c.args.duration, c.bench_rc))
         print("  scheduled %d sent %d ok %d errors %s dropped %d unsent %d stream failures %d; "
               "p50 %.1f p99 %.1f ms" % (
                   run["frames_scheduled"], run["frames_sent"], run["frames_ok"],
@@ -491,14 +514,14 @@ def main():
                   run["latency_ms"]["p99"]))
         print("  (bench does not resend: frames on a killed call count as errors or unsent;"
               " the exactly-once check is the streams')")
-        if bench_rc not in (0, 3):
-            failures.append("lane-client bench exited with %s" % bench_rc)
+        if c.bench_rc not in (0, 3):
+            c.failures.append("lane-client bench exited with %s" % c.bench_rc)
     except (OSError, ValueError, KeyError, IndexError) as e:
-        failures.append("no bench report: %s" % e)
+        c.failures.append("no bench report: %s" % e)
 
     print("per replica, from /metrics (last scrape of each process; frames answered OK):")
-    total_ok = sum(r.totals()["frames_ok"] for r in replicas) or 1
-    for r, p1 in zip(replicas, phase1):
+    total_ok = sum(r.totals()["frames_ok"] for r in c.replicas) or 1
+    for r, p1 in zip(c.replicas, c.phase1):
         t = r.totals()
         per_inc = " + ".join("%d" % inc["last"]["frames_ok"] for inc in r.incarnations)
         print("  replica %d %s: ok %6d (%4.1f %%)%s  received %d, dropped %d, error+invalid %d, "
@@ -508,15 +531,20 @@ def main():
                   t["received"], t["frames_dropped"], t["frames_error"] + t["frames_invalid"],
                   t["streams_OK"], t["streams_UNAVAILABLE"], t["streams_CANCELLED"], p1))
 
-    # ---- Verdict ---------------------------------------------------------
+
+def verdict(c, res):
+    """The checks and notes, report.json, PASS or FAIL; the exit status."""
+    failures, phase1 = c.failures, c.phase1
+    lost, dup, reorder = res["lost"], res["duplicated"], res["out_of_order"]
     if lost or dup or reorder:
         failures.append("%d lost, %d duplicated, %d out-of-order stream frames" % (lost, dup, reorder))
-    if not_ok or bad_name:
-        failures.append("%d stream frames not OK, %d under the wrong name" % (not_ok, bad_name))
-    if failed_runs:
+    if res["not_ok"] or res["bad_name"]:
+        failures.append("%d stream frames not OK, %d under the wrong name" % (res["not_ok"],
+                                                                            res["bad_name"]))
+    if res["failed_runs"]:
         failures.append("%d stream runs failed (exit status), e.g. %s" % (
-            len(failed_runs), failed_runs[0]["output"]))
-    if not runs:
+            len(res["failed_runs"]), res["failed_runs"][0]["output"]))
+    if not res["runs"]:
         failures.append("no stream run completed")
     phase1_total = sum(phase1)
     if phase1_total == 0 or min(phase1) < 0.10 * phase1_total:
@@ -525,25 +553,43 @@ def main():
         print("spread before the SIGTERM: %s frames received, smallest share %.0f %% (>= 10 %% "
               "required)"
               % ("/".join("%d" % v for v in phase1), 100.0 * min(phase1) / phase1_total))
-    if killed.incarnations[-1]["last"]["frames_ok"] == 0:
+    if c.killed.incarnations[-1]["last"]["frames_ok"] == 0:
         print("note: the restarted replica answered no frame: open streams stay on their pod "
               "(stream affinity); only new calls reach it")
-    if not reconnected:
+    if not res["reconnected"]:
         print("note: no stream run was interrupted this time (the replicas stopped held none)")
 
-    summary = {"lost": lost, "duplicated": dup, "out_of_order": reorder, "stream_runs": len(runs),
-               "stream_frames": stream_frames, "resent": resent,
-               "reconnected_runs": len(reconnected), "phase1_ok": phase1,
-               "ok_by_replica": [r.totals()["frames_ok"] for r in replicas],
+    summary = {"lost": lost, "duplicated": dup, "out_of_order": reorder,
+               "stream_runs": len(res["runs"]), "stream_frames": res["expected"],
+               "resent": res["resent"], "reconnected_runs": len(res["reconnected"]),
+               "phase1_ok": phase1, "ok_by_replica": [r.totals()["frames_ok"] for r in c.replicas],
                "failures": failures}
-    json.dump(summary, open(os.path.join(out, "report.json"), "w"), indent=1)
+    json.dump(summary, open(os.path.join(c.out, "report.json"), "w"), indent=1)
     if failures:
         for f in failures:
             print("FAIL: " + f)
         return 1
     print("PASS: every stream frame answered exactly once, in order; load spread over %d replicas"
-          % len(replicas))
+          % len(c.replicas))
     return 0
+
+
+def main():
+    args = parse_args()
+    bins = binaries()
+    out = os.path.abspath(args.out)
+    shutil.rmtree(out, ignore_errors=True)
+    os.makedirs(out)
+    deadline = 3 if args.short else 5
+    list_file, names = render_stream_frames(bins["lane"], out, args.frames_per_run)
+    cluster = Cluster(args, bins, out, deadline)
+    cluster.run(list_file, names)
+    if not cluster.phase1:
+        print("\n".join("FAIL: " + f for f in cluster.failures))
+        return 1
+    res = collect_results(cluster.loops)
+    print_report(cluster, res)
+    return verdict(cluster, res)
 
 
 if __name__ == "__main__":

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
@@ -143,65 +144,29 @@ std::string ConfigHeader(const lane::CalibrationResult& r, const CalibrateFlags&
   return h;
 }
 
-int RunCalibrate(const CalibrateFlags& flags) {
-  lane::CalibrationOptions options;
-  options.height_m = flags.height_m;
-  options.focal_px = flags.focal_px;
-  options.lane_width_m = flags.lane_width_m;
-  options.road_bottom_row = flags.road_bottom_row;
-  if (flags.principal_point) {
-    options.principal_point = ParsePoint(*flags.principal_point);
-    if (!options.principal_point) {
-      return Failure("calibrate", "--principal-point must be U,V in pixels, got \"" +
-                                      *flags.principal_point + "\"");
+// Runs `use` on every readable input frame (others counted); false when `use` fails.
+bool EachFrame(const CalibrateFlags& flags, int& read_errors,
+               const std::function<absl::Status(const InputFrame&)>& use) {
+  FrameReader reader(flags.inputs, flags.read.Options());
+  InputFrame frame;
+  while (reader.Next(&frame)) {
+    if (!frame.error.empty()) {
+      PrintMessage("lane calibrate", frame.name + ": " + frame.error);
+      ++read_errors;
+      continue;
+    }
+    if (absl::Status s = use(frame); !s.ok()) {
+      PrintMessage("lane calibrate", frame.name + ": " + std::string(s.message()));
+      return false;
     }
   }
-  absl::StatusOr<lane::Config> base = LoadEffectiveConfig(flags.template_config, {});
-  if (!base.ok()) return Failure("calibrate", std::string(base.status().message()));
+  return true;
+}
 
-  lane::CameraCalibrator calibrator(options);
-  int read_errors = 0;
-  auto each_frame = [&](const std::function<absl::Status(const InputFrame&)>& use) -> bool {
-    FrameReader reader(flags.inputs, flags.read.Options());
-    InputFrame frame;
-    while (reader.Next(&frame)) {
-      if (!frame.error.empty()) {
-        PrintMessage("lane calibrate", frame.name + ": " + frame.error);
-        ++read_errors;
-        continue;
-      }
-      if (absl::Status s = use(frame); !s.ok()) {
-        PrintMessage("lane calibrate", frame.name + ": " + std::string(s.message()));
-        return false;
-      }
-    }
-    return true;
-  };
-  if (!each_frame([&](const InputFrame& f) { return calibrator.AddFirstPass(f.bgr); })) {
-    return kExitFailure;
-  }
-  if (absl::Status s = calibrator.FinishFirstPass(); !s.ok()) {
-    return Failure("calibrate", std::string(s.message()));
-  }
-  read_errors = 0;
-  BestFrame best;
-  if (!each_frame([&](const InputFrame& f) -> absl::Status {
-        std::vector<lane::ImageSegment> segments;
-        absl::StatusOr<lane::FrameVanishingPoint> p = calibrator.AddSecondPass(f.bgr, &segments);
-        if (!p.ok()) return p.status();
-        if (flags.overlay && p->result == lane::VpFrameResult::kOk &&
-            p->inliers > best.point.inliers) {
-          best = {f.bgr.clone(), std::move(segments), *p};
-        }
-        return absl::OkStatus();
-      })) {
-    return kExitFailure;
-  }
-  const absl::StatusOr<lane::CalibrationResult> result = calibrator.Finish();
-  if (!result.ok()) return Failure("calibrate", std::string(result.status().message()));
-  const lane::CalibrationResult& r = *result;
-
-  lane::Config config = *base;
+// Writes the template config with the estimated camera and ground view to --output.
+absl::Status WriteCalibratedConfig(const lane::Config& base, const lane::CalibrationResult& r,
+                                   const CalibrateFlags& flags) {
+  lane::Config config = base;
   config.camera = r.camera;
   config.ipm.view = lane::IpmView::kGround;
   config.ipm.ground = r.view;
@@ -209,18 +174,21 @@ int RunCalibrate(const CalibrateFlags& flags) {
   if (absl::StatusOr<lane::Detector> d =
           lane::Detector::Create(config.camera, config.ipm, config.detector);
       !d.ok()) {
-    return Failure("calibrate",
-                   absl::StrCat("the estimated camera gives no detector: ", d.status().message()));
+    return absl::InternalError(
+        absl::StrCat("the estimated camera gives no detector: ", d.status().message()));
   }
   std::ofstream out;
   if (!OpenOutputFile(flags.output, &out)) {
-    return Failure("calibrate", "cannot write " + flags.output);
+    return absl::InternalError("cannot write " + flags.output);
   }
   out << ConfigHeader(r, flags) << lane::ConfigToJson(config) << '\n';
   out.close();
-  if (!out) return Failure("calibrate", "error writing " + flags.output);
-  if (flags.overlay && !best.bgr.empty()) DrawOverlay(best, r, *flags.overlay);
+  if (!out) return absl::InternalError("error writing " + flags.output);
+  return absl::OkStatus();
+}
 
+// Prints the estimate's summary on stdout.
+void PrintCalibration(const lane::CalibrationResult& r, const CalibrateFlags& flags) {
   const lane::CombinedVanishingPoint& vp = r.vanishing_point;
   std::printf(
       "vanishing point   (%.1f, %.1f) px, standard error (%.2f, %.2f) px, spread (%.1f, %.1f) px\n",
@@ -244,6 +212,55 @@ int RunCalibrate(const CalibrateFlags& flags) {
   std::printf("top view          x %.2f..%.2f m, y %.2f..%.2f m\n", r.view.x_min_m, r.view.x_max_m,
               r.view.y_min_m, r.view.y_max_m);
   std::printf("config            %s\n", flags.output.c_str());
+}
+
+int RunCalibrate(const CalibrateFlags& flags) {
+  lane::CalibrationOptions options;
+  options.height_m = flags.height_m;
+  options.focal_px = flags.focal_px;
+  options.lane_width_m = flags.lane_width_m;
+  options.road_bottom_row = flags.road_bottom_row;
+  if (flags.principal_point) {
+    options.principal_point = ParsePoint(*flags.principal_point);
+    if (!options.principal_point) {
+      return Failure("calibrate", "--principal-point must be U,V in pixels, got \"" +
+                                      *flags.principal_point + "\"");
+    }
+  }
+  absl::StatusOr<lane::Config> base = LoadEffectiveConfig(flags.template_config, {});
+  if (!base.ok()) return Failure("calibrate", std::string(base.status().message()));
+
+  lane::CameraCalibrator calibrator(options);
+  int read_errors = 0;
+  if (!EachFrame(flags, read_errors,
+                 [&](const InputFrame& f) { return calibrator.AddFirstPass(f.bgr); })) {
+    return kExitFailure;
+  }
+  if (absl::Status s = calibrator.FinishFirstPass(); !s.ok()) {
+    return Failure("calibrate", std::string(s.message()));
+  }
+  read_errors = 0;
+  BestFrame best;
+  if (!EachFrame(flags, read_errors, [&](const InputFrame& f) -> absl::Status {
+        std::vector<lane::ImageSegment> segments;
+        absl::StatusOr<lane::FrameVanishingPoint> p = calibrator.AddSecondPass(f.bgr, &segments);
+        if (!p.ok()) return p.status();
+        if (flags.overlay && p->result == lane::VpFrameResult::kOk &&
+            p->inliers > best.point.inliers) {
+          best = {f.bgr.clone(), std::move(segments), *p};
+        }
+        return absl::OkStatus();
+      })) {
+    return kExitFailure;
+  }
+  const absl::StatusOr<lane::CalibrationResult> result = calibrator.Finish();
+  if (!result.ok()) return Failure("calibrate", std::string(result.status().message()));
+  const lane::CalibrationResult& r = *result;
+  if (absl::Status s = WriteCalibratedConfig(*base, r, flags); !s.ok()) {
+    return Failure("calibrate", std::string(s.message()));
+  }
+  if (flags.overlay && !best.bgr.empty()) DrawOverlay(best, r, *flags.overlay);
+  PrintCalibration(r, flags);
   return read_errors > 0 ? kExitFailure : kExitOk;
 }
 

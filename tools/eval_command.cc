@@ -410,18 +410,60 @@ bool WriteBaseline(const std::string& baseline, const lane::eval::EvalReport& re
   return true;
 }
 
+// --drive: scores the data set as one drive (eval_drive.h).
+int RunDriveFlags(const EvalFlags& flags) {
+  DriveEvalArgs args;
+  args.dataset = flags.dataset;
+  args.config = flags.config;
+  args.mode = flags.mode;
+  args.seed = flags.seed;
+  args.results = flags.results;
+  args.rule = ScoringOptions(flags).paper;
+  return RunDriveEval(args);
+}
+
+// Scores the detectors (the first seed's report; summary over --seeds) or the results records.
+absl::StatusOr<lane::eval::EvalReport> Score(const lane::eval::Dataset& dataset,
+                                             const lane::eval::EvalOptions& options,
+                                             const EvalSource& source,
+                                             const lane::eval::FrameCallback& on_frame,
+                                             std::optional<lane::eval::SeedSummary>* summary) {
+  if (!source.detector) {
+    return lane::eval::EvaluateResults(dataset, source.records, options, on_frame);
+  }
+  std::vector<const lane::Detector*> all = {&*source.detector};
+  for (const lane::Detector& d : source.more_seeds) all.push_back(&d);
+  absl::StatusOr<std::vector<lane::eval::EvalReport>> reports =
+      lane::eval::EvaluateDetectors(dataset, all, options, on_frame);
+  if (!reports.ok()) return reports.status();
+  if (!source.seeds.empty()) *summary = lane::eval::SummariseSeeds(*reports, source.seeds);
+  return std::move(reports->front());
+}
+
+// The one-line totals on stderr, and with --seeds their spread.
+void PrintTotals(const lane::eval::EvalReport& report,
+                 const std::optional<lane::eval::SeedSummary>& summary) {
+  const lane::eval::ClipCounts& t = report.total;
+  std::fprintf(stderr,
+               "lane eval: %d frames scored, paper rule F1 %.3f (correct %.2f%%, %.3f fp/frame), "
+               "CULane F1 %.3f\n",
+               t.frames, t.paper.F1(), 100 * t.paper.CorrectRate(),
+               t.paper.FalsePositivesPerFrame(t.frames), t.culane.F1());
+  if (summary) {
+    const lane::eval::ClipSpread& m = summary->total;
+    std::fprintf(stderr,
+                 "lane eval: over %zu seeds: correct %.2f%% [%.2f, %.2f], FP rate %.2f%% [%.2f, "
+                 "%.2f], CULane F1 %.3f ± %.3f [%.3f, %.3f]\n",
+                 summary->seeds.size(), 100 * m.correct_rate.mean, 100 * m.correct_rate.min,
+                 100 * m.correct_rate.max, 100 * m.false_positive_rate.mean,
+                 100 * m.false_positive_rate.min, 100 * m.false_positive_rate.max, m.culane_f1.mean,
+                 m.culane_f1.std, m.culane_f1.min, m.culane_f1.max);
+  }
+}
+
 int RunEval(const CLI::App& app, const EvalFlags& flags, const std::vector<std::string>& argv) {
   if (const std::string e = FlagsError(flags); !e.empty()) return UsageError(app, e);
-  if (flags.drive) {
-    DriveEvalArgs args;
-    args.dataset = flags.dataset;
-    args.config = flags.config;
-    args.mode = flags.mode;
-    args.seed = flags.seed;
-    args.results = flags.results;
-    args.rule = ScoringOptions(flags).paper;
-    return RunDriveEval(args);
-  }
+  if (flags.drive) return RunDriveFlags(flags);
 
   lane::eval::Dataset dataset;
   if (const absl::Status s = LoadSelectedDataset(flags, &dataset); !s.ok()) {
@@ -442,22 +484,9 @@ int RunEval(const CLI::App& app, const EvalFlags& flags, const std::vector<std::
   const lane::eval::FrameCallback on_frame = [&](const lane::eval::FrameOutcome& o) {
     outputs.OnFrame(o, options, source.roi, detector);
   };
-  absl::StatusOr<lane::eval::EvalReport> report;
   std::optional<lane::eval::SeedSummary> summary;
-  if (detector) {
-    std::vector<const lane::Detector*> all = {&*source.detector};
-    for (const lane::Detector& d : source.more_seeds) all.push_back(&d);
-    absl::StatusOr<std::vector<lane::eval::EvalReport>> reports =
-        lane::eval::EvaluateDetectors(dataset, all, options, on_frame);
-    if (reports.ok()) {
-      if (!source.seeds.empty()) summary = lane::eval::SummariseSeeds(*reports, source.seeds);
-      report = std::move(reports->front());
-    } else {
-      report = reports.status();
-    }
-  } else {
-    report = lane::eval::EvaluateResults(dataset, source.records, options, on_frame);
-  }
+  absl::StatusOr<lane::eval::EvalReport> report =
+      Score(dataset, options, source, on_frame, &summary);
   outputs.ClearProgress();
   const lane::eval::SeedSummary* seeds_summary = summary ? &*summary : nullptr;
   if (!report.ok()) return Failure("eval", std::string(report.status().message()));
@@ -475,22 +504,7 @@ int RunEval(const CLI::App& app, const EvalFlags& flags, const std::vector<std::
   if (flags.write_baseline && !WriteBaseline(*flags.write_baseline, *report, seeds_summary, argv)) {
     outputs.set_output_failed();
   }
-  const lane::eval::ClipCounts& t = report->total;
-  std::fprintf(stderr,
-               "lane eval: %d frames scored, paper rule F1 %.3f (correct %.2f%%, %.3f fp/frame), "
-               "CULane F1 %.3f\n",
-               t.frames, t.paper.F1(), 100 * t.paper.CorrectRate(),
-               t.paper.FalsePositivesPerFrame(t.frames), t.culane.F1());
-  if (summary) {
-    const lane::eval::ClipSpread& m = summary->total;
-    std::fprintf(stderr,
-                 "lane eval: over %zu seeds: correct %.2f%% [%.2f, %.2f], FP rate %.2f%% [%.2f, "
-                 "%.2f], CULane F1 %.3f ± %.3f [%.3f, %.3f]\n",
-                 summary->seeds.size(), 100 * m.correct_rate.mean, 100 * m.correct_rate.min,
-                 100 * m.correct_rate.max, 100 * m.false_positive_rate.mean,
-                 100 * m.false_positive_rate.min, 100 * m.false_positive_rate.max, m.culane_f1.mean,
-                 m.culane_f1.std, m.culane_f1.min, m.culane_f1.max);
-  }
+  PrintTotals(*report, summary);
   return outputs.run_failures() > 0 || outputs.output_failed() ? kExitFailure : kExitOk;
 }
 

@@ -60,6 +60,87 @@ int Caption(cv::Mat& canvas, const std::string& text, int x, int y, double scale
   return y + size.height + baseline + 2 * pad;
 }
 
+// Draws a scored frame's labels and detections in their colours; returns its counts line.
+std::string DrawScoredFrame(cv::Mat& canvas, const lane::eval::FrameOutcome& outcome,
+                            const lane::eval::EvalOptions& options, int thin, int thick) {
+  const lane::eval::LabelledFrame& labelled = *outcome.frame;
+  const lane::eval::FrameScore& score = *outcome.score;
+  std::vector<bool> scored(labelled.boundaries.size(), false);
+  for (int i : score.scored_labels) scored[i] = true;
+  for (size_t i = 0; i < labelled.boundaries.size(); ++i) {
+    if (!scored[i]) DrawCurve(canvas, labelled.boundaries[i].curve, kGrey, thin);
+  }
+  if (options.mode == lane::Mode::kTwo) {
+    const double row =
+        options.ego_row >= 0 ? std::min(options.ego_row, canvas.rows - 1.0) : canvas.rows - 1.0;
+    DashedRow(canvas, static_cast<int>(std::lround(row)), kGrey, thin);
+    const int cx = canvas.cols / 2;
+    cv::line(canvas, {cx, static_cast<int>(row) - 4 * thick},
+             {cx, static_cast<int>(row) + 4 * thick}, kGrey, thin);
+  }
+  // Missed labels first, then detections, then matched labels on top so a
+  // correct detection shows its label inside it.
+  for (size_t k = 0; k < score.scored_labels.size(); ++k) {
+    if (score.paper.label_detection[k] < 0) {
+      DrawCurve(canvas, labelled.boundaries[score.scored_labels[k]].curve, kBlue, thick);
+    }
+  }
+  for (size_t d = 0; d < outcome.lanes.size(); ++d) {
+    const bool correct = score.paper.detection_label[d] >= 0;
+    DrawCurve(canvas, outcome.lanes[d].curve, correct ? kGreen : kRed, thick);
+  }
+  for (size_t k = 0; k < score.scored_labels.size(); ++k) {
+    if (score.paper.label_detection[k] >= 0) {
+      DrawCurve(canvas, labelled.boundaries[score.scored_labels[k]].curve,
+                cv::Scalar(150, 255, 150), thin);
+    }
+  }
+  return absl::StrCat("paper: ", score.paper.MatchedLabels(), "/", score.scored_labels.size(),
+                      " found, ", score.paper.FalsePositives(), " FP   CULane: TP ",
+                      score.culane.MatchedDetections(), " FP ", score.culane.FalsePositives(),
+                      " FN ", score.culane.Misses());
+}
+
+// Writes the detections' scores in their colours at row y; returns the row below them.
+int DrawLaneScores(cv::Mat& canvas, const lane::eval::FrameOutcome& outcome, int margin, int y,
+                   double text_scale) {
+  std::string text = "scores:";
+  int x = margin;
+  int baseline = 0;
+  const int text_thickness = std::max(1, static_cast<int>(std::lround(text_scale * 1.5)));
+  const auto width = [&](const std::string& t) {
+    return cv::getTextSize(t, cv::FONT_HERSHEY_SIMPLEX, text_scale, text_thickness, &baseline)
+               .width +
+           2 * std::max(2, static_cast<int>(std::lround(4 * text_scale)));
+  };
+  int bottom = Caption(canvas, text, x, y, text_scale, kWhite);
+  x += width(text);
+  for (size_t d = 0; d < outcome.lanes.size(); ++d) {
+    cv::Scalar colour = kOrange;
+    if (outcome.score) colour = outcome.score->paper.detection_label[d] >= 0 ? kGreen : kRed;
+    char score[32];
+    std::snprintf(score, sizeof(score), "%.1f", outcome.lanes[d].score);
+    Caption(canvas, score, x, y, text_scale, colour);
+    x += width(score);
+  }
+  return bottom;
+}
+
+// Writes the legend in the colours it explains at row y.
+void DrawLegend(cv::Mat& canvas, int margin, int y, double text_scale) {
+  int x = margin;
+  for (const auto& [text, colour] : {std::pair<const char*, cv::Scalar>{"label / correct", kGreen},
+                                     {"false positive", kRed},
+                                     {"miss", kBlue}}) {
+    int baseline = 0;
+    const int text_thickness = std::max(1, static_cast<int>(std::lround(text_scale * 1.5)));
+    const cv::Size size =
+        cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, text_scale, text_thickness, &baseline);
+    Caption(canvas, text, x, y, text_scale, colour);
+    x += size.width + 3 * margin;
+  }
+}
+
 }  // namespace
 
 cv::Mat DrawEvaluation(const cv::Mat& frame, const lane::eval::FrameOutcome& outcome,
@@ -83,41 +164,7 @@ cv::Mat DrawEvaluation(const cv::Mat& frame, const lane::eval::FrameOutcome& out
   const lane::eval::LabelledFrame& labelled = *outcome.frame;
   std::string counts;
   if (outcome.score) {
-    const lane::eval::FrameScore& score = *outcome.score;
-    std::vector<bool> scored(labelled.boundaries.size(), false);
-    for (int i : score.scored_labels) scored[i] = true;
-    for (size_t i = 0; i < labelled.boundaries.size(); ++i) {
-      if (!scored[i]) DrawCurve(canvas, labelled.boundaries[i].curve, kGrey, thin);
-    }
-    if (options.mode == lane::Mode::kTwo) {
-      const double row =
-          options.ego_row >= 0 ? std::min(options.ego_row, canvas.rows - 1.0) : canvas.rows - 1.0;
-      DashedRow(canvas, static_cast<int>(std::lround(row)), kGrey, thin);
-      const int cx = canvas.cols / 2;
-      cv::line(canvas, {cx, static_cast<int>(row) - 4 * thick},
-               {cx, static_cast<int>(row) + 4 * thick}, kGrey, thin);
-    }
-    // Missed labels first, then detections, then matched labels on top so a
-    // correct detection shows its label inside it.
-    for (size_t k = 0; k < score.scored_labels.size(); ++k) {
-      if (score.paper.label_detection[k] < 0) {
-        DrawCurve(canvas, labelled.boundaries[score.scored_labels[k]].curve, kBlue, thick);
-      }
-    }
-    for (size_t d = 0; d < outcome.lanes.size(); ++d) {
-      const bool correct = score.paper.detection_label[d] >= 0;
-      DrawCurve(canvas, outcome.lanes[d].curve, correct ? kGreen : kRed, thick);
-    }
-    for (size_t k = 0; k < score.scored_labels.size(); ++k) {
-      if (score.paper.label_detection[k] >= 0) {
-        DrawCurve(canvas, labelled.boundaries[score.scored_labels[k]].curve,
-                  cv::Scalar(150, 255, 150), thin);
-      }
-    }
-    counts = absl::StrCat("paper: ", score.paper.MatchedLabels(), "/", score.scored_labels.size(),
-                          " found, ", score.paper.FalsePositives(), " FP   CULane: TP ",
-                          score.culane.MatchedDetections(), " FP ", score.culane.FalsePositives(),
-                          " FN ", score.culane.Misses());
+    counts = DrawScoredFrame(canvas, outcome, options, thin, thick);
   } else {
     for (const lane::eval::DetectedLane& lane : outcome.lanes) {
       DrawCurve(canvas, lane.curve, kOrange, thick);
@@ -131,41 +178,8 @@ cv::Mat DrawEvaluation(const cv::Mat& frame, const lane::eval::FrameOutcome& out
   if (outcome.missing_result) absl::StrAppend(&title, "  (no results record)");
   int y = Caption(canvas, title, margin, margin, text_scale, kWhite);
   y = Caption(canvas, counts, margin, y, text_scale, kWhite);
-  // The detections' scores, left to right as drawn, in their colours.
-  if (!outcome.lanes.empty()) {
-    std::string text = "scores:";
-    int x = margin;
-    int baseline = 0;
-    const int text_thickness = std::max(1, static_cast<int>(std::lround(text_scale * 1.5)));
-    const auto width = [&](const std::string& t) {
-      return cv::getTextSize(t, cv::FONT_HERSHEY_SIMPLEX, text_scale, text_thickness, &baseline)
-                 .width +
-             2 * std::max(2, static_cast<int>(std::lround(4 * text_scale)));
-    };
-    int bottom = Caption(canvas, text, x, y, text_scale, kWhite);
-    x += width(text);
-    for (size_t d = 0; d < outcome.lanes.size(); ++d) {
-      cv::Scalar colour = kOrange;
-      if (outcome.score) colour = outcome.score->paper.detection_label[d] >= 0 ? kGreen : kRed;
-      char score[32];
-      std::snprintf(score, sizeof(score), "%.1f", outcome.lanes[d].score);
-      Caption(canvas, score, x, y, text_scale, colour);
-      x += width(score);
-    }
-    y = bottom;
-  }
-  // Legend in the colours it explains.
-  int x = margin;
-  for (const auto& [text, colour] : {std::pair<const char*, cv::Scalar>{"label / correct", kGreen},
-                                     {"false positive", kRed},
-                                     {"miss", kBlue}}) {
-    int baseline = 0;
-    const int text_thickness = std::max(1, static_cast<int>(std::lround(text_scale * 1.5)));
-    const cv::Size size =
-        cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, text_scale, text_thickness, &baseline);
-    Caption(canvas, text, x, y, text_scale, colour);
-    x += size.width + 3 * margin;
-  }
+  if (!outcome.lanes.empty()) y = DrawLaneScores(canvas, outcome, margin, y, text_scale);
+  DrawLegend(canvas, margin, y, text_scale);
   return canvas;
 }
 

@@ -43,130 +43,177 @@ namespace {
 
 double Rms(double sum_sq, int n) { return n > 0 ? std::sqrt(sum_sq / n) : 0.0; }
 
+// One frame's counted lanes matched to its true boundaries and road edges.
+struct FrameMatch {
+  std::vector<int> counted;   // indices into DriveOutput::lanes of the lanes counted
+  Matching m;                 // counted lanes vs true boundaries
+  std::vector<bool> on_edge;  // per counted lane: unmatched but on an asphalt edge
+};
+
+// The state carried across a drive's frames.
+struct DriveAccumulator {
+  std::map<int, int> last_id;  // true boundary id -> the lane id that last matched it
+  double offset_sq = 0, heading_sq = 0, width_sq = 0, curvature_sq = 0;
+  std::vector<double> crossings;
+  std::vector<double> departing_times;
+};
+
+// Matches a frame's counted lanes to its boundaries, and the unmatched ones to its road edges.
+FrameMatch MatchFrame(const DriveTruthFrame& t, const DriveOutput& out,
+                      const DriveScoreOptions& options) {
+  FrameMatch fm;
+  // The lanes counted, and their curves.
+  std::vector<Curve> curves;
+  for (int i = 0; i < static_cast<int>(out.lanes.size()); ++i) {
+    if (options.confirmed_only && !out.lanes[i].confirmed) continue;
+    fm.counted.push_back(i);
+    curves.push_back(Curve::FromBezier(out.lanes[i].image));
+  }
+  std::vector<Curve> labels;
+  for (const DriveTruthBoundary& b : t.boundaries) labels.push_back(b.curve);
+  fm.m = MatchPaperRule(curves, labels, t.width, options.rule);
+  // Lanes on no boundary: on an asphalt edge, or false positives.
+  std::vector<Curve> unmatched;
+  std::vector<size_t> unmatched_index;
+  for (size_t d = 0; d < fm.counted.size(); ++d) {
+    if (fm.m.detection_label[d] >= 0) continue;
+    unmatched.push_back(curves[d]);
+    unmatched_index.push_back(d);
+  }
+  fm.on_edge.assign(fm.counted.size(), false);
+  if (!unmatched.empty() && !t.road_edges.empty()) {
+    const Matching e = MatchPaperRule(unmatched, t.road_edges, t.width, options.rule);
+    for (size_t u = 0; u < unmatched.size(); ++u) {
+      fm.on_edge[unmatched_index[u]] = e.detection_label[u] >= 0;
+    }
+  }
+  return fm;
+}
+
+// Counts frame f's reported, matched, predicted, road-edge and false-positive lanes.
+void CountLanes(size_t f, const DriveOutput& out, const FrameMatch& fm, DriveScore& score) {
+  score.reported += static_cast<int>(fm.counted.size());
+  score.matched += fm.m.MatchedLabels();
+  for (size_t d = 0; d < fm.counted.size(); ++d) {
+    const bool predicted = out.lanes[static_cast<size_t>(fm.counted[d])].predicted;
+    score.predicted += predicted ? 1 : 0;
+    if (fm.m.detection_label[d] >= 0) continue;
+    if (fm.on_edge[d]) {
+      ++score.on_road_edges;
+      continue;
+    }
+    ++score.false_positives;
+    score.false_positive_frames.push_back(static_cast<int>(f));
+    score.predicted_false_positives += predicted ? 1 : 0;
+  }
+}
+
+// Scores a matched lane's colour and type against its true boundary.
+void ScoreMarking(const Lane& lane, const DriveTruthBoundary& b, DriveScore& score) {
+  ++score.colour_scored;
+  if (lane.color == (b.yellow ? MarkingColor::kYellow : MarkingColor::kWhite)) {
+    ++score.colour_right;
+  }
+  if (!b.type_changes) {
+    ++score.type_scored;
+    if (lane.type == (b.dashed ? MarkingType::kDashed : MarkingType::kSolid)) {
+      ++score.type_right;
+    } else {
+      ++score.type_errors[{b.id, absl::StrFormat("%s read %s", b.dashed ? "dashed" : "solid",
+                                                 MarkingTypeName(lane.type))}];
+    }
+  }
+}
+
+// Scores frame f's matched boundaries (colour, type, id switches); per boundary its lane or -1.
+std::vector<int> ScoreBoundaries(size_t f, const DriveTruthFrame& t, const DriveOutput& out,
+                                 const FrameMatch& fm, std::map<int, int>& last_id,
+                                 DriveScore& score) {
+  std::vector<int> lane_of(t.boundaries.size(), -1);
+  for (size_t k = 0; k < t.boundaries.size(); ++k) {
+    const int d = fm.m.label_detection[k];
+    if (d < 0) continue;
+    const Lane& lane = out.lanes[static_cast<size_t>(fm.counted[static_cast<size_t>(d)])];
+    lane_of[k] = fm.counted[static_cast<size_t>(d)];
+    const DriveTruthBoundary& b = t.boundaries[k];
+    ScoreMarking(lane, b, score);
+    if (lane.id >= 0) {
+      auto it = last_id.find(b.id);
+      if (it != last_id.end() && it->second != lane.id) {
+        ++score.id_switches;
+        score.switches.push_back({static_cast<int>(f), b.id, it->second, lane.id});
+      }
+      last_id[b.id] = lane.id;
+    }
+  }
+  return lane_of;
+}
+
+// Scores frame f's ego lane and notes its lane change crossing and departure warning.
+void ScoreEgo(size_t f, const std::vector<DriveTruthFrame>& truth, const DriveOutput& out,
+              const std::vector<int>& lane_of, DriveAccumulator& acc, DriveScore& score) {
+  const DriveTruthFrame& t = truth[f];
+  if (t.ego) {
+    ++score.ego_frames;
+    if (f > 0 && truth[f - 1].ego && truth[f - 1].ego->lane != t.ego->lane) {
+      acc.crossings.push_back(0.5 * (truth[f - 1].time_s + t.time_s));
+    }
+    int true_left = -1, true_right = -1;
+    for (size_t k = 0; k < t.boundaries.size(); ++k) {
+      if (t.boundaries[k].id == t.ego->lane) true_left = lane_of[k];
+      if (t.boundaries[k].id == t.ego->lane + 1) true_right = lane_of[k];
+    }
+    if (out.ego && true_left >= 0 && out.ego->left_index == true_left &&
+        out.ego->right_index == true_right) {
+      ++score.ego_matched;
+      acc.offset_sq += std::pow(out.ego->offset_m - t.ego->offset_m, 2);
+      acc.heading_sq += std::pow(out.ego->heading_deg - t.ego->heading_deg, 2);
+      acc.width_sq += std::pow(out.ego->width_m - t.ego->width_m, 2);
+      acc.curvature_sq += std::pow(out.ego->curvature_per_m - t.ego->curvature_per_m, 2);
+    }
+  }
+  if (out.ego && out.ego->departing) acc.departing_times.push_back(t.time_s);
+}
+
+// The drive's ego RMS errors, departure warning leads and false departures.
+void FinishDrive(const DriveAccumulator& acc, const DriveScoreOptions& options, DriveScore& score) {
+  score.offset_rms_m = Rms(acc.offset_sq, score.ego_matched);
+  score.heading_rms_deg = Rms(acc.heading_sq, score.ego_matched);
+  score.width_rms_m = Rms(acc.width_sq, score.ego_matched);
+  score.curvature_rms_per_m = Rms(acc.curvature_sq, score.ego_matched);
+  for (const double c : acc.crossings) {
+    std::optional<double> lead;
+    for (const double d : acc.departing_times) {
+      if (d < c && c - d <= options.departure_lead_s) lead = std::max(lead.value_or(0.0), c - d);
+    }
+    score.departure_leads_s.push_back(lead);
+  }
+  for (const double d : acc.departing_times) {
+    const bool near = std::any_of(acc.crossings.begin(), acc.crossings.end(), [&](double c) {
+      return std::abs(c - d) <= options.departure_lead_s;
+    });
+    if (!near) ++score.false_departure_frames;
+  }
+}
+
 }  // namespace
 
 DriveScore ScoreDrive(const std::vector<DriveTruthFrame>& truth,
                       const std::vector<DriveOutput>& outputs, const DriveScoreOptions& options) {
   DriveScore score;
   const size_t n = std::min(truth.size(), outputs.size());
-  std::map<int, int> last_id;  // true boundary id -> the lane id that last matched it
-  double offset_sq = 0, heading_sq = 0, width_sq = 0, curvature_sq = 0;
-  std::vector<double> crossings;
-  std::vector<double> departing_times;
+  DriveAccumulator acc;
   for (size_t f = 0; f < n; ++f) {
     const DriveTruthFrame& t = truth[f];
     const DriveOutput& out = outputs[f];
     ++score.frames;
     score.labels += static_cast<int>(t.boundaries.size());
-    // The lanes counted, and their curves.
-    std::vector<int> counted;
-    std::vector<Curve> curves;
-    for (int i = 0; i < static_cast<int>(out.lanes.size()); ++i) {
-      if (options.confirmed_only && !out.lanes[i].confirmed) continue;
-      counted.push_back(i);
-      curves.push_back(Curve::FromBezier(out.lanes[i].image));
-    }
-    std::vector<Curve> labels;
-    for (const DriveTruthBoundary& b : t.boundaries) labels.push_back(b.curve);
-    const Matching m = MatchPaperRule(curves, labels, t.width, options.rule);
-    // Lanes on no boundary: on an asphalt edge, or false positives.
-    std::vector<Curve> unmatched;
-    std::vector<size_t> unmatched_index;
-    for (size_t d = 0; d < counted.size(); ++d) {
-      if (m.detection_label[d] >= 0) continue;
-      unmatched.push_back(curves[d]);
-      unmatched_index.push_back(d);
-    }
-    std::vector<bool> on_edge(counted.size(), false);
-    if (!unmatched.empty() && !t.road_edges.empty()) {
-      const Matching e = MatchPaperRule(unmatched, t.road_edges, t.width, options.rule);
-      for (size_t u = 0; u < unmatched.size(); ++u) {
-        on_edge[unmatched_index[u]] = e.detection_label[u] >= 0;
-      }
-    }
-    score.reported += static_cast<int>(counted.size());
-    score.matched += m.MatchedLabels();
-    for (size_t d = 0; d < counted.size(); ++d) {
-      const bool predicted = out.lanes[static_cast<size_t>(counted[d])].predicted;
-      score.predicted += predicted ? 1 : 0;
-      if (m.detection_label[d] >= 0) continue;
-      if (on_edge[d]) {
-        ++score.on_road_edges;
-        continue;
-      }
-      ++score.false_positives;
-      score.false_positive_frames.push_back(static_cast<int>(f));
-      score.predicted_false_positives += predicted ? 1 : 0;
-    }
-    // Per true boundary: the lane (index into out.lanes) that matched it.
-    std::vector<int> lane_of(t.boundaries.size(), -1);
-    for (size_t k = 0; k < t.boundaries.size(); ++k) {
-      const int d = m.label_detection[k];
-      if (d < 0) continue;
-      const Lane& lane = out.lanes[static_cast<size_t>(counted[static_cast<size_t>(d)])];
-      lane_of[k] = counted[static_cast<size_t>(d)];
-      const DriveTruthBoundary& b = t.boundaries[k];
-      ++score.colour_scored;
-      if (lane.color == (b.yellow ? MarkingColor::kYellow : MarkingColor::kWhite)) {
-        ++score.colour_right;
-      }
-      if (!b.type_changes) {
-        ++score.type_scored;
-        if (lane.type == (b.dashed ? MarkingType::kDashed : MarkingType::kSolid)) {
-          ++score.type_right;
-        } else {
-          ++score.type_errors[{b.id, absl::StrFormat("%s read %s", b.dashed ? "dashed" : "solid",
-                                                     MarkingTypeName(lane.type))}];
-        }
-      }
-      if (lane.id >= 0) {
-        auto it = last_id.find(b.id);
-        if (it != last_id.end() && it->second != lane.id) {
-          ++score.id_switches;
-          score.switches.push_back({static_cast<int>(f), b.id, it->second, lane.id});
-        }
-        last_id[b.id] = lane.id;
-      }
-    }
-    // Ego lane.
-    if (t.ego) {
-      ++score.ego_frames;
-      if (f > 0 && truth[f - 1].ego && truth[f - 1].ego->lane != t.ego->lane) {
-        crossings.push_back(0.5 * (truth[f - 1].time_s + t.time_s));
-      }
-      int true_left = -1, true_right = -1;
-      for (size_t k = 0; k < t.boundaries.size(); ++k) {
-        if (t.boundaries[k].id == t.ego->lane) true_left = lane_of[k];
-        if (t.boundaries[k].id == t.ego->lane + 1) true_right = lane_of[k];
-      }
-      if (out.ego && true_left >= 0 && out.ego->left_index == true_left &&
-          out.ego->right_index == true_right) {
-        ++score.ego_matched;
-        offset_sq += std::pow(out.ego->offset_m - t.ego->offset_m, 2);
-        heading_sq += std::pow(out.ego->heading_deg - t.ego->heading_deg, 2);
-        width_sq += std::pow(out.ego->width_m - t.ego->width_m, 2);
-        curvature_sq += std::pow(out.ego->curvature_per_m - t.ego->curvature_per_m, 2);
-      }
-    }
-    if (out.ego && out.ego->departing) departing_times.push_back(t.time_s);
+    const FrameMatch fm = MatchFrame(t, out, options);
+    CountLanes(f, out, fm, score);
+    const std::vector<int> lane_of = ScoreBoundaries(f, t, out, fm, acc.last_id, score);
+    ScoreEgo(f, truth, out, lane_of, acc, score);
   }
-  score.offset_rms_m = Rms(offset_sq, score.ego_matched);
-  score.heading_rms_deg = Rms(heading_sq, score.ego_matched);
-  score.width_rms_m = Rms(width_sq, score.ego_matched);
-  score.curvature_rms_per_m = Rms(curvature_sq, score.ego_matched);
-  for (const double c : crossings) {
-    std::optional<double> lead;
-    for (const double d : departing_times) {
-      if (d < c && c - d <= options.departure_lead_s) lead = std::max(lead.value_or(0.0), c - d);
-    }
-    score.departure_leads_s.push_back(lead);
-  }
-  for (const double d : departing_times) {
-    const bool near = std::any_of(crossings.begin(), crossings.end(), [&](double c) {
-      return std::abs(c - d) <= options.departure_lead_s;
-    });
-    if (!near) ++score.false_departure_frames;
-  }
+  FinishDrive(acc, options, score);
   return score;
 }
 

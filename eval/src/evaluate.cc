@@ -223,122 +223,168 @@ absl::StatusOr<EvalReport> EvaluateDetector(const Dataset& dataset, const Detect
   return std::move(reports->front());
 }
 
+namespace {
+
+using RecordMap = std::map<const LabelledFrame*, const FrameResult*>;
+
+// Every frame of the data set, over all clips in order.
+std::vector<const LabelledFrame*> AllFrames(const Dataset& dataset) {
+  std::vector<const LabelledFrame*> frames;
+  for (const Clip& clip : dataset.clips) {
+    for (const LabelledFrame& f : clip.frames) frames.push_back(&f);
+  }
+  return frames;
+}
+
+// Maps records to frames by their frame index over the whole data set.
+absl::Status MatchRecordsByIndex(const std::vector<FrameResult>& results,
+                                 const std::vector<const LabelledFrame*>& frames,
+                                 RecordMap& record_of) {
+  const int total = static_cast<int>(frames.size());
+  for (const FrameResult& r : results) {
+    if (r.index >= total) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("results frame#", r.index, " is beyond the data set's ", total,
+                       " frames (frames are numbered from 0 over all clips in order; use --clip to "
+                       "score one clip)"));
+    }
+    record_of[frames[r.index]] = &r;
+  }
+  return absl::OkStatus();
+}
+
+// Maps records to frames by name (exact, or a unique path suffix); unmatched names the rest.
+absl::Status MatchRecordsByName(const Dataset& dataset, const std::vector<FrameResult>& results,
+                                const std::vector<const LabelledFrame*>& frames,
+                                RecordMap& record_of, std::vector<std::string>& unmatched) {
+  const int total = static_cast<int>(frames.size());
+  std::map<std::string, int> exact;
+  std::map<std::string, std::vector<int>> by_suffix;
+  for (int i = 0; i < total; ++i) {
+    exact[frames[i]->name] = i;
+    for (const std::string& s : Suffixes(frames[i]->name)) by_suffix[s].push_back(i);
+  }
+  for (const FrameResult& r : results) {
+    const std::string name = NormalName(r.frame);
+    int index = -1;
+    if (const auto it = exact.find(name); it != exact.end()) {
+      index = it->second;
+    } else if (const auto s = by_suffix.find(name); s != by_suffix.end()) {
+      if (s->second.size() > 1) {
+        return absl::InvalidArgumentError(
+            absl::StrCat("results frame \"", r.frame, "\" could be ", frames[s->second[0]]->name,
+                         " or ", frames[s->second[1]]->name,
+                         ": name frames by their path relative to the data set folder"));
+      }
+      index = s->second.front();
+    }
+    if (index < 0) {
+      unmatched.push_back(r.frame);
+      continue;
+    }
+    if (!record_of.emplace(frames[index], &r).second) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("the results hold two records for frame ", frames[index]->name));
+    }
+  }
+  if (record_of.empty()) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("no results record names a frame of ", dataset.root, " (results name e.g. \"",
+                     results.front().frame, "\", the data set has e.g. \"",
+                     total > 0 ? frames.front()->name : std::string(), "\")"));
+  }
+  return absl::OkStatus();
+}
+
+// Fills outcomes from the records; sizes they lack from the labels, options or clip's images.
+class RecordFiller {
+ public:
+  RecordFiller(const RecordMap& record_of, const EvalOptions& options)
+      : record_of_(record_of), options_(options) {}
+
+  void operator()(const LabelledFrame& frame, FrameOutcome& outcome) {
+    const auto it = record_of_.find(&frame);
+    const FrameResult* record = it == record_of_.end() ? nullptr : it->second;
+    outcome.missing_result = record == nullptr;
+    if (record != nullptr) {
+      outcome.lanes = record->lanes;
+      outcome.error = record->error;
+      outcome.width = record->width;
+      outcome.height = record->height;
+    }
+    if (outcome.width <= 0 || outcome.height <= 0) {
+      outcome.width = frame.width;
+      outcome.height = frame.height;
+    }
+    if (outcome.width <= 0 || outcome.height <= 0) {
+      outcome.width = options_.default_width;
+      outcome.height = options_.default_height;
+    }
+    if (outcome.width <= 0 || outcome.height <= 0) FillClipSize(frame, outcome);
+  }
+
+ private:
+  // The clip's image size (read once per clip until one decodes), or an error.
+  void FillClipSize(const LabelledFrame& frame, FrameOutcome& outcome) {
+    if (size_clip_ != outcome.clip || clip_size_.empty()) {
+      size_clip_ = outcome.clip;
+      clip_size_ = cv::Size();
+      try {
+        const cv::Mat image = cv::imread(frame.image_path, cv::IMREAD_COLOR);
+        clip_size_ = image.size();
+      } catch (const cv::Exception&) {
+      }
+    }
+    outcome.width = clip_size_.width;
+    outcome.height = clip_size_.height;
+    if (clip_size_.empty() && outcome.error.empty()) {
+      outcome.error = absl::StrCat("frame size unknown: cannot read image ", frame.image_path,
+                                   " (give a config)");
+    }
+  }
+
+  const RecordMap& record_of_;
+  const EvalOptions& options_;
+  const Clip* size_clip_ = nullptr;
+  cv::Size clip_size_;
+};
+
+// Warns of records that matched no frame and of labelled frames without a record.
+void AddResultsWarnings(const std::vector<std::string>& unmatched, EvalReport& report) {
+  if (!unmatched.empty()) {
+    report.warnings.push_back(absl::StrCat(unmatched.size(),
+                                           " results record(s) match no frame of the data set, "
+                                           "e.g. \"",
+                                           unmatched.front(), "\" (ignored)"));
+  }
+  if (report.total.missing_results > 0) {
+    report.warnings.push_back(absl::StrCat(report.total.missing_results,
+                                           " labelled frame(s) have no results record (scored "
+                                           "as no detections)"));
+  }
+}
+
+}  // namespace
+
 absl::StatusOr<EvalReport> EvaluateResults(const Dataset& dataset,
                                            const std::vector<FrameResult>& results,
                                            const EvalOptions& options,
                                            const FrameCallback& on_frame) {
   if (absl::Status s = options.Validate(); !s.ok()) return s;
   if (results.empty()) return absl::InvalidArgumentError("the results file holds no frame");
-  const int total = dataset.FrameCount();
-  std::vector<const LabelledFrame*> frames;
-  for (const Clip& clip : dataset.clips) {
-    for (const LabelledFrame& f : clip.frames) frames.push_back(&f);
-  }
+  const std::vector<const LabelledFrame*> frames = AllFrames(dataset);
   // The record of each data set frame.
-  std::map<const LabelledFrame*, const FrameResult*> record_of;
+  RecordMap record_of;
   std::vector<std::string> unmatched;
   const bool by_index = std::all_of(results.begin(), results.end(),
                                     [](const FrameResult& r) { return r.index >= 0; });
-  if (by_index) {
-    for (const FrameResult& r : results) {
-      if (r.index >= total) {
-        return absl::InvalidArgumentError(absl::StrCat(
-            "results frame#", r.index, " is beyond the data set's ", total,
-            " frames (frames are numbered from 0 over all clips in order; use --clip to "
-            "score one clip)"));
-      }
-      record_of[frames[r.index]] = &r;
-    }
-  } else {
-    std::map<std::string, int> exact;
-    std::map<std::string, std::vector<int>> by_suffix;
-    for (int i = 0; i < total; ++i) {
-      exact[frames[i]->name] = i;
-      for (const std::string& s : Suffixes(frames[i]->name)) by_suffix[s].push_back(i);
-    }
-    for (const FrameResult& r : results) {
-      const std::string name = NormalName(r.frame);
-      int index = -1;
-      if (const auto it = exact.find(name); it != exact.end()) {
-        index = it->second;
-      } else if (const auto s = by_suffix.find(name); s != by_suffix.end()) {
-        if (s->second.size() > 1) {
-          return absl::InvalidArgumentError(
-              absl::StrCat("results frame \"", r.frame, "\" could be ", frames[s->second[0]]->name,
-                           " or ", frames[s->second[1]]->name,
-                           ": name frames by their path relative to the data set folder"));
-        }
-        index = s->second.front();
-      }
-      if (index < 0) {
-        unmatched.push_back(r.frame);
-        continue;
-      }
-      if (!record_of.emplace(frames[index], &r).second) {
-        return absl::InvalidArgumentError(
-            absl::StrCat("the results hold two records for frame ", frames[index]->name));
-      }
-    }
-    if (record_of.empty()) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "no results record names a frame of ", dataset.root, " (results name e.g. \"",
-          results.front().frame, "\", the data set has e.g. \"",
-          total > 0 ? frames.front()->name : std::string(), "\")"));
-    }
-  }
-
-  // Frame sizes the records do not give: the labels', the options', or the
-  // clip's first decodable image's.
-  const Clip* size_clip = nullptr;
-  cv::Size clip_size;
+  const absl::Status matched =
+      by_index ? MatchRecordsByIndex(results, frames, record_of)
+               : MatchRecordsByName(dataset, results, frames, record_of, unmatched);
+  if (!matched.ok()) return matched;
   absl::StatusOr<EvalReport> report =
-      Run(dataset, options, on_frame, [&](const LabelledFrame& frame, FrameOutcome& outcome) {
-        const auto it = record_of.find(&frame);
-        const FrameResult* record = it == record_of.end() ? nullptr : it->second;
-        outcome.missing_result = record == nullptr;
-        if (record != nullptr) {
-          outcome.lanes = record->lanes;
-          outcome.error = record->error;
-          outcome.width = record->width;
-          outcome.height = record->height;
-        }
-        if (outcome.width <= 0 || outcome.height <= 0) {
-          outcome.width = frame.width;
-          outcome.height = frame.height;
-        }
-        if (outcome.width <= 0 || outcome.height <= 0) {
-          outcome.width = options.default_width;
-          outcome.height = options.default_height;
-        }
-        if (outcome.width <= 0 || outcome.height <= 0) {
-          if (size_clip != outcome.clip || clip_size.empty()) {
-            size_clip = outcome.clip;
-            clip_size = cv::Size();
-            try {
-              const cv::Mat image = cv::imread(frame.image_path, cv::IMREAD_COLOR);
-              clip_size = image.size();
-            } catch (const cv::Exception&) {
-            }
-          }
-          outcome.width = clip_size.width;
-          outcome.height = clip_size.height;
-          if (clip_size.empty() && outcome.error.empty()) {
-            outcome.error = absl::StrCat("frame size unknown: cannot read image ", frame.image_path,
-                                         " (give a config)");
-          }
-        }
-      });
-  if (report.ok() && !unmatched.empty()) {
-    report->warnings.push_back(absl::StrCat(unmatched.size(),
-                                            " results record(s) match no frame of the data set, "
-                                            "e.g. \"",
-                                            unmatched.front(), "\" (ignored)"));
-  }
-  if (report.ok() && report->total.missing_results > 0) {
-    report->warnings.push_back(absl::StrCat(report->total.missing_results,
-                                            " labelled frame(s) have no results record (scored "
-                                            "as no detections)"));
-  }
+      Run(dataset, options, on_frame, RecordFiller(record_of, options));
+  if (report.ok()) AddResultsWarnings(unmatched, *report);
   return report;
 }
 

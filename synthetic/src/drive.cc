@@ -97,17 +97,8 @@ struct Drive {
   }
 };
 
-Drive MakeDrive(const CameraModel& camera, const SyntheticDriveOptions& o, uint64_t seed) {
-  Drive drive;
-  drive.o = o;
-  drive.duration = o.count / o.fps;
-  drive.length = drive.duration * o.speed_mps;
-  const double L = drive.length;
-  Rng rng(seed);
-
-  // Boundaries: a solid yellow line on the left, dashed white lines between
-  // the lanes, a solid white edge line on the right.
-  Road& road = drive.world;
+// Boundaries (solid yellow left, dashed white between, solid white right) and asphalt edges.
+void SampleBoundaries(const SyntheticDriveOptions& o, Rng& rng, Road& road) {
   road.lane_width = o.lane_width_m;
   const double dash = Uniform(rng, 2.8, 3.2);
   const double gap = Uniform(rng, 8.5, 9.5);
@@ -135,13 +126,11 @@ Drive MakeDrive(const CameraModel& camera, const SyntheticDriveOptions& o, uint6
   }
   road.edge_left = -Uniform(rng, 0.4, 1.0);
   road.edge_right = o.num_lanes * o.lane_width_m + Uniform(rng, 0.8, 2.0);
-  drive.switch_s = 0.55 * L;
-  drive.weave_phase = Uniform(rng, 0.0, 2.0 * kPi);
+}
 
-  drive.look = SampleLook(rng, camera.image_height);
-  drive.look.gain = 1.0;
-
-  // Tree shadows across the road over a stretch, and a few elsewhere.
+// Tree shadows across a road of length L over a stretch, and a few elsewhere.
+std::vector<Shadow> SampleShadows(double L, Rng& rng) {
+  std::vector<Shadow> shadows;
   for (int i = 0; i < 8; ++i) {
     Shadow s;
     s.band = true;
@@ -154,8 +143,41 @@ Drive MakeDrive(const CameraModel& camera, const SyntheticDriveOptions& o, uint6
     s.q0 = i < 5 ? Uniform(rng, 0.18, 0.34) * L + 30.0 : Uniform(rng, 0.0, L + 40.0);
     s.xa = -1e9;
     s.xb = 1e9;
-    drive.shadows.push_back(s);
+    shadows.push_back(s);
   }
+  return shadows;
+}
+
+// A vehicle in `lane` going from y0 to y1 ahead over the drive's fractions [t0, t1] of time.
+DriveVehicle SampleVehicle(Rng& rng, int lane, double t0, double t1, double y0, double y1) {
+  DriveVehicle v{lane, t0, t1, y0, y1, Uniform(rng, -0.3, 0.3), {}};
+  v.look.kind = Object::kVehicle;
+  v.look.height = kVehicleHeight * Uniform(rng, 0.9, 1.2);
+  v.look.size = kVehicleWidth * Uniform(rng, 0.95, 1.1);
+  const double g = Uniform(rng, 15, 90);
+  v.look.colour = cv::Scalar(g, g * Uniform(rng, 0.8, 1.0), g * Uniform(rng, 0.8, 1.2));
+  const double win = Uniform(rng, 55, 100);
+  v.look.colour2 = cv::Scalar(win + 10, win + 5, win);
+  return v;
+}
+
+Drive MakeDrive(const CameraModel& camera, const SyntheticDriveOptions& o, uint64_t seed) {
+  Drive drive;
+  drive.o = o;
+  drive.duration = o.count / o.fps;
+  drive.length = drive.duration * o.speed_mps;
+  const double L = drive.length;
+  Rng rng(seed);
+
+  Road& road = drive.world;
+  SampleBoundaries(o, rng, road);
+  drive.switch_s = 0.55 * L;
+  drive.weave_phase = Uniform(rng, 0.0, 2.0 * kPi);
+
+  drive.look = SampleLook(rng, camera.image_height);
+  drive.look.gain = 1.0;
+
+  drive.shadows = SampleShadows(L, rng);
   // Trees, buildings and poles along the whole road.
   const int roadside = static_cast<int>(L / 8.0) + 6;
   for (int i = 0; i < roadside; ++i) {
@@ -163,21 +185,102 @@ Drive MakeDrive(const CameraModel& camera, const SyntheticDriveOptions& o, uint6
   }
   // Traffic: one car in the left lane that the ego car overtakes; after the
   // lane change one closing in ahead, and one overtaking on the left.
-  auto vehicle = [&](int lane, double t0, double t1, double y0, double y1) {
-    DriveVehicle v{lane, t0, t1, y0, y1, Uniform(rng, -0.3, 0.3), {}};
-    v.look.kind = Object::kVehicle;
-    v.look.height = kVehicleHeight * Uniform(rng, 0.9, 1.2);
-    v.look.size = kVehicleWidth * Uniform(rng, 0.95, 1.1);
-    const double g = Uniform(rng, 15, 90);
-    v.look.colour = cv::Scalar(g, g * Uniform(rng, 0.8, 1.0), g * Uniform(rng, 0.8, 1.2));
-    const double win = Uniform(rng, 55, 100);
-    v.look.colour2 = cv::Scalar(win + 10, win + 5, win);
-    drive.vehicles.push_back(v);
-  };
-  vehicle(0, 0.05, 0.40, 28.0, 9.0);
-  vehicle(2, 0.60, 1.00, 32.0, 13.0);
-  vehicle(1, 0.84, 1.00, 6.0, 18.0);
+  drive.vehicles.push_back(SampleVehicle(rng, 0, 0.05, 0.40, 28.0, 9.0));
+  drive.vehicles.push_back(SampleVehicle(rng, 2, 0.60, 1.00, 32.0, 13.0));
+  drive.vehicles.push_back(SampleVehicle(rng, 1, 0.84, 1.00, 6.0, 18.0));
   return drive;
+}
+
+// The car at time t: along (s), across (d, right of boundary 0), lateral rate, heading (psi).
+struct CarPose {
+  double t = 0, s = 0, d = 0, rate = 0, psi = 0, cos_psi = 1;
+};
+
+// The car's pose at time t of the drive.
+CarPose CarPoseAt(const Drive& drive, double t) {
+  CarPose car;
+  car.t = t;
+  car.s = drive.o.speed_mps * t;
+  drive.Lateral(t, &car.d, &car.rate);
+  car.psi = std::atan2(car.rate, drive.o.speed_mps);
+  car.cos_psi = std::cos(car.psi);
+  return car;
+}
+
+// The road in the car's ground frame (x right, y ahead): offsets, heading, curvature ahead.
+Road RoadSeenFrom(const Drive& drive, const CarPose& car) {
+  Road road = drive.world;
+  road.heading = -std::tan(car.psi);
+  road.curvature = drive.Curvature(car.s + 15.0);
+  road.world_texture = true;
+  road.s0 = car.s;
+  for (Boundary& m : road.boundaries) {
+    const double lateral = m.offset;  // from boundary 0 on the road
+    m.offset = (lateral - car.d) / car.cos_psi;
+    m.phase -= car.s;
+    if (m.dashed && &m == &road.boundaries[1]) m.solid_from = drive.switch_s - car.s;
+  }
+  road.edge_left = (drive.world.edge_left - car.d) / car.cos_psi;
+  road.edge_right = (drive.world.edge_right - car.d) / car.cos_psi;
+  return road;
+}
+
+// The drive's shadows, roadside objects and vehicles in the car's frame, into scene.
+void PlaceInScene(const Drive& drive, const CarPose& car, double y_bottom, Scene& scene) {
+  const Road& road = scene.road;
+  for (Shadow s : drive.shadows) {
+    s.q0 = s.q0 - car.s + s.slope * car.d;
+    s.noise_dx = car.d;
+    s.noise_dy = car.s;
+    scene.shadows.push_back(s);
+  }
+  for (Object r : drive.roadside) {
+    r.y -= car.s;
+    if (r.y < y_bottom + 1.0 || r.y > 160.0) continue;
+    r.x = road.X((r.x - car.d) / car.cos_psi, r.y);
+    scene.objects.push_back(r);
+  }
+  for (const DriveVehicle& v : drive.vehicles) {
+    const double f = car.t / drive.duration;
+    if (f < v.t0 || f > v.t1) continue;
+    Object o = v.look;
+    o.y = v.y0 + (v.y1 - v.y0) * (f - v.t0) / (v.t1 - v.t0);
+    const double centre = (v.lane + 0.5) * drive.o.lane_width_m + v.lateral;
+    o.x = road.X((centre - car.d) / car.cos_psi, o.y);
+    o.extra = v.lane;
+    scene.objects.push_back(o);
+  }
+}
+
+// Labels the pattern nearest the camera, and whether it changes in view or just changed.
+void LabelPatterns(const SyntheticDriveOptions& options, const Road& road, double y_bottom,
+                   SyntheticFrame& frame) {
+  const double y_near = std::max({options.frame.truth_near_m, y_bottom, 0.1});
+  for (SyntheticBoundary& b : frame.boundaries) {
+    const Boundary& m = road.boundaries[static_cast<size_t>(b.id)];
+    if (!m.dashed || !std::isfinite(m.solid_from)) continue;
+    b.dashed = m.solid_from > y_near;
+    b.type_changes = m.solid_from < options.frame.truth_far_m &&
+                     m.solid_from > y_near - options.type_settle_s * options.speed_mps;
+  }
+}
+
+// The true ego lane: its index, the car's offset, the lane's width, heading and curvature.
+SyntheticEgo EgoTruth(const CameraModel& camera, const Road& road, const CarPose& car, int ego,
+                      double w) {
+  SyntheticEgo truth;
+  truth.lane = ego;
+  truth.offset_m = car.d - (ego + 0.5) * w;
+  truth.width_m = w;
+  // The lane's direction from the optical axis: the axis meets the ground
+  // at the principal point's ground point.
+  const Eigen::Vector2d axis = camera.ImageToGround({camera.cu, camera.cv});
+  const double axis_angle = axis.allFinite() && axis.y() > 0 ? std::atan2(axis.x(), axis.y())
+                                                             : camera.yaw_deg * kDegToRad;
+  truth.heading_deg = (std::atan(road.heading) - axis_angle) / kDegToRad;
+  truth.curvature_per_m = road.curvature;
+  truth.offset_rate_mps = car.rate;
+  return truth;
 }
 
 }  // namespace
@@ -196,88 +299,26 @@ absl::StatusOr<SyntheticFrame> RenderSyntheticDriveFrame(const CameraModel& came
   }
   const Drive drive = MakeDrive(camera, options, seed);
   const double t = index / options.fps;
-  const double s_car = options.speed_mps * t;
   const double w = options.lane_width_m;
-  double d_car = 0, rate = 0;
-  drive.Lateral(t, &d_car, &rate);
-  const double psi = std::atan2(rate, options.speed_mps);  // car heading from the road, right +
-  const double cos_psi = std::cos(psi);
+  const CarPose car = CarPoseAt(drive, t);
 
-  // The road in the car's ground frame (x right, y ahead): offsets along x
-  // at y = 0, the road's heading seen from the car, its curvature ahead.
   Scene scene;
-  Road& road = scene.road;
-  road = drive.world;
-  road.heading = -std::tan(psi);
-  road.curvature = drive.Curvature(s_car + 15.0);
-  road.world_texture = true;
-  road.s0 = s_car;
-  for (Boundary& m : road.boundaries) {
-    const double lateral = m.offset;  // from boundary 0 on the road
-    m.offset = (lateral - d_car) / cos_psi;
-    m.phase -= s_car;
-    if (m.dashed && &m == &road.boundaries[1]) m.solid_from = drive.switch_s - s_car;
-  }
-  road.edge_left = (drive.world.edge_left - d_car) / cos_psi;
-  road.edge_right = (drive.world.edge_right - d_car) / cos_psi;
+  scene.road = RoadSeenFrom(drive, car);
   const int lanes = options.num_lanes;
-  const int ego = std::clamp(static_cast<int>(std::floor(d_car / w)), 0, lanes - 1);
-  road.ego_left = ego;
-  road.ego_right = ego + 1;
+  const int ego = std::clamp(static_cast<int>(std::floor(car.d / w)), 0, lanes - 1);
+  scene.road.ego_left = ego;
+  scene.road.ego_right = ego + 1;
 
   scene.look = drive.look;
   scene.look.gain = drive.Gain(t);
-  for (Shadow s : drive.shadows) {
-    s.q0 = s.q0 - s_car + s.slope * d_car;
-    s.noise_dx = d_car;
-    s.noise_dy = s_car;
-    scene.shadows.push_back(s);
-  }
   const double y_bottom = BottomDistance(camera);
-  for (Object r : drive.roadside) {
-    r.y -= s_car;
-    if (r.y < y_bottom + 1.0 || r.y > 160.0) continue;
-    r.x = road.X((r.x - d_car) / cos_psi, r.y);
-    scene.objects.push_back(r);
-  }
-  for (const DriveVehicle& v : drive.vehicles) {
-    const double f = t / drive.duration;
-    if (f < v.t0 || f > v.t1) continue;
-    Object o = v.look;
-    o.y = v.y0 + (v.y1 - v.y0) * (f - v.t0) / (v.t1 - v.t0);
-    const double centre = (v.lane + 0.5) * w + v.lateral;
-    o.x = road.X((centre - d_car) / cos_psi, o.y);
-    o.extra = v.lane;
-    scene.objects.push_back(o);
-  }
+  PlaceInScene(drive, car, y_bottom, scene);
   scene.noise_seed = seed * 0x9e3779b97f4a7c15ULL + static_cast<uint64_t>(index) + 1;
 
   SyntheticFrame frame = RenderScene(camera, options.frame, scene);
   frame.time_s = t;
-
-  // Labels: the pattern nearest the camera, and whether it changes in view
-  // or changed under the camera within type_settle_s.
-  const double y_near = std::max({options.frame.truth_near_m, y_bottom, 0.1});
-  for (SyntheticBoundary& b : frame.boundaries) {
-    const Boundary& m = road.boundaries[static_cast<size_t>(b.id)];
-    if (!m.dashed || !std::isfinite(m.solid_from)) continue;
-    b.dashed = m.solid_from > y_near;
-    b.type_changes = m.solid_from < options.frame.truth_far_m &&
-                     m.solid_from > y_near - options.type_settle_s * options.speed_mps;
-  }
-  SyntheticEgo truth;
-  truth.lane = ego;
-  truth.offset_m = d_car - (ego + 0.5) * w;
-  truth.width_m = w;
-  // The lane's direction from the optical axis: the axis meets the ground
-  // at the principal point's ground point.
-  const Eigen::Vector2d axis = camera.ImageToGround({camera.cu, camera.cv});
-  const double axis_angle = axis.allFinite() && axis.y() > 0 ? std::atan2(axis.x(), axis.y())
-                                                             : camera.yaw_deg * kDegToRad;
-  truth.heading_deg = (std::atan(road.heading) - axis_angle) / kDegToRad;
-  truth.curvature_per_m = road.curvature;
-  truth.offset_rate_mps = rate;
-  frame.ego = truth;
+  LabelPatterns(options, scene.road, y_bottom, frame);
+  frame.ego = EgoTruth(camera, scene.road, car, ego, w);
   return frame;
 }
 

@@ -73,6 +73,142 @@ void RenderSky(const CameraModel& cam, const Look& look, cv::Mat3f& img) {
   }
 }
 
+namespace {
+
+// Ground point of pixel (u, v) is a(v) + b(v) * u (the homography's
+// denominator depends on v only): at the row (a, b) and half a row above
+// (am, bm) and below (ap, bp).
+struct RowAffine {
+  Eigen::Vector2d a, b, am, bm, ap, bp;
+};
+
+// One ground pixel: its ground point, footprint and place on the road.
+struct GroundPixel {
+  double x, y;                // ground point
+  double jux, juy, jvx, jvy;  // pixel footprint on the ground: Jacobian columns
+  double foot;                // the footprint's size, sqrt(area)
+  double ext_x;               // the footprint's lateral extent
+  double slope, inv_norm;     // road slope at y, and 1 / sqrt(1 + slope^2)
+  double lane_pos;            // lateral position from the first boundary
+  double gx, gy;              // texture coordinates
+};
+
+// The ground point a + b * u of row v, for the pixel at u = 0 and the step per pixel.
+void RowAffineAt(const CameraModel& cam, double du, double v, Eigen::Vector2d* a,
+                 Eigen::Vector2d* b) {
+  *a = cam.ImageToGround({0.0, v});
+  *b = (cam.ImageToGround({du, v}) - *a) / du;
+}
+
+// Row v's affine ground mapping, at the row and half a row above and below.
+RowAffine RowAffineOf(const CameraModel& cam, double du, int v) {
+  RowAffine r;
+  RowAffineAt(cam, du, v, &r.a, &r.b);
+  RowAffineAt(cam, du, v - 0.5, &r.am, &r.bm);
+  RowAffineAt(cam, du, v + 0.5, &r.ap, &r.bp);
+  return r;
+}
+
+// Pixel u of a row on the ground; false when it looks at no ground point ahead.
+bool GroundPixelAt(const RowAffine& r, const Road& road, const Boundary& b0, int u,
+                   GroundPixel* p) {
+  p->x = r.a.x() + r.b.x() * u;
+  p->y = r.a.y() + r.b.y() * u;
+  const double x = p->x, y = p->y;
+  if (!(y > 0) || !std::isfinite(x)) return false;
+  p->jux = r.b.x();
+  p->juy = r.b.y();
+  p->jvx = (r.ap.x() - r.am.x()) + (r.bp.x() - r.bm.x()) * u;
+  p->jvy = (r.ap.y() - r.am.y()) + (r.bp.y() - r.bm.y()) * u;
+  const double area = std::abs(p->jux * p->jvy - p->juy * p->jvx);
+  p->foot = std::sqrt(area);
+  p->ext_x = std::abs(p->jux) + std::abs(p->jvx);
+  p->slope = road.Slope(y);
+  p->inv_norm = 1.0 / std::sqrt(1.0 + p->slope * p->slope);
+  p->lane_pos = (x - road.X(b0.offset, y)) * p->inv_norm;
+  p->gx = road.world_texture ? p->lane_pos : x;
+  p->gy = road.world_texture ? y + road.s0 : y;
+  return true;
+}
+
+// Asphalt: patches, mottling and grain (faded as the pixel's footprint grows), tyre tracks.
+cv::Vec3f AsphaltColour(const Road& road, const Look& look, const GroundPixel& p) {
+  const uint64_t salt = look.salt;
+  const double gx = p.gx, gy = p.gy, foot = p.foot;
+  double grey = look.asphalt + look.patch_amp * ValueNoise(gx, gy, 1.0 / 7.0, salt + 1);
+  const double mid = look.mid_amp * std::min(1.0, 1.2 / foot);
+  if (mid > 0.2) grey += mid * ValueNoise(gx, gy, 1.0 / 1.2, salt + 2);
+  const double grain = look.grain_amp * std::min(1.0, 0.07 / foot);
+  if (grain > 0.2) grey += grain * ValueNoise(gx, gy, 1.0 / 0.07, salt + 3);
+  const double fine = look.grain_amp * std::min(1.0, 0.02 / foot);
+  if (fine > 0.2) grey += fine * ValueNoise(gx, gy, 1.0 / 0.02, salt + 6);
+  // Darker tyre tracks in every lane.
+  const double lane_pos = p.lane_pos;
+  const double in_lane = lane_pos - road.lane_width * std::floor(lane_pos / road.lane_width);
+  const double track = std::min(std::abs(in_lane - 0.5 * road.lane_width + 0.85),
+                                std::abs(in_lane - 0.5 * road.lane_width - 0.85));
+  const double bump = std::max(0.0, 1.0 - track * track / 0.3);
+  grey -= look.track_dark * bump * bump;
+  return look.asphalt_tint * static_cast<float>(grey);
+}
+
+// Blends in the verge beyond the asphalt edges.
+void BlendVerge(const Road& road, const Look& look, const GroundPixel& p, cv::Vec3f& colour) {
+  const uint64_t salt = look.salt;
+  const double x = p.x, y = p.y, inv_norm = p.inv_norm;
+  const double fd0 = std::max(1e-4, p.ext_x * inv_norm + 1e-3);
+  const double el = (x - road.X(road.edge_left, y)) * inv_norm;
+  const double er = (road.X(road.edge_right, y) - x) * inv_norm;
+  const double on_road = SoftStep(el, fd0) * SoftStep(er, fd0);
+  if (on_road < 1.0) {
+    const double vt = look.verge_amp * (0.6 * ValueNoise(p.gx, p.gy, 1.0 / 0.8, salt + 4) +
+                                        0.4 * std::min(1.0, 0.1 / p.foot) *
+                                            ValueNoise(p.gx, p.gy, 1.0 / 0.1, salt + 5));
+    const cv::Vec3f verge = look.verge + cv::Vec3f::all(static_cast<float>(vt));
+    colour = Lerp(verge, colour, on_road);
+  }
+}
+
+// A marking's box-filtered coverage of the pixel across (lateral) and along (dashes).
+double MarkingCover(const Road& road, const Boundary& m, const GroundPixel& p) {
+  const double slope = p.slope, inv_norm = p.inv_norm, y = p.y;
+  const double jux = p.jux, juy = p.juy, jvx = p.jvx, jvy = p.jvy;
+  const double d = (p.x - road.X(m.offset, y)) * inv_norm;
+  const double nx = inv_norm, ny = -slope * inv_norm;  // unit normal
+  const double fd = std::max(1e-4, std::abs(nx * jux + ny * juy) + std::abs(nx * jvx + ny * jvy));
+  const double half = 0.5 * m.width;
+  if (std::abs(d) >= half + 0.5 * fd) return 0.0;
+  const double lo = std::max(d - 0.5 * fd, -half);
+  const double hi = std::min(d + 0.5 * fd, half);
+  double cover = std::max(0.0, hi - lo) / fd;
+  if (m.dashed) {
+    const double tx = slope * inv_norm, ty = inv_norm;  // unit tangent
+    const double fa = std::abs(tx * jux + ty * juy) + std::abs(tx * jvx + ty * jvy);
+    if (fa < 1e-6) {
+      cover *= (PaintedUpTo(m, y + 1e-6) - PaintedUpTo(m, y)) > 0 ? 1.0 : 0.0;
+    } else {
+      cover *= (PaintedUpTo(m, y + 0.5 * fa) - PaintedUpTo(m, y - 0.5 * fa)) / fa;
+    }
+  }
+  return cover;
+}
+
+// Blends in the visible markings, worn where they are.
+void BlendMarkings(const Road& road, const std::vector<const Boundary*>& visible,
+                   const GroundPixel& p, cv::Vec3f& colour) {
+  for (const Boundary* m : visible) {
+    const double cover = MarkingCover(road, *m, p);
+    if (cover <= 0) continue;
+    double alpha = m->alpha;
+    if (m->wear > 0) {
+      alpha *= 1.0 - m->wear * std::max(0.0, ValueNoise(p.gx, p.gy, 1.0 / 0.4, m->salt));
+    }
+    colour = Lerp(colour, m->colour, alpha * cover);
+  }
+}
+
+}  // namespace
+
 void RenderGround(const CameraModel& cam, const Road& road, const Look& look,
                   const std::vector<Shadow>& shadows, cv::Mat3f& img) {
   const int w = img.cols;
@@ -80,107 +216,27 @@ void RenderGround(const CameraModel& cam, const Road& road, const Look& look,
   const double horizon = cam.HorizonRow();
   const int first = std::max(0, static_cast<int>(std::floor(horizon + 0.5)) + 1);
   const double du = w > 1 ? w - 1 : 1;
-  // Ground point of pixel (u, v) is a(v) + b(v) * u (the homography's
-  // denominator depends on v only).
-  auto row_affine = [&](double v, Eigen::Vector2d* a, Eigen::Vector2d* b) {
-    *a = cam.ImageToGround({0.0, v});
-    *b = (cam.ImageToGround({du, v}) - *a) / du;
-  };
   std::vector<const Boundary*> visible;
   for (const Boundary& m : road.boundaries) {
     if (m.visible) visible.push_back(&m);
   }
   const Boundary& b0 = road.boundaries.front();
-  const uint64_t salt = look.salt;
   for (int v = first; v < h; ++v) {
-    Eigen::Vector2d a, b, am, bm, ap, bp;
-    row_affine(v, &a, &b);
-    row_affine(v - 0.5, &am, &bm);
-    row_affine(v + 0.5, &ap, &bp);
+    const RowAffine r = RowAffineOf(cam, du, v);
     auto* row = img.ptr<cv::Vec3f>(v);
     // Atmospheric haze exp(-y / haze_dist); y is affine in u along the row.
-    double clear = std::exp(-a.y() / look.haze_dist);
-    const double clear_step = std::exp(-b.y() / look.haze_dist);
+    double clear = std::exp(-r.a.y() / look.haze_dist);
+    const double clear_step = std::exp(-r.b.y() / look.haze_dist);
     // Rows at the horizon span huge distances: evaluate those directly.
     const bool recur = clear > 1e-200 && clear_step < 1e10 && clear_step > 1e-10;
     for (int u = 0; u < w; ++u, clear *= clear_step) {
-      const double x = a.x() + b.x() * u;
-      const double y = a.y() + b.y() * u;
-      if (!(y > 0) || !std::isfinite(x)) continue;
-      // Pixel footprint on the ground: Jacobian columns.
-      const double jux = b.x(), juy = b.y();
-      const double jvx = (ap.x() - am.x()) + (bp.x() - bm.x()) * u;
-      const double jvy = (ap.y() - am.y()) + (bp.y() - bm.y()) * u;
-      const double area = std::abs(jux * jvy - juy * jvx);
-      const double foot = std::sqrt(area);
-      const double ext_x = std::abs(jux) + std::abs(jvx);
-
-      const double slope = road.Slope(y);
-      const double inv_norm = 1.0 / std::sqrt(1.0 + slope * slope);
-      const double lane_pos = (x - road.X(b0.offset, y)) * inv_norm;
-      // Texture coordinates.
-      const double gx = road.world_texture ? lane_pos : x;
-      const double gy = road.world_texture ? y + road.s0 : y;
-      // Asphalt: low-frequency patches, mid-scale mottling and fine grain,
-      // each attenuated once the pixel averages over many cells.
-      double grey = look.asphalt + look.patch_amp * ValueNoise(gx, gy, 1.0 / 7.0, salt + 1);
-      const double mid = look.mid_amp * std::min(1.0, 1.2 / foot);
-      if (mid > 0.2) grey += mid * ValueNoise(gx, gy, 1.0 / 1.2, salt + 2);
-      const double grain = look.grain_amp * std::min(1.0, 0.07 / foot);
-      if (grain > 0.2) grey += grain * ValueNoise(gx, gy, 1.0 / 0.07, salt + 3);
-      const double fine = look.grain_amp * std::min(1.0, 0.02 / foot);
-      if (fine > 0.2) grey += fine * ValueNoise(gx, gy, 1.0 / 0.02, salt + 6);
-      // Darker tyre tracks in every lane.
-      const double in_lane = lane_pos - road.lane_width * std::floor(lane_pos / road.lane_width);
-      const double track = std::min(std::abs(in_lane - 0.5 * road.lane_width + 0.85),
-                                    std::abs(in_lane - 0.5 * road.lane_width - 0.85));
-      const double bump = std::max(0.0, 1.0 - track * track / 0.3);
-      grey -= look.track_dark * bump * bump;
-      cv::Vec3f colour = look.asphalt_tint * static_cast<float>(grey);
-
-      // Verge beyond the asphalt edges.
-      const double fd0 = std::max(1e-4, ext_x * inv_norm + 1e-3);
-      const double el = (x - road.X(road.edge_left, y)) * inv_norm;
-      const double er = (road.X(road.edge_right, y) - x) * inv_norm;
-      const double on_road = SoftStep(el, fd0) * SoftStep(er, fd0);
-      if (on_road < 1.0) {
-        const double vt = look.verge_amp * (0.6 * ValueNoise(gx, gy, 1.0 / 0.8, salt + 4) +
-                                            0.4 * std::min(1.0, 0.1 / foot) *
-                                                ValueNoise(gx, gy, 1.0 / 0.1, salt + 5));
-        const cv::Vec3f verge = look.verge + cv::Vec3f::all(static_cast<float>(vt));
-        colour = Lerp(verge, colour, on_road);
-      }
-
-      // Markings: box-filtered coverage across (lateral) and along (dashes).
-      for (const Boundary* m : visible) {
-        const double d = (x - road.X(m->offset, y)) * inv_norm;
-        const double nx = inv_norm, ny = -slope * inv_norm;  // unit normal
-        const double fd =
-            std::max(1e-4, std::abs(nx * jux + ny * juy) + std::abs(nx * jvx + ny * jvy));
-        const double half = 0.5 * m->width;
-        if (std::abs(d) >= half + 0.5 * fd) continue;
-        const double lo = std::max(d - 0.5 * fd, -half);
-        const double hi = std::min(d + 0.5 * fd, half);
-        double cover = std::max(0.0, hi - lo) / fd;
-        if (m->dashed) {
-          const double tx = slope * inv_norm, ty = inv_norm;  // unit tangent
-          const double fa = std::abs(tx * jux + ty * juy) + std::abs(tx * jvx + ty * jvy);
-          if (fa < 1e-6) {
-            cover *= (PaintedUpTo(*m, y + 1e-6) - PaintedUpTo(*m, y)) > 0 ? 1.0 : 0.0;
-          } else {
-            cover *= (PaintedUpTo(*m, y + 0.5 * fa) - PaintedUpTo(*m, y - 0.5 * fa)) / fa;
-          }
-        }
-        if (cover <= 0) continue;
-        double alpha = m->alpha;
-        if (m->wear > 0) {
-          alpha *= 1.0 - m->wear * std::max(0.0, ValueNoise(gx, gy, 1.0 / 0.4, m->salt));
-        }
-        colour = Lerp(colour, m->colour, alpha * cover);
-      }
-
-      colour *= static_cast<float>(ShadowFactor(shadows, x, y, foot));
-      const double haze = 1.0 - (recur ? clear : std::exp(-y / look.haze_dist));
+      GroundPixel p;
+      if (!GroundPixelAt(r, road, b0, u, &p)) continue;
+      cv::Vec3f colour = AsphaltColour(road, look, p);
+      BlendVerge(road, look, p, colour);
+      BlendMarkings(road, visible, p, colour);
+      colour *= static_cast<float>(ShadowFactor(shadows, p.x, p.y, p.foot));
+      const double haze = 1.0 - (recur ? clear : std::exp(-p.y / look.haze_dist));
       row[u] = Lerp(colour, look.haze, haze);
     }
   }
