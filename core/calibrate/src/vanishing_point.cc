@@ -167,16 +167,12 @@ cv::Mat PaintChannel(const cv::Mat& frame) {
   return paint;
 }
 
-std::vector<ImageSegment> FindMarkingSegments(const cv::Mat& frame,
-                                              const MarkingSegmentOptions& o) {
-  std::vector<ImageSegment> segments;
-  if (frame.empty()) return segments;
-  const cv::Mat paint = PaintChannel(frame);
-  const int top = std::clamp(o.top_row, 0, paint.rows);
-  const int bottom = std::clamp(o.bottom_row > 0 ? o.bottom_row : paint.rows, top, paint.rows);
-  if (bottom - top < 3) return segments;
+namespace {
 
-  // Responses of the band, smoothed over 3 rows first (noise, JPEG blocks).
+// The bar responses of rows [top, bottom) of the paint channel, smoothed
+// over 3 rows first (noise, JPEG blocks): a marking's width at each row
+// from the horizon and the camera's height, or the fixed widths.
+cv::Mat BandResponse(const cv::Mat& paint, int top, int bottom, const MarkingSegmentOptions& o) {
   cv::Mat smooth;
   cv::GaussianBlur(paint.rowRange(top, bottom), smooth, cv::Size(3, 3), 0.0);
   cv::Mat response(bottom - top, paint.cols, CV_32F, cv::Scalar(0));
@@ -193,6 +189,97 @@ std::vector<ImageSegment> FindMarkingSegments(const cv::Mat& frame,
         BarResponse(smooth.ptr<uint8_t>(r), paint.cols, w, prefix, out);
     }
   }
+  return response;
+}
+
+// The pieces of a thresholded band (connected components) with the centre
+// of each of their rows: the sum and count of the columns of row j of
+// piece i at index offset[i] + j.
+struct BandPieces {
+  cv::Mat labels, stats, centroids;
+  int count = 0;
+  std::vector<int> offset;
+  std::vector<double> row_sum;
+  std::vector<int> row_count;
+};
+
+BandPieces PiecesOf(const cv::Mat& mask) {
+  BandPieces p;
+  p.count = cv::connectedComponentsWithStats(mask, p.labels, p.stats, p.centroids, 8, CV_32S);
+  const int n = p.count;
+  p.offset.assign(static_cast<size_t>(n) + 1, 0);
+  for (int i = 1; i < n; ++i)
+    p.offset[i + 1] = p.offset[i] + p.stats.at<int>(i, cv::CC_STAT_HEIGHT);
+  p.row_sum.assign(static_cast<size_t>(p.offset[n]), 0.0);
+  p.row_count.assign(static_cast<size_t>(p.offset[n]), 0);
+  for (int r = 0; r < p.labels.rows; ++r) {
+    const int* l = p.labels.ptr<int>(r);
+    for (int c = 0; c < p.labels.cols; ++c) {
+      if (l[c] == 0) continue;
+      const size_t k =
+          static_cast<size_t>(p.offset[l[c]] + r - p.stats.at<int>(l[c], cv::CC_STAT_TOP));
+      p.row_sum[k] += c;
+      ++p.row_count[k];
+    }
+  }
+  return p;
+}
+
+// Piece i as a segment: its axis from the centres of its rows (u regressed
+// on v: the pieces are cut along rows, and a principal axis of a slanted bar
+// with horizontal ends leans towards the rows); none when it is too short,
+// not elongated or too flat.
+std::optional<ImageSegment> SegmentOfPiece(const BandPieces& p, int i, int top, double min_length,
+                                           double min_sin, const MarkingSegmentOptions& o) {
+  const int rows = p.stats.at<int>(i, cv::CC_STAT_HEIGHT);
+  if (rows < 3 || p.stats.at<int>(i, cv::CC_STAT_AREA) < 6) return std::nullopt;
+  // Least squares u = a v + b over the rows' centres.
+  double sv = 0, su = 0, svv = 0, suv = 0, runs = 0;
+  int m = 0;
+  for (int j = 0; j < rows; ++j) {
+    const size_t k = static_cast<size_t>(p.offset[i] + j);
+    if (p.row_count[k] == 0) continue;
+    const double v = top + p.stats.at<int>(i, cv::CC_STAT_TOP) + j;
+    const double u = p.row_sum[k] / p.row_count[k];
+    sv += v;
+    su += u;
+    svv += v * v;
+    suv += u * v;
+    runs += p.row_count[k];
+    ++m;
+  }
+  if (m < 3) return std::nullopt;
+  const double mv = sv / m, mu = su / m;
+  const double var_v = svv / m - mv * mv;
+  if (var_v <= 0) return std::nullopt;
+  const double slope = (suv / m - mu * mv) / var_v;  // du/dv
+  const double stretch = std::sqrt(1.0 + slope * slope);
+  const double length = rows * stretch;
+  const double width = (runs / m) / stretch;
+  if (length < min_length || length < o.min_elongation * width) return std::nullopt;
+  // Pointing up the image.
+  const Eigen::Vector2d dir = Eigen::Vector2d(-slope, -1.0) / stretch;
+  if (-dir.y() < min_sin) return std::nullopt;
+  ImageSegment seg;
+  seg.centre = {mu, mv};
+  seg.direction = dir;
+  seg.length = length;
+  seg.top_row = top + p.stats.at<int>(i, cv::CC_STAT_TOP);
+  seg.bottom_row = seg.top_row + rows - 1;
+  return seg;
+}
+
+}  // namespace
+
+std::vector<ImageSegment> FindMarkingSegments(const cv::Mat& frame,
+                                              const MarkingSegmentOptions& o) {
+  std::vector<ImageSegment> segments;
+  if (frame.empty()) return segments;
+  const cv::Mat paint = PaintChannel(frame);
+  const int top = std::clamp(o.top_row, 0, paint.rows);
+  const int bottom = std::clamp(o.bottom_row > 0 ? o.bottom_row : paint.rows, top, paint.rows);
+  if (bottom - top < 3) return segments;
+  const cv::Mat response = BandResponse(paint, top, bottom, o);
   const float threshold =
       std::max(static_cast<float>(o.min_contrast), ResponseQuantile(response, o.quantile));
   cv::Mat mask = response >= threshold;
@@ -200,64 +287,11 @@ std::vector<ImageSegment> FindMarkingSegments(const cv::Mat& frame,
   for (int r = slice - (top % slice); r < mask.rows; r += slice) {
     mask.row(r).setTo(cv::Scalar(0));
   }
-
-  // Each piece's axis from the centres of its rows (u regressed on v): the
-  // pieces are cut along rows, and a principal axis of a slanted bar with
-  // horizontal ends leans towards the rows.
-  cv::Mat labels, stats, centroids;
-  const int n = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8, CV_32S);
-  std::vector<int> offset(static_cast<size_t>(n) + 1, 0);
-  for (int i = 1; i < n; ++i) offset[i + 1] = offset[i] + stats.at<int>(i, cv::CC_STAT_HEIGHT);
-  std::vector<double> row_sum(static_cast<size_t>(offset[n]), 0.0);
-  std::vector<int> row_count(static_cast<size_t>(offset[n]), 0);
-  for (int r = 0; r < labels.rows; ++r) {
-    const int* l = labels.ptr<int>(r);
-    for (int c = 0; c < labels.cols; ++c) {
-      if (l[c] == 0) continue;
-      const size_t k = static_cast<size_t>(offset[l[c]] + r - stats.at<int>(l[c], cv::CC_STAT_TOP));
-      row_sum[k] += c;
-      ++row_count[k];
-    }
-  }
+  const BandPieces pieces = PiecesOf(mask);
   const double min_length = o.min_length_px > 0 ? o.min_length_px : paint.rows / 40.0;
   const double min_sin = std::sin(o.min_angle_deg * kDegToRad);
-  for (int i = 1; i < n; ++i) {
-    const int rows = stats.at<int>(i, cv::CC_STAT_HEIGHT);
-    if (rows < 3 || stats.at<int>(i, cv::CC_STAT_AREA) < 6) continue;
-    // Least squares u = a v + b over the rows' centres.
-    double sv = 0, su = 0, svv = 0, suv = 0, runs = 0;
-    int m = 0;
-    for (int j = 0; j < rows; ++j) {
-      const size_t k = static_cast<size_t>(offset[i] + j);
-      if (row_count[k] == 0) continue;
-      const double v = top + stats.at<int>(i, cv::CC_STAT_TOP) + j;
-      const double u = row_sum[k] / row_count[k];
-      sv += v;
-      su += u;
-      svv += v * v;
-      suv += u * v;
-      runs += row_count[k];
-      ++m;
-    }
-    if (m < 3) continue;
-    const double mv = sv / m, mu = su / m;
-    const double var_v = svv / m - mv * mv;
-    if (var_v <= 0) continue;
-    const double slope = (suv / m - mu * mv) / var_v;  // du/dv
-    const double stretch = std::sqrt(1.0 + slope * slope);
-    const double length = rows * stretch;
-    const double width = (runs / m) / stretch;
-    if (length < min_length || length < o.min_elongation * width) continue;
-    // Pointing up the image.
-    const Eigen::Vector2d dir = Eigen::Vector2d(-slope, -1.0) / stretch;
-    if (-dir.y() < min_sin) continue;
-    ImageSegment seg;
-    seg.centre = {mu, mv};
-    seg.direction = dir;
-    seg.length = length;
-    seg.top_row = top + stats.at<int>(i, cv::CC_STAT_TOP);
-    seg.bottom_row = seg.top_row + rows - 1;
-    segments.push_back(seg);
+  for (int i = 1; i < pieces.count; ++i) {
+    if (auto seg = SegmentOfPiece(pieces, i, top, min_length, min_sin, o)) segments.push_back(*seg);
   }
   return segments;
 }

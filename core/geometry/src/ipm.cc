@@ -131,99 +131,111 @@ absl::StatusOr<IpmMapping> IpmMapping::Create(const CameraModel& camera,
                                               const IpmOptions& options) {
   if (auto s = camera.Validate(); !s.ok()) return s;
   if (auto s = options.Validate(); !s.ok()) return s;
-
   IpmMapping m;
   m.camera_ = camera;
   m.options_ = options;
-  const double horizon = camera.HorizonRow();
-  const double top_limit = horizon + options.horizon_margin_px;
-
-  if (options.view == IpmView::kGround) {
-    // The ground rectangle as given; the ROI is the bounding box of its
-    // projection, clipped to the image and to below the horizon.
-    const GroundView& g = options.ground;
-    m.width_ = GroundPixels(g.x_max_m - g.x_min_m, g.metres_per_px_x);
-    m.height_ = GroundPixels(g.y_max_m - g.y_min_m, g.metres_per_px_y);
-    m.x_min_ = g.x_min_m;
-    m.x_max_ = g.x_max_m;
-    m.y_min_ = g.y_min_m;
-    m.y_max_ = g.y_max_m;
-    m.mpp_x_ = (m.x_max_ - m.x_min_) / m.width_;
-    m.mpp_y_ = (m.y_max_ - m.y_min_) / m.height_;
-    Roi box{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
-            std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
-    for (const double x : {g.x_min_m, g.x_max_m}) {
-      for (const double y : {g.y_min_m, g.y_max_m}) {
-        const Eigen::Vector2d p = camera.GroundToImage({x, y});
-        if (!p.allFinite() || !(p.y() > horizon)) {
-          return absl::InvalidArgumentError(
-              absl::StrCat("ipm.ground corner (", x, ", ", y,
-                           ") m does not project below the horizon: is the camera's pitch right?"));
-        }
-        box.left = std::min(box.left, p.x());
-        box.right = std::max(box.right, p.x());
-        box.top = std::min(box.top, p.y());
-        box.bottom = std::max(box.bottom, p.y());
-      }
-    }
-    Roi roi;
-    roi.left = std::max(box.left, 0.0);
-    roi.right = std::min(box.right, camera.image_width - 1.0);
-    roi.top = std::max(box.top, std::max(0.0, top_limit));
-    roi.bottom = std::min(box.bottom, camera.image_height - 1.0);
-    if (roi.right - roi.left < 2 || roi.bottom - roi.top < 2) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "ipm.ground (x ", g.x_min_m, "..", g.x_max_m, " m, y ", g.y_min_m, "..", g.y_max_m,
-          " m) projects to image rows ", box.top, "..", box.bottom, ", columns ", box.left, "..",
-          box.right, ": no usable part inside the ", camera.image_width, "x", camera.image_height,
-          " image below the horizon (row ", horizon, " + margin ", options.horizon_margin_px, ")"));
-    }
-    m.roi_ = roi;
-  } else {
-    // Clip the ROI to the image and to below the horizon.
-    Roi roi = options.roi;
-    roi.left = std::max(roi.left, 0.0);
-    roi.right = std::min(roi.right, camera.image_width - 1.0);
-    roi.bottom = std::min(roi.bottom, camera.image_height - 1.0);
-    roi.top = std::max(roi.top, top_limit);
-    if (roi.right - roi.left < 2 || roi.bottom - roi.top < 2) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "ipm.roi (left=", options.roi.left, " right=", options.roi.right,
-          " top=", options.roi.top, " bottom=", options.roi.bottom,
-          ") has no usable part inside the ", camera.image_width, "x", camera.image_height,
-          " image below the horizon (row ", horizon, " + margin ", options.horizon_margin_px, ")"));
-    }
-    m.roi_ = roi;
-    m.width_ = options.width;
-    m.height_ = options.height;
-
-    // Ground footprint of the ROI: its corners and the vanishing point's column
-    // on its top and bottom rows.
-    const double vp_u = std::clamp(camera.VanishingPoint().x(), roi.left, roi.right);
-    const Eigen::Vector2d corners[] = {{roi.left, roi.top},     {roi.right, roi.top},
-                                       {vp_u, roi.top},         {roi.left, roi.bottom},
-                                       {roi.right, roi.bottom}, {vp_u, roi.bottom}};
-    m.x_min_ = m.y_min_ = std::numeric_limits<double>::infinity();
-    m.x_max_ = m.y_max_ = -std::numeric_limits<double>::infinity();
-    for (const auto& c : corners) {
-      const Eigen::Vector2d g = camera.ImageToGround(c);
-      if (!g.allFinite() || g.y() <= 0) {
-        return absl::InvalidArgumentError("ipm.roi maps to points behind the camera");
-      }
-      m.x_min_ = std::min(m.x_min_, g.x());
-      m.x_max_ = std::max(m.x_max_, g.x());
-      m.y_min_ = std::min(m.y_min_, g.y());
-      m.y_max_ = std::max(m.y_max_, g.y());
-    }
-    m.mpp_x_ = (m.x_max_ - m.x_min_) / m.width_;
-    m.mpp_y_ = (m.y_max_ - m.y_min_) / m.height_;
-    if (!(m.mpp_x_ > 0) || !(m.mpp_y_ > 0)) {
-      return absl::InvalidArgumentError("ipm.roi has an empty ground footprint");
-    }
-  }
+  const absl::Status placed =
+      options.view == IpmView::kGround ? m.PlaceGroundView() : m.PlaceImageRoi();
+  if (!placed.ok()) return placed;
   m.BuildTaps();
   if (m.valid_count_ == 0) return absl::InvalidArgumentError("ipm maps to no image pixel");
   return m;
+}
+
+absl::Status IpmMapping::PlaceGroundView() {
+  const CameraModel& camera = camera_;
+  const IpmOptions& options = options_;
+  const double horizon = camera.HorizonRow();
+  const double top_limit = horizon + options.horizon_margin_px;
+  // The ground rectangle as given; the ROI is the bounding box of its
+  // projection, clipped to the image and to below the horizon.
+  const GroundView& g = options.ground;
+  width_ = GroundPixels(g.x_max_m - g.x_min_m, g.metres_per_px_x);
+  height_ = GroundPixels(g.y_max_m - g.y_min_m, g.metres_per_px_y);
+  x_min_ = g.x_min_m;
+  x_max_ = g.x_max_m;
+  y_min_ = g.y_min_m;
+  y_max_ = g.y_max_m;
+  mpp_x_ = (x_max_ - x_min_) / width_;
+  mpp_y_ = (y_max_ - y_min_) / height_;
+  Roi box{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+          std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+  for (const double x : {g.x_min_m, g.x_max_m}) {
+    for (const double y : {g.y_min_m, g.y_max_m}) {
+      const Eigen::Vector2d p = camera.GroundToImage({x, y});
+      if (!p.allFinite() || !(p.y() > horizon)) {
+        return absl::InvalidArgumentError(
+            absl::StrCat("ipm.ground corner (", x, ", ", y,
+                         ") m does not project below the horizon: is the camera's pitch right?"));
+      }
+      box.left = std::min(box.left, p.x());
+      box.right = std::max(box.right, p.x());
+      box.top = std::min(box.top, p.y());
+      box.bottom = std::max(box.bottom, p.y());
+    }
+  }
+  Roi roi;
+  roi.left = std::max(box.left, 0.0);
+  roi.right = std::min(box.right, camera.image_width - 1.0);
+  roi.top = std::max(box.top, std::max(0.0, top_limit));
+  roi.bottom = std::min(box.bottom, camera.image_height - 1.0);
+  if (roi.right - roi.left < 2 || roi.bottom - roi.top < 2) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "ipm.ground (x ", g.x_min_m, "..", g.x_max_m, " m, y ", g.y_min_m, "..", g.y_max_m,
+        " m) projects to image rows ", box.top, "..", box.bottom, ", columns ", box.left, "..",
+        box.right, ": no usable part inside the ", camera.image_width, "x", camera.image_height,
+        " image below the horizon (row ", horizon, " + margin ", options.horizon_margin_px, ")"));
+  }
+  roi_ = roi;
+  return absl::OkStatus();
+}
+
+absl::Status IpmMapping::PlaceImageRoi() {
+  const CameraModel& camera = camera_;
+  const IpmOptions& options = options_;
+  const double horizon = camera.HorizonRow();
+  const double top_limit = horizon + options.horizon_margin_px;
+  // Clip the ROI to the image and to below the horizon.
+  Roi roi = options.roi;
+  roi.left = std::max(roi.left, 0.0);
+  roi.right = std::min(roi.right, camera.image_width - 1.0);
+  roi.bottom = std::min(roi.bottom, camera.image_height - 1.0);
+  roi.top = std::max(roi.top, top_limit);
+  if (roi.right - roi.left < 2 || roi.bottom - roi.top < 2) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "ipm.roi (left=", options.roi.left, " right=", options.roi.right, " top=", options.roi.top,
+        " bottom=", options.roi.bottom, ") has no usable part inside the ", camera.image_width, "x",
+        camera.image_height, " image below the horizon (row ", horizon, " + margin ",
+        options.horizon_margin_px, ")"));
+  }
+  roi_ = roi;
+  width_ = options.width;
+  height_ = options.height;
+
+  // Ground footprint of the ROI: its corners and the vanishing point's column
+  // on its top and bottom rows.
+  const double vp_u = std::clamp(camera.VanishingPoint().x(), roi.left, roi.right);
+  const Eigen::Vector2d corners[] = {{roi.left, roi.top},     {roi.right, roi.top},
+                                     {vp_u, roi.top},         {roi.left, roi.bottom},
+                                     {roi.right, roi.bottom}, {vp_u, roi.bottom}};
+  x_min_ = y_min_ = std::numeric_limits<double>::infinity();
+  x_max_ = y_max_ = -std::numeric_limits<double>::infinity();
+  for (const auto& c : corners) {
+    const Eigen::Vector2d g = camera.ImageToGround(c);
+    if (!g.allFinite() || g.y() <= 0) {
+      return absl::InvalidArgumentError("ipm.roi maps to points behind the camera");
+    }
+    x_min_ = std::min(x_min_, g.x());
+    x_max_ = std::max(x_max_, g.x());
+    y_min_ = std::min(y_min_, g.y());
+    y_max_ = std::max(y_max_, g.y());
+  }
+  mpp_x_ = (x_max_ - x_min_) / width_;
+  mpp_y_ = (y_max_ - y_min_) / height_;
+  if (!(mpp_x_ > 0) || !(mpp_y_ > 0)) {
+    return absl::InvalidArgumentError("ipm.roi has an empty ground footprint");
+  }
+  return absl::OkStatus();
 }
 
 void IpmMapping::BuildTaps() {
@@ -307,6 +319,10 @@ void IpmMapping::BuildTaps() {
   }
 }
 
+// Longer than 80 lines on purpose: one pass over the top view's pixels that
+// keeps four running bounds (seg_row0_, seg_row1_, col1, each footprint's
+// total weight) beside the boxes it emits; split, each part would take and
+// return all of them.
 void IpmMapping::BuildSegments() {
   // The footprint of IPM pixel (c, r) is the image of the ground cell
   // [c - 0.5, c + 0.5] x [r - 0.5, r + 0.5]. Lines of constant ground y are

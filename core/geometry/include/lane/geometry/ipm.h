@@ -142,6 +142,10 @@ class IpmMapping {
 
  private:
   IpmMapping() = default;
+  // Create's two kinds of top view: a rectangle on the ground (its image
+  // ROI derived), or an image ROI (its ground footprint derived).
+  absl::Status PlaceGroundView();
+  absl::Status PlaceImageRoi();
   void BuildTaps();
   void BuildSegments();
   cv::Mat ApplySegments(const cv::Mat& image, int channel, int channel2) const;
