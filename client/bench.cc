@@ -4,16 +4,16 @@
 
 #include <algorithm>
 #include <chrono>
-#include <condition_variable>
 #include <memory>
-#include <mutex>
 #include <queue>
 #include <thread>
 #include <tuple>
 #include <utility>
 #include <vector>
 
+#include "absl/base/thread_annotations.h"
 #include "absl/strings/str_cat.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/clock.h"
 #include "bench_camera.h"
 #include "common.h"
@@ -131,8 +131,8 @@ class LoadRun {
       if (spec_.progress && now - last_progress_ >= std::chrono::milliseconds(500)) {
         ReportProgress(now < run_.measure_start ? "warm-up" : "run");
       }
-      std::unique_lock<std::mutex> lock(done_mu_);
-      done_cv_.wait_until(lock, std::min(run_.measure_end, now + std::chrono::milliseconds(50)));
+      absl::MutexLock lock(&done_mu_);
+      WaitDoneUntil(std::min(run_.measure_end, now + std::chrono::milliseconds(50)));
     }
   }
 
@@ -145,14 +145,14 @@ class LoadRun {
     double latency_sum = 0;
     uint64_t interval_ok = 0;
     for (auto& camera : cameras_) {
-      std::lock_guard<std::mutex> lock(camera->stats_mu());
-      CameraStats& s = camera->stats();
-      p.ok += s.ok;
-      p.errors += s.failed + s.dropped;
-      interval_ok += s.interval_ok;
-      latency_sum += s.interval_latency_ms;
-      s.interval_ok = 0;
-      s.interval_latency_ms = 0;
+      camera->WithStats([&](CameraStats& s) {
+        p.ok += s.ok;
+        p.errors += s.failed + s.dropped;
+        interval_ok += s.interval_ok;
+        latency_sum += s.interval_latency_ms;
+        s.interval_ok = 0;
+        s.interval_latency_ms = 0;
+      });
     }
     const double dt = std::chrono::duration<double>(now - last_progress_).count();
     p.fps = dt > 0 ? static_cast<double>(interval_ok) / dt : 0;
@@ -170,10 +170,10 @@ class LoadRun {
     while (true) {
       const auto now = Clock::now();
       {
-        std::unique_lock<std::mutex> lock(done_mu_);
+        absl::MutexLock lock(&done_mu_);
         if (AllDone()) break;
         if (now < drain_deadline) {
-          done_cv_.wait_until(lock, std::min(drain_deadline, now + std::chrono::milliseconds(100)));
+          WaitDoneUntil(std::min(drain_deadline, now + std::chrono::milliseconds(100)));
         }
       }
       if (now >= drain_deadline) {
@@ -182,21 +182,26 @@ class LoadRun {
             if (!stream->done()) stream->Cancel();
           }
         }
-        std::unique_lock<std::mutex> lock(done_mu_);
-        done_cv_.wait_for(lock, std::chrono::milliseconds(50));
+        absl::MutexLock lock(&done_mu_);
+        done_cv_.WaitWithTimeout(&done_mu_, absl::Milliseconds(50));
       } else if (spec_.progress && now - last_progress_ >= std::chrono::milliseconds(500)) {
         ReportProgress("drain");
       }
     }
   }
 
-  bool AllDone() {
+  bool AllDone() ABSL_EXCLUSIVE_LOCKS_REQUIRED(done_mu_) {
     for (auto& camera : cameras_) {
       for (CameraStream* stream : camera->streams()) {
         if (!stream->done()) return false;
       }
     }
     return true;
+  }
+
+  // Until a stream is done (or a spurious wake-up) or `deadline`.
+  void WaitDoneUntil(Clock::time_point deadline) ABSL_EXCLUSIVE_LOCKS_REQUIRED(done_mu_) {
+    done_cv_.WaitWithTimeout(&done_mu_, absl::FromChrono(deadline - Clock::now()));
   }
 
   // The cameras' counts added up.
@@ -211,8 +216,7 @@ class LoadRun {
     std::vector<float> error_at_s;
     Clock::time_point last_ok = run_.measure_start;
     for (auto& camera : cameras_) {
-      std::lock_guard<std::mutex> lock(camera->stats_mu());
-      CameraStats& s = camera->stats();
+      const CameraStats s = camera->stats();
       result.frames_scheduled += s.scheduled;
       result.frames_sent += s.sent;
       result.frames_ok += s.ok;
@@ -255,8 +259,8 @@ class LoadRun {
   const LoadSpec& spec_;
   std::vector<std::unique_ptr<grpc::GenericStub>> stubs_;
   RunState run_;
-  std::mutex done_mu_;
-  std::condition_variable done_cv_;
+  absl::Mutex done_mu_;
+  absl::CondVar done_cv_;  // a stream is done (Camera::StreamDone)
   std::vector<std::unique_ptr<Camera>> cameras_;
   Clock::time_point last_progress_;
 };

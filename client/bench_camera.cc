@@ -10,7 +10,7 @@
 namespace lane_client::load {
 
 void CameraStream::Pump() {
-  std::unique_lock<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   if (pumping_) return;  // the pumping thread re-checks after its call
   pumping_ = true;
   while (true) {
@@ -45,10 +45,9 @@ void CameraStream::Pump() {
       }
     }
     if (action == kNone) break;
-    lock.unlock();
+    mu_.Unlock();
     if (unsent > 0) {
-      std::lock_guard<std::mutex> stats_lock(camera_->stats_mu());
-      camera_->stats().unsent += unsent;
+      camera_->WithStats([unsent](CameraStats& stats) { stats.unsent += unsent; });
     }
     switch (action) {
       case kWrite:
@@ -64,7 +63,7 @@ void CameraStream::Pump() {
       case kNone:
         break;
     }
-    lock.lock();
+    mu_.Lock();
     if (action == kRelease) break;
   }
   pumping_ = false;
@@ -73,7 +72,7 @@ void CameraStream::Pump() {
 void CameraStream::OnReadDone(bool ok) {
   if (!ok) {
     {
-      std::lock_guard<std::mutex> lock(mu_);
+      absl::MutexLock lock(&mu_);
       failed_ = true;  // the call is over: nothing more can be written
     }
     Pump();
@@ -85,7 +84,7 @@ void CameraStream::OnReadDone(bool ok) {
       grpc::SerializationTraits<v1::FrameResponse>::Deserialize(&read_buffer_, &response).ok();
   std::optional<Sent> sent;
   if (parsed) {
-    std::lock_guard<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     answered_any_ = true;
     const auto it = inflight_.find(response.frame_id());
     if (it != inflight_.end()) {
@@ -94,31 +93,31 @@ void CameraStream::OnReadDone(bool ok) {
     }
   }
   if (sent && sent->measured) {
-    std::lock_guard<std::mutex> lock(camera_->stats_mu());
-    CameraStats& stats = camera_->stats();
-    const v1::FrameCode code = response.status().code();
-    if (code == v1::FRAME_CODE_OK) {
-      ++stats.ok;
-      const double latency = Ms(now - sent->due);
-      stats.latency_ms.push_back(latency);
-      stats.server_ms.push_back(static_cast<double>(response.server_send_time_unix_ns() -
-                                                    response.server_receive_time_unix_ns()) *
-                                1e-6);
-      stats.queue_ms.push_back(response.timings().queue_wait_ms());
-      stats.decode_ms.push_back(response.timings().decode_ms());
-      stats.detect_ms.push_back(response.timings().detect_ms());
-      stats.ok_at_s.push_back(camera_->run().SinceMeasureStart(now));
-      stats.last_ok = now;
-      ++stats.interval_ok;
-      stats.interval_latency_ms += latency;
-    } else if (code == v1::FRAME_CODE_DROPPED) {
-      ++stats.dropped;
-      stats.error_at_s.push_back(camera_->run().SinceMeasureStart(now));
-    } else {
-      ++stats.failed;
-      ++stats.errors[FrameCodeName(code)];
-      stats.error_at_s.push_back(camera_->run().SinceMeasureStart(now));
-    }
+    camera_->WithStats([&](CameraStats& stats) {
+      const v1::FrameCode code = response.status().code();
+      if (code == v1::FRAME_CODE_OK) {
+        ++stats.ok;
+        const double latency = Ms(now - sent->due);
+        stats.latency_ms.push_back(latency);
+        stats.server_ms.push_back(static_cast<double>(response.server_send_time_unix_ns() -
+                                                      response.server_receive_time_unix_ns()) *
+                                  1e-6);
+        stats.queue_ms.push_back(response.timings().queue_wait_ms());
+        stats.decode_ms.push_back(response.timings().decode_ms());
+        stats.detect_ms.push_back(response.timings().detect_ms());
+        stats.ok_at_s.push_back(camera_->run().SinceMeasureStart(now));
+        stats.last_ok = now;
+        ++stats.interval_ok;
+        stats.interval_latency_ms += latency;
+      } else if (code == v1::FRAME_CODE_DROPPED) {
+        ++stats.dropped;
+        stats.error_at_s.push_back(camera_->run().SinceMeasureStart(now));
+      } else {
+        ++stats.failed;
+        ++stats.errors[FrameCodeName(code)];
+        stats.error_at_s.push_back(camera_->run().SinceMeasureStart(now));
+      }
+    });
   }
   StartRead(&read_buffer_);
   camera_->OnResponse(this);
@@ -127,15 +126,13 @@ void CameraStream::OnReadDone(bool ok) {
 void CameraStream::OnDone(const grpc::Status& status) {
   uint64_t lost = 0;
   {
-    std::lock_guard<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     for (const auto& entry : inflight_) {
       if (entry.second.measured) ++lost;
     }
     inflight_.clear();
   }
-  {
-    std::lock_guard<std::mutex> lock(camera_->stats_mu());
-    CameraStats& stats = camera_->stats();
+  camera_->WithStats([&](CameraStats& stats) {
     if (lost > 0) {
       stats.failed += lost;
       stats.error_at_s.insert(stats.error_at_s.end(), lost,
@@ -145,15 +142,10 @@ void CameraStream::OnDone(const grpc::Status& status) {
       stats.errors[code] += lost;
     }
     if (!status.ok() && !camera_->run().stopping.load()) ++stats.stream_failures;
-  }
-  // Last: once the run sees done_ (under done_mu), it may destroy this
-  // stream, so the notification happens under done_mu too.
-  std::lock_guard<std::mutex> lock(camera_->done_mu());
-  {
-    std::lock_guard<std::mutex> own(mu_);
-    done_ = true;
-  }
-  camera_->done_cv().notify_all();
+  });
+  // Last: once the run sees done_ (under its done mutex), it may destroy
+  // this stream, so the notification happens under that mutex too.
+  camera_->StreamDone(this);
 }
 
 }  // namespace lane_client::load

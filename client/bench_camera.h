@@ -10,15 +10,15 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
 #include <deque>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <unordered_map>
 #include <vector>
 
+#include "absl/base/thread_annotations.h"
+#include "absl/synchronization/mutex.h"
 #include "bench.h"
 #include "lane/v1/lane_service.pb.h"
 #include "reconnect_backoff.h"
@@ -50,7 +50,7 @@ struct RunState {
   }
 };
 
-// Per camera, guarded by its mutex.
+// Per camera: Camera::stats_, under its mutex (Camera::WithStats).
 struct CameraStats {
   uint64_t scheduled = 0;
   uint64_t sent = 0;
@@ -100,7 +100,7 @@ class CameraStream final : public grpc::ClientBidiReactor<grpc::ByteBuffer, grpc
   // serialized request header, `image_part` the frame's bytes (not copied).
   bool Queue(uint64_t frame_id, Clock::time_point due, bool measured, const std::string& header,
              const std::string& image_part, size_t limit) {
-    std::lock_guard<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     if (failed_ || half_close_ || done_ || inflight_.size() >= limit) return false;
     grpc::Slice slices[2] = {
         grpc::Slice(header.data(), header.size()),
@@ -116,7 +116,7 @@ class CameraStream final : public grpc::ClientBidiReactor<grpc::ByteBuffer, grpc
 
   void HalfClose() {
     {
-      std::lock_guard<std::mutex> lock(mu_);
+      absl::MutexLock lock(&mu_);
       half_close_ = true;
     }
     Pump();
@@ -125,21 +125,21 @@ class CameraStream final : public grpc::ClientBidiReactor<grpc::ByteBuffer, grpc
   void Cancel() { context_.TryCancel(); }
 
   bool done() {
-    std::lock_guard<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     return done_;
   }
   bool answered_any() {
-    std::lock_guard<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     return answered_any_;
   }
   size_t unanswered() {
-    std::lock_guard<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     return inflight_.size();
   }
 
   void OnWriteDone(bool ok) override {
     {
-      std::lock_guard<std::mutex> lock(mu_);
+      absl::MutexLock lock(&mu_);
       writing_ = false;
       if (!ok) failed_ = true;
     }
@@ -148,7 +148,7 @@ class CameraStream final : public grpc::ClientBidiReactor<grpc::ByteBuffer, grpc
 
   void OnWritesDoneDone(bool /*ok*/) override {
     {
-      std::lock_guard<std::mutex> lock(mu_);
+      absl::MutexLock lock(&mu_);
       writing_ = false;
       writes_done_ = true;
     }
@@ -157,6 +157,12 @@ class CameraStream final : public grpc::ClientBidiReactor<grpc::ByteBuffer, grpc
 
   void OnReadDone(bool ok) override;
   void OnDone(const grpc::Status& status) override;
+
+  // done() from now on; Camera::StreamDone calls it, under the run's done mutex.
+  void MarkDone() {
+    absl::MutexLock lock(&mu_);
+    done_ = true;
+  }
 
  private:
   struct Outgoing {
@@ -175,24 +181,25 @@ class CameraStream final : public grpc::ClientBidiReactor<grpc::ByteBuffer, grpc
   grpc::ByteBuffer read_buffer_;
   grpc::ByteBuffer write_buffer_;  // the message being written
 
-  std::mutex mu_;
-  std::deque<Outgoing> queue_;                   // not yet written
-  std::unordered_map<uint64_t, Sent> inflight_;  // queued or written, unanswered
-  bool writing_ = false;
-  bool pumping_ = false;
-  bool half_close_ = false;
-  bool writes_done_started_ = false;
-  bool writes_done_ = false;
-  bool failed_ = false;
-  bool hold_released_ = false;
-  bool done_ = false;
-  bool answered_any_ = false;
+  absl::Mutex mu_;
+  std::deque<Outgoing> queue_ ABSL_GUARDED_BY(mu_);  // not yet written
+  // Queued or written, unanswered.
+  std::unordered_map<uint64_t, Sent> inflight_ ABSL_GUARDED_BY(mu_);
+  bool writing_ ABSL_GUARDED_BY(mu_) = false;
+  bool pumping_ ABSL_GUARDED_BY(mu_) = false;
+  bool half_close_ ABSL_GUARDED_BY(mu_) = false;
+  bool writes_done_started_ ABSL_GUARDED_BY(mu_) = false;
+  bool writes_done_ ABSL_GUARDED_BY(mu_) = false;
+  bool failed_ ABSL_GUARDED_BY(mu_) = false;
+  bool hold_released_ ABSL_GUARDED_BY(mu_) = false;
+  bool done_ ABSL_GUARDED_BY(mu_) = false;
+  bool answered_any_ ABSL_GUARDED_BY(mu_) = false;
 };
 
 class Camera {
  public:
   Camera(int index, std::string id, grpc::GenericStub* stub, std::string target, RunState* run,
-         std::mutex* done_mu, std::condition_variable* done_cv)
+         absl::Mutex* done_mu, absl::CondVar* done_cv)
       : id_(std::move(id)),
         stub_(stub),
         target_(std::move(target)),
@@ -203,18 +210,34 @@ class Camera {
   }
 
   const std::string& target() const { return target_; }
-  std::mutex& stats_mu() { return stats_mu_; }
-  CameraStats& stats() { return stats_; }  // under stats_mu()
-  std::mutex& done_mu() { return *done_mu_; }
-  std::condition_variable& done_cv() { return *done_cv_; }
   const RunState& run() const { return *run_; }
+
+  // A copy of the counts.
+  CameraStats stats() {
+    absl::MutexLock lock(&stats_mu_);
+    return stats_;
+  }
+  // Runs f(stats) under the stats' mutex.
+  template <typename F>
+  void WithStats(F f) {
+    absl::MutexLock lock(&stats_mu_);
+    f(stats_);
+  }
+
+  // Marks `stream` done and wakes the run, under the run's done mutex: once
+  // the run sees the stream done (under that mutex too), it may destroy it.
+  void StreamDone(CameraStream* stream) {
+    absl::MutexLock lock(done_mu_);
+    stream->MarkDone();
+    done_cv_->SignalAll();
+  }
 
   // A new call (the previous one, if any, is done).
   void OpenStream() {
     auto stream = std::make_unique<CameraStream>(this, stub_);
     CameraStream* raw = stream.get();
     {
-      std::lock_guard<std::mutex> lock(streams_mu_);
+      absl::MutexLock lock(&streams_mu_);
       streams_.push_back(std::move(stream));
       current_ = raw;
       first_message_ = true;
@@ -224,7 +247,7 @@ class Camera {
   }
 
   CameraStream* current() {
-    std::lock_guard<std::mutex> lock(streams_mu_);
+    absl::MutexLock lock(&streams_mu_);
     return current_;
   }
 
@@ -235,7 +258,7 @@ class Camera {
     const bool queued = stream != nullptr && !stream->done() &&
                         SendNext(stream, due, measured, std::numeric_limits<size_t>::max());
     const double lag_ms = Ms(Clock::now() - due);
-    std::lock_guard<std::mutex> lock(stats_mu_);
+    absl::MutexLock lock(&stats_mu_);
     if (!measured) return;
     ++stats_.scheduled;
     if (!queued) ++stats_.unsent;
@@ -250,7 +273,7 @@ class Camera {
       const bool measured = run_->Measured(now);
       if (!SendNext(stream, now, measured, limit)) break;
       if (measured) {
-        std::lock_guard<std::mutex> lock(stats_mu_);
+        absl::MutexLock lock(&stats_mu_);
         ++stats_.scheduled;
       }
     }
@@ -262,12 +285,12 @@ class Camera {
 
   void CountSent(bool measured) {
     if (!measured) return;
-    std::lock_guard<std::mutex> lock(stats_mu_);
+    absl::MutexLock lock(&stats_mu_);
     ++stats_.sent;
   }
 
   std::vector<CameraStream*> streams() {
-    std::lock_guard<std::mutex> lock(streams_mu_);
+    absl::MutexLock lock(&streams_mu_);
     std::vector<CameraStream*> out;
     for (const auto& s : streams_) out.push_back(s.get());
     return out;
@@ -285,7 +308,7 @@ class Camera {
   bool SendNext(CameraStream* stream, Clock::time_point due, bool measured, size_t limit) {
     const std::vector<BenchFrame>& frames = *run_->spec->frames;
     {
-      std::lock_guard<std::mutex> lock(streams_mu_);
+      absl::MutexLock lock(&streams_mu_);
       v1::FrameRequest header;
       header.set_camera_id(id_);
       header.set_frame_id(next_frame_id_);
@@ -313,18 +336,19 @@ class Camera {
   grpc::GenericStub* const stub_;
   const std::string target_;
   RunState* const run_;
-  std::mutex* const done_mu_;
-  std::condition_variable* const done_cv_;
+  absl::Mutex* const done_mu_;
+  absl::CondVar* const done_cv_;
 
-  std::mutex streams_mu_;
-  std::vector<std::unique_ptr<CameraStream>> streams_;  // kept until the run ends
-  CameraStream* current_ = nullptr;
-  bool first_message_ = true;
-  uint64_t next_frame_id_ = 0;
-  size_t next_frame_ = 0;
+  absl::Mutex streams_mu_;
+  // Kept until the run ends.
+  std::vector<std::unique_ptr<CameraStream>> streams_ ABSL_GUARDED_BY(streams_mu_);
+  CameraStream* current_ ABSL_GUARDED_BY(streams_mu_) = nullptr;
+  bool first_message_ ABSL_GUARDED_BY(streams_mu_) = true;
+  uint64_t next_frame_id_ ABSL_GUARDED_BY(streams_mu_) = 0;
+  size_t next_frame_ ABSL_GUARDED_BY(streams_mu_) = 0;
 
-  std::mutex stats_mu_;
-  CameraStats stats_;
+  absl::Mutex stats_mu_;
+  CameraStats stats_ ABSL_GUARDED_BY(stats_mu_);
 };
 
 }  // namespace lane_client::load

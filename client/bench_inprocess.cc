@@ -4,12 +4,13 @@
 #include <atomic>
 #include <chrono>
 #include <limits>
-#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "absl/base/thread_annotations.h"
 #include "absl/strings/str_cat.h"
+#include "absl/synchronization/mutex.h"
 #include "bench.h"
 #include "lane/detector.h"
 #include "lane/track/frame_tracker.h"
@@ -40,9 +41,9 @@ struct InprocessRun {
   std::atomic<size_t> next{0};
   std::atomic<uint64_t> done_frames{0};
   std::atomic<uint64_t> tracked_frames{0};
-  std::mutex mu;
-  std::vector<double> latency;
-  std::string failure;
+  absl::Mutex mu;
+  std::vector<double> latency ABSL_GUARDED_BY(mu);
+  std::string failure ABSL_GUARDED_BY(mu);
 };
 
 // One worker: decodes and detects (or tracks) frames until the end, timing the measured ones.
@@ -66,7 +67,7 @@ void RunWorker(InprocessRun& run) {
     }
     const Clock::time_point t1 = Clock::now();
     if (!status.ok()) {
-      std::lock_guard<std::mutex> lock(run.mu);
+      absl::MutexLock lock(&run.mu);
       run.failure = absl::StrCat(frame.name, ": ", status.message());
       break;
     }
@@ -75,7 +76,7 @@ void RunWorker(InprocessRun& run) {
       run.done_frames.fetch_add(1, std::memory_order_relaxed);
     }
   }
-  std::lock_guard<std::mutex> lock(run.mu);
+  absl::MutexLock lock(&run.mu);
   run.latency.insert(run.latency.end(), own.begin(), own.end());
 }
 
@@ -134,6 +135,8 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
   for (int w = 0; w < workers; ++w) threads.emplace_back([&run] { RunWorker(run); });
   if (progress) ReportProgress(run, absl::ToDoubleSeconds(warmup + duration), progress);
   for (std::thread& t : threads) t.join();
+  // The workers are joined; what they left is read under the lock they wrote it under.
+  absl::MutexLock lock(&run.mu);
   if (!run.failure.empty()) return absl::InternalError(absl::StrCat("in-process: ", run.failure));
   InprocessResult result;
   result.workers = workers;

@@ -1,13 +1,11 @@
 // `lane-client stream`: a camera's recorded frames through the service, the
 // lanes out as JSON Lines (docs/client.md), surviving server restarts.
-#include <condition_variable>
 #include <cstdio>
 #include <deque>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
-#include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <set>
@@ -15,8 +13,10 @@
 #include <thread>
 #include <vector>
 
+#include "absl/base/thread_annotations.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/clock.h"
 #include "cli/inputs.h"
 #include "cli/overlay.h"
@@ -155,18 +155,18 @@ class OverlayDrawer {
 
   void Submit(const StreamItem& item, const v1::FrameResponse& response,
               const std::optional<v1::Session>& session, double latency_ms) {
-    std::unique_lock<std::mutex> lock(mu_);
-    space_.wait(lock, [this] { return jobs_.size() < kMaxQueued; });
+    absl::MutexLock lock(&mu_);
+    while (jobs_.size() >= kMaxQueued) space_.Wait(&mu_);
     jobs_.push_back(Job{item, response, session, latency_ms});
-    ready_.notify_one();
+    ready_.Signal();
   }
   // Draws what is queued and stops. True if every overlay was written.
   bool Finish() {
     {
-      std::lock_guard<std::mutex> lock(mu_);
+      absl::MutexLock lock(&mu_);
       done_ = true;
     }
-    ready_.notify_one();
+    ready_.Signal();
     if (thread_.joinable()) thread_.join();
     return !failed_;
   }
@@ -184,13 +184,13 @@ class OverlayDrawer {
     for (;;) {
       Job job;
       {
-        std::unique_lock<std::mutex> lock(mu_);
-        ready_.wait(lock, [this] { return done_ || !jobs_.empty(); });
+        absl::MutexLock lock(&mu_);
+        while (!done_ && jobs_.empty()) ready_.Wait(&mu_);
         if (jobs_.empty()) return;
         job = std::move(jobs_.front());
         jobs_.pop_front();
       }
-      space_.notify_one();
+      space_.Signal();
       const std::string error = writer_->Write(job.item, job.response, job.session, job.latency_ms);
       if (!error.empty()) {
         failed_ = true;
@@ -200,12 +200,12 @@ class OverlayDrawer {
   }
 
   OverlayWriter* const writer_;
-  std::mutex mu_;
-  std::condition_variable ready_;
-  std::condition_variable space_;
-  std::deque<Job> jobs_;  // guarded by mu_
-  bool done_ = false;     // guarded by mu_
-  bool failed_ = false;   // the drawer thread's until joined
+  absl::Mutex mu_;
+  absl::CondVar ready_;  // a job is queued, or done_
+  absl::CondVar space_;  // jobs_ has room
+  std::deque<Job> jobs_ ABSL_GUARDED_BY(mu_);
+  bool done_ ABSL_GUARDED_BY(mu_) = false;
+  bool failed_ = false;  // the drawer thread's until joined
   std::thread thread_;
 };
 

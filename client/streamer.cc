@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "absl/time/clock.h"
 #include "common.h"
 
 namespace lane_client {
@@ -87,7 +88,7 @@ absl::Status Streamer::Run(const Source& source, const Sink& sink) {
   bool first_connection = true;
   while (true) {
     {
-      std::lock_guard<std::mutex> lock(mu_);
+      absl::MutexLock lock(&mu_);
       if (source_done_ && pending_.empty()) return absl::OkStatus();
     }
     bool progress = false;
@@ -98,7 +99,7 @@ absl::Status Streamer::Run(const Source& source, const Sink& sink) {
     }
     EmitLocalErrors(sink);
     {
-      std::lock_guard<std::mutex> lock(mu_);
+      absl::MutexLock lock(&mu_);
       if (status.ok() && source_done_ && pending_.empty()) return absl::OkStatus();
     }
     if (status.ok()) {
@@ -120,7 +121,7 @@ absl::Status Streamer::Run(const Source& source, const Sink& sink) {
     stats_.failures.push_back(why);
     size_t unanswered = 0;
     {
-      std::lock_guard<std::mutex> lock(mu_);
+      absl::MutexLock lock(&mu_);
       unanswered = unanswered_;
     }
     const absl::Duration wait = backoff.Next();
@@ -134,7 +135,7 @@ absl::Status Streamer::Run(const Source& source, const Sink& sink) {
 void Streamer::EmitLocalErrors(const Sink& sink) {
   std::vector<std::shared_ptr<StreamItem>> ready;
   {
-    std::lock_guard<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     while (!pending_.empty() && pending_.front()->request == nullptr) {
       ready.push_back(std::move(pending_.front()));
       pending_.pop_front();
@@ -149,7 +150,7 @@ void Streamer::EmitLocalErrors(const Sink& sink) {
 
 std::string Streamer::TakeAnswered(uint64_t frame_id, Clock::time_point now,
                                    std::vector<std::shared_ptr<StreamItem>>* ready) {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   while (!pending_.empty() && pending_.front()->request == nullptr && passed_ > 0) {
     ready->push_back(std::move(pending_.front()));
     pending_.pop_front();
@@ -174,7 +175,7 @@ grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* 
   std::unique_ptr<Stream> stream = stub_->StreamFrames(&context);
   ++stats_.connections;
   {
-    std::lock_guard<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     passed_ = 0;
     written_ = 0;
     attempt_over_ = false;
@@ -191,7 +192,7 @@ grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* 
     const auto now = Clock::now();
     std::vector<std::shared_ptr<StreamItem>> ready;
     protocol_error = TakeAnswered(response.frame_id(), now, &ready);
-    cv_.notify_all();
+    cv_.SignalAll();
     if (!protocol_error.empty()) break;
     for (size_t i = 0; i < ready.size(); ++i) {
       const StreamItem& item = *ready[i];
@@ -206,13 +207,17 @@ grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* 
   }
   bool writer_running = false;
   {
-    std::unique_lock<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     attempt_over_ = true;
-    cv_.notify_all();
+    cv_.SignalAll();
     // The call is over, so a Write in progress fails by itself. Cancelling
     // would replace the server's status (UNAVAILABLE) with CANCELLED: only
     // when the writer does not return.
-    writer_running = !cv_.wait_for(lock, std::chrono::seconds(2), [this] { return writer_done_; });
+    const absl::Time deadline = absl::Now() + absl::Seconds(2);
+    while (!writer_done_) {
+      if (cv_.WaitWithDeadline(&mu_, deadline)) break;  // timed out
+    }
+    writer_running = !writer_done_;
   }
   if (writer_running || !protocol_error.empty()) context.TryCancel();
   writer.join();
@@ -221,7 +226,7 @@ grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* 
   if (!protocol_error.empty()) return grpc::Status(grpc::StatusCode::INTERNAL, protocol_error);
   bool stalled = false;
   {
-    std::lock_guard<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     stalled = stalled_;
   }
   if (stalled) {
@@ -234,7 +239,7 @@ grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* 
 }
 
 void Streamer::WriterLoop(Stream* stream, const Source& source) {
-  std::unique_lock<std::mutex> lock(mu_);
+  mu_.Lock();
   bool first_write = true;
   while (!attempt_over_) {
     if (passed_ < pending_.size()) {
@@ -245,7 +250,7 @@ void Streamer::WriterLoop(Stream* stream, const Source& source) {
       ++item->attempts;
       item->last_sent = Clock::now();
       if (written_++ == 0) last_activity_ = item->last_sent;
-      lock.unlock();
+      mu_.Unlock();
       bool ok;
       if (first_write && config_) {
         // The first request carries the session config too, so the stream is
@@ -257,16 +262,16 @@ void Streamer::WriterLoop(Stream* stream, const Source& source) {
         ok = stream->Write(*item->request);
       }
       first_write = false;
-      lock.lock();
+      mu_.Lock();
       if (!ok) break;  // the call is over; the reader learns why
       continue;
     }
     if (!source_done_ && unanswered_ < options_.window) {
       auto item = std::make_shared<StreamItem>();
       item->frame_id = next_frame_id_;
-      lock.unlock();
+      mu_.Unlock();
       const bool got = source(item.get());
-      lock.lock();
+      mu_.Lock();
       if (!got) {
         source_done_ = true;
       } else {
@@ -277,30 +282,31 @@ void Streamer::WriterLoop(Stream* stream, const Source& source) {
       continue;
     }
     if (source_done_) {
-      lock.unlock();
+      mu_.Unlock();
       stream->WritesDone();
-      lock.lock();
+      mu_.Lock();
       break;
     }
-    cv_.wait(lock);
+    cv_.Wait(&mu_);
   }
   writer_done_ = true;
-  lock.unlock();
-  cv_.notify_all();
+  mu_.Unlock();
+  cv_.SignalAll();
 }
 
 void Streamer::WatchdogLoop(grpc::ClientContext* context) {
   const auto timeout = absl::ToChronoNanoseconds(options_.stall_timeout);
-  std::unique_lock<std::mutex> lock(mu_);
+  mu_.Lock();
   while (!attempt_over_) {
-    cv_.wait_for(lock, std::min<Clock::duration>(timeout, std::chrono::milliseconds(250)));
+    cv_.WaitWithTimeout(&mu_, std::min(options_.stall_timeout, absl::Milliseconds(250)));
     if (!attempt_over_ && written_ > 0 && Clock::now() - last_activity_ > timeout) {
       stalled_ = true;
-      lock.unlock();
+      mu_.Unlock();
       context->TryCancel();
       return;
     }
   }
+  mu_.Unlock();
 }
 
 }  // namespace lane_client

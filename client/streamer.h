@@ -16,17 +16,17 @@
 #include <grpcpp/grpcpp.h>
 
 #include <chrono>
-#include <condition_variable>
 #include <cstdint>
 #include <deque>
 #include <functional>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "absl/base/thread_annotations.h"
 #include "absl/status/status.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "reconnect_backoff.h"
@@ -121,19 +121,20 @@ class Streamer {
   std::optional<lane::v1::Session> session_;
   StreamerStats stats_;
 
-  std::mutex mu_;
-  std::condition_variable cv_;
-  // Guarded by mu_:
-  std::deque<std::shared_ptr<StreamItem>> pending_;  // not yet handed to the sink, in order
-  size_t passed_ = 0;      // items at the front of pending_ the writer has passed this call
-  size_t unanswered_ = 0;  // items of pending_ with a request
-  size_t written_ = 0;     // items written on this call and not answered
-  uint64_t next_frame_id_ = 0;
-  bool source_done_ = false;
-  bool attempt_over_ = false;
-  bool writer_done_ = false;
-  bool stalled_ = false;
-  Clock::time_point last_activity_{};
+  absl::Mutex mu_;
+  absl::CondVar cv_;
+  // Not yet handed to the sink, in order.
+  std::deque<std::shared_ptr<StreamItem>> pending_ ABSL_GUARDED_BY(mu_);
+  // Items at the front of pending_ the writer has passed this call.
+  size_t passed_ ABSL_GUARDED_BY(mu_) = 0;
+  size_t unanswered_ ABSL_GUARDED_BY(mu_) = 0;  // items of pending_ with a request
+  size_t written_ ABSL_GUARDED_BY(mu_) = 0;     // items written on this call and not answered
+  uint64_t next_frame_id_ ABSL_GUARDED_BY(mu_) = 0;
+  bool source_done_ ABSL_GUARDED_BY(mu_) = false;
+  bool attempt_over_ ABSL_GUARDED_BY(mu_) = false;
+  bool writer_done_ ABSL_GUARDED_BY(mu_) = false;
+  bool stalled_ ABSL_GUARDED_BY(mu_) = false;
+  Clock::time_point last_activity_ ABSL_GUARDED_BY(mu_);
 };
 
 // Whether a failed call is worth retrying after a reconnection.
