@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 
 #include "frame_processor.h"
 #include "fuzz_common.h"
@@ -26,8 +27,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   lane::v1::FrameResponse response;
   const lane::server::Arrival arrival = lane::server::Arrival::Now();
   lane::server::StartResponse(request, request.camera_id(), arrival, &response);
+  std::optional<lane::Detection> detection;
   (void)lane::server::ProcessFrame(
       request, *session, lane::server::FrameLimits{int64_t{1920} * 1080, absl::Milliseconds(500)},
-      arrival, *metrics, &response);
+      arrival, *metrics, &response, &detection);
+  lane::server::FinishFrame(*session, /*tracked=*/false, detection, &response);
   return 0;
 }

@@ -23,10 +23,10 @@ inline lane::Config SyntheticConfig() {
   return *config;
 }
 
-inline std::shared_ptr<const lane::server::Session> SyntheticSession() {
+inline std::shared_ptr<lane::server::Session> SyntheticSession() {
   static lane::server::SessionRegistry* registry =
       new lane::server::SessionRegistry(lane::server::SessionRegistry::Options());
-  static std::shared_ptr<const lane::server::Session> session = [] {
+  static std::shared_ptr<lane::server::Session> session = [] {
     lane::server::SessionSpec spec;
     spec.config = SyntheticConfig();
     auto created = registry->Create("fuzz", spec, false);
