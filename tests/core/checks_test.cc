@@ -117,7 +117,9 @@ TEST(ImageExtensionTest, LocalisationMovesASplineOntoTheMarking) {
   const cv::Mat frame = RoadFrame(cam);
   const ChannelView red(frame, 2);
   const Bezier off = ImageSpline(cam, 1.6, 14, 8);  // 0.2 m beside the marking
-  const auto loc = LocalizeInImage(off, red, cam, 21, 0.4, 0.1, 1.0, 40, 0.9);
+  LocalizeOptions lo;
+  lo.min_sigma_px = 1.0;
+  const auto loc = LocalizeInImage(off, red, cam, lo);
   ASSERT_TRUE(loc.has_value());
   for (double t : {0.1, 0.5, 0.9}) {
     EXPECT_NEAR(cam.ImageToGround(loc->Eval(t)).x(), 1.8, 0.05) << t;

@@ -63,15 +63,35 @@ std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
 // LocalizeInImage's profile samples per smoothing sigma.
 constexpr double kSamplesPerSigma = 4.0;
 
+// The offset (samples from the centre) of the strongest bar of the smoothed
+// profile `s` within +-half samples of its centre: the local maximum that
+// most exceeds the brighter of its two sides `side` samples out. A marking
+// is a bar, brighter than the road on both sides; the bright side of a step
+// (a shadow's border, a curb, the hood's reflection) is not, however bright.
+std::optional<double> StrongestBarOffset(const std::vector<double>& s, int half, int side) {
+  const int n = static_cast<int>(s.size()), c = (n - 1) / 2;
+  std::optional<double> best_offset;
+  double best = 0;
+  for (int i = std::max(c - half, side + 1); i <= std::min(c + half, n - side - 2); ++i) {
+    if (!(s[i] >= s[i - 1] && s[i] >= s[i + 1])) continue;
+    const double contrast = s[i] - std::max(s[i - side], s[i + side]);
+    if (contrast <= best) continue;
+    best = contrast;
+    double off = i;
+    const double denom = s[i - 1] - 2 * s[i] + s[i + 1];
+    if (denom < 0) off += std::clamp(0.5 * (s[i - 1] - s[i + 1]) / denom, -0.5, 0.5);
+    best_offset = off - c;
+  }
+  return best_offset;
+}
+
 }  // namespace
 
 std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& image,
-                                      const CameraModel& camera, int n, double search_m,
-                                      double sigma_m, double min_sigma_px, double max_search_px,
-                                      double min_cos) {
+                                      const CameraModel& camera, const LocalizeOptions& o) {
   std::vector<Eigen::Vector2d> pts;
-  for (int i = 0; i < n; ++i) {
-    const double t = static_cast<double>(i) / (n - 1);
+  for (int i = 0; i < o.points; ++i) {
+    const double t = static_cast<double>(i) / (o.points - 1);
     const Eigen::Vector2d p = spline.Eval(t);
     Eigen::Vector2d tangent = spline.Derivative(t);
     if (tangent.norm() < 1e-9 || !InImage(p, image)) continue;
@@ -79,8 +99,8 @@ std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& i
     const double ppm = PixelsPerMetreAcross(camera, p);
     if (!(ppm > 0)) continue;
     const Eigen::Vector2d normal = Normal(tangent);
-    const double sigma = QuantizedSigma(std::max(min_sigma_px, sigma_m * ppm));
-    const double half = std::clamp(search_m * ppm, 2.0, max_search_px);
+    const double sigma = QuantizedSigma(std::max(o.min_sigma_px, o.sigma_m * ppm));
+    const double half = std::clamp(o.search_m * ppm, 2.0, o.max_search_px);
     // The profile is sampled every `spacing` pixels, kSamplesPerSigma
     // samples per sigma (one pixel while sigma <= 4 px): near the camera a
     // 10 cm sigma spans 5-10 px, and a 1 px raster only multiplied the
@@ -88,14 +108,29 @@ std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& i
     const double spacing = std::max(1.0, sigma / kSamplesPerSigma);
     const double sigma_samples = spacing > 1.0 ? kSamplesPerSigma : sigma;
     thread_local std::vector<float> profile;
-    SampleProfile(image, p, spacing * normal, half / spacing, profile);
-    const auto peak = FindProfilePeak(profile, sigma_samples);
-    if (!peak) continue;
-    const double offset = spacing * peak->offset;
+    double offset = 0;
+    if (o.on_bars) {
+      // The bar's sides lie a marking width out, and no nearer than the
+      // smoothing's reach (2.5 sigma).
+      const double side = std::max(o.marking_width_m * ppm, 2.5 * sigma) / spacing;
+      const int half_samples = static_cast<int>(std::lround(half / spacing));
+      const int side_samples = std::max(1, static_cast<int>(std::lround(side)));
+      SampleProfile(image, p, spacing * normal, half_samples + side_samples + 1, profile);
+      thread_local std::vector<double> smooth;
+      SmoothProfile(profile, sigma_samples, smooth);
+      const auto bar = StrongestBarOffset(smooth, half_samples, side_samples);
+      if (!bar) continue;
+      offset = spacing * *bar;
+    } else {
+      SampleProfile(image, p, spacing * normal, half / spacing, profile);
+      const auto peak = FindProfilePeak(profile, sigma_samples);
+      if (!peak) continue;
+      offset = spacing * peak->offset;
+    }
     const Eigen::Vector2d q = p + offset * normal;
     if (!pts.empty()) {
       const Eigen::Vector2d step = q - pts.back();
-      if (step.norm() < 1e-9 || step.normalized().dot(tangent) < min_cos) continue;
+      if (step.norm() < 1e-9 || step.normalized().dot(tangent) < o.min_cos) continue;
     }
     pts.push_back(q);
   }
@@ -212,6 +247,69 @@ std::optional<Bezier> ClipToImageContent(const Bezier& spline, const ChannelView
       std::vector<Eigen::Vector2d>(pts.begin() + best_start, pts.begin() + best_start + best_len));
 }
 
+namespace {
+
+// The road continues straight under the last evidence: a straight line
+// fitted on the ground to the evidence's nearest `kStraightFitM` metres (a
+// dash and its gap: not one image step, whose direction a pixel of noise
+// turns), followed down to image row `max_row`, sampled every `step_px`
+// rows. Empty when the evidence does not reach the ground or runs across.
+constexpr double kStraightFitM = 6.0;
+
+std::vector<Eigen::Vector2d> ExtrapolateDownOnGround(const std::vector<Eigen::Vector2d>& evidence,
+                                                     const CameraModel& camera, double max_row,
+                                                     double step_px, int cols) {
+  std::vector<Eigen::Vector2d> ground;
+  Eigen::Vector2d end(0, -1);
+  for (const Eigen::Vector2d& p : evidence) {
+    const Eigen::Vector2d g = camera.ImageToGround(p);
+    if (!g.allFinite() || g.y() <= 0) continue;
+    ground.push_back(g);
+    if (end.y() < 0 || p.y() > end.y()) end = p;
+  }
+  std::vector<Eigen::Vector2d> out;
+  if (ground.size() < 2 || end.y() >= max_row) return out;
+  double y_near = ground.front().y();
+  for (const auto& g : ground) y_near = std::min(y_near, g.y());
+  // x = a + b y over the nearest kStraightFitM metres.
+  double n = 0, sy = 0, sx = 0, syy = 0, sxy = 0;
+  for (const auto& g : ground) {
+    if (g.y() > y_near + kStraightFitM) continue;
+    n += 1;
+    sy += g.y();
+    sx += g.x();
+    syy += g.y() * g.y();
+    sxy += g.x() * g.y();
+  }
+  const double det = n * syy - sy * sy;
+  if (n < 2 || det < 1e-9) return out;
+  const double b = (n * sxy - sy * sx) / det, a = (sx - b * sy) / n;
+  // Ground distance of max_row below the end: where the line meets that row.
+  const Eigen::Vector2d start = camera.GroundToImage(Eigen::Vector2d(a + b * y_near, y_near));
+  if (!start.allFinite()) return out;
+  for (double row = start.y() + step_px; row < max_row + step_px; row += step_px) {
+    const double r = std::min(row, max_row);
+    // The ground point of the line seen at image row r: solve on the ground
+    // by bisection over y (rows grow as y shrinks).
+    double lo = 0.05, hi = y_near;
+    for (int it = 0; it < 40; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      const Eigen::Vector2d q = camera.GroundToImage(Eigen::Vector2d(a + b * mid, mid));
+      if (q.allFinite() && q.y() > r)
+        lo = mid;
+      else
+        hi = mid;
+    }
+    const Eigen::Vector2d q = camera.GroundToImage(Eigen::Vector2d(a + b * hi, hi));
+    if (!q.allFinite() || q.x() < 0 || q.x() > cols - 1) break;
+    out.push_back(q);
+    if (r >= max_row) break;
+  }
+  return out;
+}
+
+}  // namespace
+
 Bezier ExtendInImage(const Bezier& spline, const ChannelView& image, const CameraModel& camera,
                      const ImageExtendOptions& options) {
   const double reference = ImageBarContrast(spline, image, camera, options);
@@ -263,21 +361,11 @@ Bezier ExtendInImage(const Bezier& spline, const ChannelView& image, const Camer
   Eigen::Vector2d down_dir = spline.Derivative(1);
   auto down = walk(spline.p[3], spline.Derivative(1), options.min_cos_down, &down_dir);
   if (options.extrapolate_down) {
-    // The final straight segment: through the last two evidence points (the
-    // spline's end tangent when the walk found none), down to max_row.
-    const Eigen::Vector2d end = down.empty() ? spline.p[3] : down.back();
-    Eigen::Vector2d d = down.size() >= 2 ? Eigen::Vector2d(down.back() - down[down.size() - 2])
-                                         : spline.Derivative(1);
-    if (d.y() > 1e-6) {
-      d /= d.y();  // per image row
-      const double rows = max_row - end.y();
-      const int n = static_cast<int>(std::ceil(rows / options.step_px));
-      for (int i = 1; i <= n; ++i) {
-        const Eigen::Vector2d q = end + std::min(rows, i * options.step_px) * d;
-        if (q.x() < 0 || q.x() > image.cols() - 1) break;
-        down.push_back(q);  // clipped to the image content afterwards
-      }
-    }
+    std::vector<Eigen::Vector2d> evidence = spline.Sample(20);
+    evidence.insert(evidence.end(), down.begin(), down.end());
+    const std::vector<Eigen::Vector2d> below =
+        ExtrapolateDownOnGround(evidence, camera, max_row, options.step_px, image.cols());
+    down.insert(down.end(), below.begin(), below.end());
   }
   if (up.empty() && down.empty()) return spline;
   std::vector<Eigen::Vector2d> pts(up.rbegin(), up.rend());

@@ -225,14 +225,23 @@ bool PostprocessInImage(SplineCandidate& c, const PostprocessFrame& f, const Pos
   const Bezier fallback = TopDown(*image_line);
   const double min_len = pp.min_image_length_px * scale;
   double contrast = 0;
-  if (pp.localize_in_image && pp.localize_geometric) {
-    if (auto loc = LocalizeInImage(
-            c.image, f.channel, cam, pp.localize_points, pp.localize_search_m, pp.localize_sigma_m,
-            pp.profile_sigma_px * scale, 2 * pp.localize_search_px * scale, pp.localize_min_cos)) {
+  const bool localize = pp.localize_in_image && (!pp.localize_only_coarse_top_view ||
+                                                 f.ipm.metres_per_px_x() > marking_width_m);
+  if (localize && pp.localize_geometric) {
+    LocalizeOptions lo;
+    lo.points = pp.localize_points;
+    lo.search_m = pp.localize_search_m;
+    lo.sigma_m = pp.localize_sigma_m;
+    lo.min_sigma_px = pp.profile_sigma_px * scale;
+    lo.max_search_px = 2 * pp.localize_search_px * scale;
+    lo.min_cos = pp.localize_min_cos;
+    lo.marking_width_m = marking_width_m;
+    lo.on_bars = pp.localize_on_bars;
+    if (auto loc = LocalizeInImage(c.image, f.channel, cam, lo)) {
       c.image = TopDown(*loc);
     }
     if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
-  } else if (pp.localize_in_image) {
+  } else if (localize) {
     if (auto loc =
             LocalizeSpline(c.image, f.channel, pp.localize_points, pp.localize_search_px * scale,
                            pp.profile_sigma_px * scale, pp.localize_min_cos, &contrast)) {

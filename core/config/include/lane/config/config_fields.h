@@ -143,6 +143,8 @@ LANE_FIELDS(PostprocessOptions) {
   v.Field("extend_geometric", s.extend_geometric);
   v.Field("localize_geometric", s.localize_geometric);
   v.Field("localize_search_m", s.localize_search_m);
+  v.Field("localize_on_bars", s.localize_on_bars);
+  v.Field("localize_only_coarse_top_view", s.localize_only_coarse_top_view);
   v.Field("localize_sigma_m", s.localize_sigma_m);
   v.Field("extend_search_m", s.extend_search_m);
   v.Field("extend_gap_m", s.extend_gap_m);

@@ -47,17 +47,31 @@ struct ImageExtendOptions {
 };
 
 // Localisation in the image (paper section II-E.1) with the camera's
-// geometry: `n` samples of `spline` move to the peak of the profile across
-// it, searched +-search_m on the road and smoothed with sigma_m on the road
-// (at least min_sigma_px), converted to pixels at each sample. A smoothing
-// as wide as a marking merges the two lines of a double line into one peak
-// at their centre, where such a boundary is labelled, and leaves a single
-// line's peak at its centre. Points that turn the curve by more than
-// acos(min_cos) are rejected; nullopt if fewer than 4 remain.
+// geometry: `points` samples of the spline move to the strongest bar of the
+// profile across them, searched +-search_m on the road and smoothed with
+// sigma_m on the road (at least min_sigma_px), converted to pixels at each
+// sample. A bar is a local maximum brighter than both of its sides, a
+// marking width (and at least 2.5 sigma) out; the bright side of a step (a
+// shadow's border, a curb, the hood's reflection) is not one. A smoothing as
+// wide as a marking merges the two lines of a double line into one peak at
+// their centre, where such a boundary is labelled, and leaves a single
+// line's peak at its centre. Points without a bar stay out; points that turn
+// the curve by more than acos(min_cos) are rejected; nullopt if fewer than 4
+// remain.
+struct LocalizeOptions {
+  int points = 21;
+  double search_m = 0.4;
+  double sigma_m = 0.1;
+  double min_sigma_px = 2;
+  double max_search_px = 40;
+  double min_cos = 0.9;
+  double marking_width_m = 0.1;
+  // false: the brightest point of the profile (the peak of the paper and the
+  // reference), which a bright step beside a marking wins.
+  bool on_bars = true;
+};
 std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& image,
-                                      const CameraModel& camera, int n, double search_m,
-                                      double sigma_m, double min_sigma_px, double max_search_px,
-                                      double min_cos);
+                                      const CameraModel& camera, const LocalizeOptions& options);
 
 // Angle of the chord of `spline` (image) from the road's direction on the
 // ground, degrees; 90 when its ends do not map to the ground ahead.
