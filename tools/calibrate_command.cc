@@ -123,17 +123,17 @@ void DrawOverlay(const BestFrame& best, const lane::CalibrationResult& r, const 
   cv::imwrite(path, img);
 }
 
-std::string ConfigHeader(const lane::CalibrationResult& r, const CalibrateFlags& flags) {
+std::string ConfigHeader(const lane::CalibrationResult& r, const lane::LaneGeometryReport& check,
+                         const CalibrateFlags& flags) {
   const lane::CombinedVanishingPoint& vp = r.vanishing_point;
   std::string h = "// Written by lane calibrate (docs/calibration.md).\n";
   absl::StrAppendFormat(
       &h,
-      "// Vanishing point (%.1f, %.1f) px +- (%.1f, %.1f) (standard error), "
-      "from %d of %d frames\n// (%d curved, %d without markings, %d stationary, %d "
+      "// Vanishing point (%.1f, %.1f) px +- (%.1f, %.1f) (95 %% interval, bootstrap over the "
+      "frames), from %d of %d frames\n// (%d curved, %d without markings, %d stationary, %d "
       "outliers) and %d marking segments.\n",
-      vp.point.x(), vp.point.y(), vp.standard_error.x(), vp.standard_error.y(), vp.frames_used,
-      r.frames, r.frames_curved, r.frames_no_markings, r.frames_stationary, vp.frames_rejected,
-      r.segments);
+      vp.point.x(), vp.point.y(), r.interval_px.x(), r.interval_px.y(), vp.frames_used, r.frames,
+      r.frames_curved, r.frames_no_markings, r.frames_stationary, vp.frames_rejected, r.segments);
   absl::StrAppendFormat(&h, "// Camera height %.3f m (given); focal length %.1f px (%s).\n",
                         r.camera.height_m, r.camera.fu,
                         r.focal_assumed ? "assumed: 0.61 x image width; only the along-road "
@@ -141,6 +141,11 @@ std::string ConfigHeader(const lane::CalibrationResult& r, const CalibrateFlags&
                                         : "given");
   absl::StrAppendFormat(&h, "// Road rows end at row %d; lane width for the top view %.2f m.\n",
                         r.road_bottom_row, flags.lane_width_m);
+  absl::StrAppendFormat(&h,
+                        "// Self-check passed: lane pairs in %d of %d used frames, heading %.2f "
+                        "deg, divergence %.2f deg, width %.2f m.\n",
+                        check.frames_with_pair, check.frames, check.heading_deg,
+                        check.divergence_deg, check.width_m);
   return h;
 }
 
@@ -165,6 +170,7 @@ bool EachFrame(const CalibrateFlags& flags, int& read_errors,
 
 // Writes the template config with the estimated camera and ground view to --output.
 absl::Status WriteCalibratedConfig(const lane::Config& base, const lane::CalibrationResult& r,
+                                   const lane::LaneGeometryReport& check,
                                    const CalibrateFlags& flags) {
   lane::Config config = base;
   config.camera = r.camera;
@@ -181,26 +187,64 @@ absl::Status WriteCalibratedConfig(const lane::Config& base, const lane::Calibra
   if (!OpenOutputFile(flags.output, &out)) {
     return absl::InternalError("cannot write " + flags.output);
   }
-  out << ConfigHeader(r, flags) << lane::ConfigToJson(config) << '\n';
+  out << ConfigHeader(r, check, flags) << lane::ConfigToJson(config) << '\n';
   out.close();
   if (!out) return absl::InternalError("error writing " + flags.output);
   return absl::OkStatus();
 }
 
+void PrintSelfCheck(const lane::LaneGeometryReport& check) {
+  std::printf(
+      "self-check        lane pairs in %d of %d used frames; heading %.2f deg, divergence %.2f "
+      "deg, width %.2f m: %s\n",
+      check.frames_with_pair, check.frames, check.heading_deg, check.divergence_deg, check.width_m,
+      check.verdict.ok() ? "passed" : "FAILED");
+}
+
+// Runs the detector with the estimate on the frames it used (pass 3).
+absl::StatusOr<lane::LaneGeometryReport> SelfCheck(const lane::CalibrationResult& r,
+                                                   const CalibrateFlags& flags) {
+  absl::StatusOr<lane::CalibrationSelfCheck> check =
+      lane::CalibrationSelfCheck::Create(r, flags.lane_width_m);
+  if (!check.ok()) return check.status();
+  std::vector<bool> used;
+  for (int k : r.used_frames) {
+    if (k >= static_cast<int>(used.size())) used.resize(static_cast<size_t>(k) + 1, false);
+    used[static_cast<size_t>(k)] = true;
+  }
+  int index = 0, read_errors = 0;
+  if (!EachFrame(flags, read_errors, [&](const InputFrame& f) -> absl::Status {
+        const size_t k = static_cast<size_t>(index++);
+        return k < used.size() && used[k] ? check->AddFrame(f.bgr) : absl::OkStatus();
+      })) {
+    return absl::InternalError("the self-check could not run the detector");
+  }
+  return check->Report();
+}
+
+// What to try when the self-check refuses.
+constexpr char kSelfCheckAdvice[] =
+    "no config written. Try: more frames, or a straight stretch of road with markings on both "
+    "sides; --focal-px if the focal length is known (0.61 x image width is assumed); "
+    "--road-bottom-row if the hood shows in the frames; --overlay to see what voted";
+
 // Prints the estimate's summary on stdout.
-void PrintCalibration(const lane::CalibrationResult& r, const CalibrateFlags& flags) {
+void PrintCalibration(const lane::CalibrationResult& r, const lane::LaneGeometryReport& check,
+                      const CalibrateFlags& flags) {
   const lane::CombinedVanishingPoint& vp = r.vanishing_point;
   std::printf(
-      "vanishing point   (%.1f, %.1f) px, standard error (%.2f, %.2f) px, spread (%.1f, %.1f) px\n",
-      vp.point.x(), vp.point.y(), vp.standard_error.x(), vp.standard_error.y(), vp.spread.x(),
-      vp.spread.y());
+      "vanishing point   (%.1f, %.1f) px, 95 %% interval +-(%.1f, %.1f) px (bootstrap over %d "
+      "frames), spread (%.1f, %.1f) px\n",
+      vp.point.x(), vp.point.y(), r.interval_px.x(), r.interval_px.y(),
+      vp.frames_used + vp.frames_rejected, vp.spread.x(), vp.spread.y());
   std::printf(
       "frames            %d read, %d used, %d curved, %d without markings, %d stationary, %d "
       "outliers\n",
       r.frames, vp.frames_used, r.frames_curved, r.frames_no_markings, r.frames_stationary,
       vp.frames_rejected);
   std::printf("segments          %d supporting\n", r.segments);
-  std::printf("pitch, yaw        %.3f, %.3f deg\n", r.camera.pitch_deg, r.camera.yaw_deg);
+  std::printf("pitch, yaw        %.3f +- %.3f, %.3f +- %.3f deg (95 %% interval)\n",
+              r.camera.pitch_deg, r.pitch_interval_deg, r.camera.yaw_deg, r.yaw_interval_deg);
   std::printf("focal length      %.1f px (%s)\n", r.camera.fu,
               r.focal_assumed ? "assumed: 0.61 x image width, give --focal-px if known" : "given");
   std::printf("principal point   (%.1f, %.1f) px%s\n", r.camera.cu, r.camera.cv,
@@ -211,6 +255,7 @@ void PrintCalibration(const lane::CalibrationResult& r, const CalibrateFlags& fl
               r.road_bottom_row < r.camera.image_height ? " (still hood below)" : "");
   std::printf("top view          x %.2f..%.2f m, y %.2f..%.2f m\n", r.view.x_min_m, r.view.x_max_m,
               r.view.y_min_m, r.view.y_max_m);
+  PrintSelfCheck(check);
   std::printf("config            %s\n", flags.output.c_str());
 }
 
@@ -256,11 +301,20 @@ int RunCalibrate(const CalibrateFlags& flags) {
   const absl::StatusOr<lane::CalibrationResult> result = calibrator.Finish();
   if (!result.ok()) return Failure("calibrate", std::string(result.status().message()));
   const lane::CalibrationResult& r = *result;
-  if (absl::Status s = WriteCalibratedConfig(*base, r, flags); !s.ok()) {
+  if (flags.overlay && !best.bgr.empty()) DrawOverlay(best, r, *flags.overlay);
+  const absl::StatusOr<lane::LaneGeometryReport> check = SelfCheck(r, flags);
+  if (!check.ok()) return Failure("calibrate", std::string(check.status().message()));
+  if (!check->verdict.ok()) {
+    PrintSelfCheck(*check);
+    return Failure("calibrate",
+                   absl::StrFormat("the estimate (%.1f, %.1f) failed its self-check: %s; %s",
+                                   r.vanishing_point.point.x(), r.vanishing_point.point.y(),
+                                   check->verdict.message(), kSelfCheckAdvice));
+  }
+  if (absl::Status s = WriteCalibratedConfig(*base, r, *check, flags); !s.ok()) {
     return Failure("calibrate", std::string(s.message()));
   }
-  if (flags.overlay && !best.bgr.empty()) DrawOverlay(best, r, *flags.overlay);
-  PrintCalibration(r, flags);
+  PrintCalibration(r, *check, flags);
   return read_errors > 0 ? kExitFailure : kExitOk;
 }
 

@@ -21,6 +21,21 @@ inline CameraModel CulaneCamera() {
   return config->camera;
 }
 
+// A 640x480 camera with a 79 degree field of view (focal 390 px), for
+// rendered frames.
+inline CameraModel TestCamera(double pitch_deg, double yaw_deg, double height_m) {
+  CameraModel c;
+  c.image_width = 640;
+  c.image_height = 480;
+  c.fu = c.fv = 390.0;
+  c.cu = 320.0;
+  c.cv = 240.0;
+  c.pitch_deg = pitch_deg;
+  c.yaw_deg = yaw_deg;
+  c.height_m = height_m;
+  return c;
+}
+
 }  // namespace lane::testing
 
 #endif  // LANE_TESTS_CORE_TEST_CAMERAS_H_

@@ -24,18 +24,7 @@
 namespace lane {
 namespace {
 
-CameraModel TestCamera(double pitch, double yaw, double height) {
-  CameraModel c;
-  c.image_width = 640;
-  c.image_height = 480;
-  c.fu = c.fv = 390.0;
-  c.cu = 320.0;
-  c.cv = 240.0;
-  c.pitch_deg = pitch;
-  c.yaw_deg = yaw;
-  c.height_m = height;
-  return c;
-}
+using testing::TestCamera;
 
 TEST(CalibrationTest, PitchAndYawFromTheVanishingPointRoundTrip) {
   for (const CameraModel& truth :

@@ -232,6 +232,7 @@ absl::StatusOr<FrameVanishingPoint> CameraCalibrator::AddSecondPass(
   switch (p.result) {
     case VpFrameResult::kOk:
       points_.push_back(p.point);
+      point_frames_.push_back(static_cast<int>(index));
       segments_ += p.inliers;
       break;
     case VpFrameResult::kCurved:
@@ -273,10 +274,71 @@ absl::StatusOr<CalibrationResult> CameraCalibrator::Finish() const {
   r.segments = segments_;
   r.road_bottom_row = road_bottom_;
   r.far_point = r.camera.GroundToImage({0.0, 1e5});
+  for (int k : c->used) r.used_frames.push_back(point_frames_[static_cast<size_t>(k)]);
+  r.interval_px = BootstrapInterval(points_, 1.0);
+  // The interval in degrees: the cameras at the interval's ends.
+  const CameraModel du =
+      CameraFromVanishingPoint(intrinsics_, c->point + Eigen::Vector2d(r.interval_px.x(), 0));
+  const CameraModel dv =
+      CameraFromVanishingPoint(intrinsics_, c->point + Eigen::Vector2d(0, r.interval_px.y()));
+  r.yaw_interval_deg = std::abs(du.yaw_deg - r.camera.yaw_deg);
+  r.pitch_interval_deg = std::abs(dv.pitch_deg - r.camera.pitch_deg);
   absl::StatusOr<GroundView> view = ChooseGroundView(r.camera, options_.lane_width_m, road_bottom_);
   if (!view.ok()) return view.status();
   r.view = *view;
   return r;
+}
+
+// ---------------------------------------------------------------------------
+// Self-check
+
+LaneGeometryCheckOptions GeometryCheckForWidth(double lane_width_m) {
+  LaneGeometryCheckOptions o;
+  o.min_lane_width_m = std::min(o.min_lane_width_m, lane_width_m - 0.5);
+  o.max_lane_width_m = std::max(o.max_lane_width_m, lane_width_m + 0.5);
+  return o;
+}
+
+std::vector<GroundChord> LaneChords(const std::vector<Lane>& lanes) {
+  std::vector<GroundChord> out;
+  for (const Lane& l : lanes) {
+    GroundChord c{l.ground[0], l.ground[3]};
+    if (c.near.y() > c.far.y()) std::swap(c.near, c.far);
+    out.push_back(c);
+  }
+  return out;
+}
+
+std::vector<GroundChord> LaneChords(const std::vector<std::array<Eigen::Vector2d, 2>>& image_ends,
+                                    const CameraModel& camera) {
+  std::vector<GroundChord> out;
+  const double horizon = camera.HorizonRow();
+  for (const std::array<Eigen::Vector2d, 2>& e : image_ends) {
+    if (e[0].y() <= horizon + 1.0 || e[1].y() <= horizon + 1.0) continue;  // above the road
+    GroundChord c{camera.ImageToGround(e[0]), camera.ImageToGround(e[1])};
+    if (c.near.y() > c.far.y()) std::swap(c.near, c.far);
+    out.push_back(c);
+  }
+  return out;
+}
+
+absl::StatusOr<CalibrationSelfCheck> CalibrationSelfCheck::Create(const CalibrationResult& result,
+                                                                  double lane_width_m) {
+  IpmOptions ipm;
+  ipm.view = IpmView::kGround;
+  ipm.ground = result.view;
+  ipm.interpolation = Interpolation::kArea;
+  absl::StatusOr<Detector> detector =
+      Detector::Create(result.camera, ipm, DetectorOptions::ForMode(Mode::kAll));
+  if (!detector.ok()) return detector.status();
+  return CalibrationSelfCheck(*std::move(detector), GeometryCheckForWidth(lane_width_m));
+}
+
+absl::Status CalibrationSelfCheck::AddFrame(const cv::Mat& frame) {
+  absl::StatusOr<Detection> d = detector_.Detect(frame);
+  if (!d.ok()) return d.status();
+  check_.AddFrame(LaneChords(d->lanes));
+  return absl::OkStatus();
 }
 
 // ---------------------------------------------------------------------------
@@ -316,6 +378,12 @@ CameraModel OnlineCalibrator::camera() const { return CameraFromVanishingPoint(i
 
 bool OnlineCalibrator::Observe(const std::vector<Lane>& lanes) {
   ++frames_seen_;
+  if (options_.check_frames > 0) {
+    std::vector<std::array<Eigen::Vector2d, 2>> ends;
+    for (const Lane& l : lanes) ends.push_back({l.image[0], l.image[3]});
+    recent_.push_back(std::move(ends));
+    while (static_cast<int>(recent_.size()) > options_.check_frames) recent_.pop_front();
+  }
   const std::optional<Eigen::Vector2d> p =
       LanesVanishingPoint(lanes, options_.max_bend_px, options_.min_spread_deg);
   if (!p) return false;
@@ -345,6 +413,31 @@ bool OnlineCalibrator::Observe(const std::vector<Lane>& lanes) {
   vp_ = c.VanishingPoint();
   if (std::abs(c.pitch_deg - applied_.pitch_deg) >= options_.rederive_deg ||
       std::abs(c.yaw_deg - applied_.yaw_deg) >= options_.rederive_deg) {
+    if (options_.check_frames > 0) {
+      // The candidate passes, or at least improves on the camera in use (a
+      // session started with a camera that is off moves towards the truth
+      // through candidates that are still off).
+      auto report = [&](const CameraModel& camera) {
+        LaneGeometryCheck check(options_.check);
+        for (const auto& frame : recent_) check.AddFrame(LaneChords(frame, camera));
+        return check.Report();
+      };
+      LaneGeometryReport candidate = report(c);
+      if (!candidate.verdict.ok()) {
+        const LaneGeometryReport applied = report(applied_);
+        auto error = [](const LaneGeometryReport& r) {
+          return std::abs(r.heading_deg) + std::abs(r.divergence_deg);
+        };
+        const bool improves = candidate.frames_with_pair >= options_.check.min_frames &&
+                              candidate.frames_with_pair >= applied.frames_with_pair &&
+                              (applied.frames_with_pair == 0 || error(candidate) < error(applied));
+        if (!improves) {
+          ++refused_;
+          last_refusal_ = std::move(candidate.verdict);
+          return false;
+        }
+      }
+    }
     ++rederived_;
     applied_ = c;
     return true;

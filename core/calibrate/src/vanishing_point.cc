@@ -3,8 +3,10 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <opencv2/imgproc.hpp>
+#include <random>
 
 namespace lane {
 namespace {
@@ -432,6 +434,7 @@ std::optional<CombinedVanishingPoint> CombineVanishingPoints(
       continue;
     }
     ++c.frames_used;
+    c.used.push_back(static_cast<int>(&p - points.data()));
     sum += p;
     sum_sq += p.cwiseProduct(p);
   }
@@ -441,6 +444,45 @@ std::optional<CombinedVanishingPoint> CombineVanishingPoints(
   c.spread = (var * (n / std::max(1.0, n - 1))).cwiseSqrt();
   c.standard_error = c.spread / std::sqrt(n);
   return c;
+}
+
+namespace {
+
+// Two-sided 97.5 % quantile of Student's t with `df` degrees of freedom
+// (tabled to 10, then 1.96 + 2.4 / df, within 0.01 of the exact value).
+double StudentT975(int df) {
+  static constexpr double kTable[] = {12.71, 4.30, 3.18, 2.78, 2.57, 2.45, 2.36, 2.31, 2.26, 2.23};
+  if (df < 1) return kTable[0];
+  if (df <= 10) return kTable[df - 1];
+  return 1.96 + 2.4 / df;
+}
+
+}  // namespace
+
+Eigen::Vector2d BootstrapInterval(const std::vector<Eigen::Vector2d>& points, double min_spread_px,
+                                  int resamples) {
+  const std::optional<CombinedVanishingPoint> whole = CombineVanishingPoints(points, min_spread_px);
+  if (!whole || points.size() < 2) {
+    return Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  }
+  std::mt19937_64 rng(20261205);
+  std::uniform_int_distribution<size_t> pick(0, points.size() - 1);
+  std::vector<double> us, vs;
+  std::vector<Eigen::Vector2d> sample(points.size());
+  for (int b = 0; b < resamples; ++b) {
+    for (Eigen::Vector2d& s : sample) s = points[pick(rng)];
+    const std::optional<CombinedVanishingPoint> c = CombineVanishingPoints(sample, min_spread_px);
+    us.push_back(c->point.x());
+    vs.push_back(c->point.y());
+  }
+  auto half = [&](std::vector<double>& v, double estimate) {
+    std::sort(v.begin(), v.end());
+    const double lo = v[static_cast<size_t>(0.025 * static_cast<double>(v.size() - 1))];
+    const double hi = v[static_cast<size_t>(0.975 * static_cast<double>(v.size() - 1))];
+    return std::max(hi - estimate, estimate - lo);
+  };
+  const double widen = StudentT975(whole->frames_used - 1) / 1.96;
+  return Eigen::Vector2d(half(us, whole->point.x()), half(vs, whole->point.y())) * widen;
 }
 
 }  // namespace lane

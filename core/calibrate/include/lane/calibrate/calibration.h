@@ -14,13 +14,16 @@
 #define LANE_CALIBRATION_H_
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
+#include <deque>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <utility>
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "lane/calibrate/self_check.h"
 #include "lane/calibrate/vanishing_point.h"
 #include "lane/detector.h"
 #include "lane/geometry/camera.h"
@@ -106,6 +109,13 @@ struct CalibrationResult {
   // Far ground point (0, 1e5 m) projected by the camera, for the check
   // against the vanishing point.
   Eigen::Vector2d far_point = Eigen::Vector2d::Zero();
+  // 95 % interval half-widths of the point (BootstrapInterval), and the
+  // same in degrees of pitch and yaw.
+  Eigen::Vector2d interval_px = Eigen::Vector2d::Zero();
+  double pitch_interval_deg = 0, yaw_interval_deg = 0;
+  // Pass-2 frames (0-based, in the order given) whose points were kept:
+  // the frames the self-check runs on.
+  std::vector<int> used_frames;
 };
 
 class CameraCalibrator {
@@ -147,8 +157,36 @@ class CameraCalibrator {
   std::vector<bool> stationary_;
   int second_frames_ = 0, stationary_count_ = 0;
   std::vector<Eigen::Vector2d> points_;
+  std::vector<int> point_frames_;  // pass-2 index of each point
   int frames_ = 0, no_markings_ = 0, curved_ = 0, segments_ = 0;
 };
+
+// The self-check of an estimate (self_check.h) before it is written: the
+// detector, with the estimated camera, its ground view and the built-in
+// settings (all lanes), on the frames whose points were used.
+class CalibrationSelfCheck {
+ public:
+  // Lane pairs count when `lane_width_m` apart, widened to 2.5-4.5 m.
+  static absl::StatusOr<CalibrationSelfCheck> Create(const CalibrationResult& result,
+                                                     double lane_width_m);
+  absl::Status AddFrame(const cv::Mat& frame);
+  LaneGeometryReport Report() const { return check_.Report(); }
+
+ private:
+  CalibrationSelfCheck(Detector detector, LaneGeometryCheckOptions options)
+      : detector_(std::move(detector)), check_(options) {}
+  Detector detector_;
+  LaneGeometryCheck check_;
+};
+
+// Lane pairs `lane_width_m` apart, widened to the default 2.5-4.5 m.
+LaneGeometryCheckOptions GeometryCheckForWidth(double lane_width_m);
+
+// The chords on the ground of a frame's lanes (Lane::ground, or the image
+// control points mapped through `camera` when given: a candidate camera).
+std::vector<GroundChord> LaneChords(const std::vector<Lane>& lanes);
+std::vector<GroundChord> LaneChords(const std::vector<std::array<Eigen::Vector2d, 2>>& image_ends,
+                                    const CameraModel& camera);
 
 // A session's slow refinement of pitch and yaw from its own detections.
 //
@@ -158,7 +196,9 @@ class CameraCalibrator {
 // at most max_step_deg per frame, and never further than max_drift_deg
 // from the camera it started with. When the estimate has moved
 // rederive_deg from the camera the detector uses, Observe says so and the
-// caller rebuilds the detector (and its top view) with camera().
+// caller rebuilds the detector (and its top view) with camera(). A
+// candidate that fails the self-check on the recent frames' lanes is not
+// adopted (refused(), last_refusal()).
 struct OnlineCalibrationOptions {
   double max_bend_px = 2.0;
   double min_spread_deg = 10.0;
@@ -169,6 +209,13 @@ struct OnlineCalibrationOptions {
   double max_step_deg = 0.05;
   double max_drift_deg = 5.0;
   double rederive_deg = 0.2;
+  // Before a new estimate is adopted, the last `check_frames` frames'
+  // lanes, mapped to the ground through it, must pass `check`
+  // (self_check.h), or at least improve on the camera in use (as many lane
+  // pairs, smaller heading plus divergence); otherwise the detector keeps
+  // its camera and the refusal is counted. 0: no check.
+  int check_frames = 30;
+  LaneGeometryCheckOptions check;
 };
 
 class OnlineCalibrator {
@@ -186,6 +233,8 @@ class OnlineCalibrator {
   int frames_used() const { return frames_used_; }
   int frames_seen() const { return frames_seen_; }
   int rederived() const { return rederived_; }
+  int refused() const { return refused_; }
+  const absl::Status& last_refusal() const { return last_refusal_; }
   // Standard error of the estimate, degrees (from the scatter of the
   // frames' points and the effective number of frames averaged).
   double uncertainty_deg() const;
@@ -203,6 +252,10 @@ class OnlineCalibrator {
   int frames_used_ = 0;
   int frames_seen_ = 0;
   int rederived_ = 0;
+  int refused_ = 0;
+  absl::Status last_refusal_;
+  // The recent frames' lanes: image end points (nearest, farthest).
+  std::deque<std::vector<std::array<Eigen::Vector2d, 2>>> recent_;
 };
 
 // The vanishing point of one frame's lanes that are straight in the image,

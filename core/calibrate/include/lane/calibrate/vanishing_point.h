@@ -138,9 +138,17 @@ struct CombinedVanishingPoint {
   Eigen::Vector2d spread = Eigen::Vector2d::Zero();          // std of the kept frames, pixels
   int frames_used = 0;
   int frames_rejected = 0;  // outliers to the median
+  std::vector<int> used;    // indices (into the input) of the frames kept
 };
 std::optional<CombinedVanishingPoint> CombineVanishingPoints(
     const std::vector<Eigen::Vector2d>& points, double min_spread_px = 1.0);
+
+// Half-widths (pixels, per coordinate) of a 95 % interval for
+// CombineVanishingPoints' point: a bootstrap over the frames (each
+// resample combined the same way, outlier rejection included), its
+// percentile interval widened by t(n-1) / z for few frames. Deterministic.
+Eigen::Vector2d BootstrapInterval(const std::vector<Eigen::Vector2d>& points,
+                                  double min_spread_px = 1.0, int resamples = 1000);
 
 }  // namespace lane
 
