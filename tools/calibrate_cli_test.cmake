@@ -33,6 +33,20 @@ if(NOT n EQUAL 40)
   message(FATAL_ERROR "lane detect with the calibrated config: ${n} records, expected 40")
 endif()
 
+expect_contains("${calibrate_out}" "self-check" "calibrate output: the self-check ran")
+expect_contains("${calibrate_out}" "95 % interval" "calibrate output: the interval")
+
+# A camera height 2.4 times too large: the same vanishing point, but the
+# lanes come out 2.4 times too far apart on the ground. The self-check
+# refuses it (exit 1, the reason, no config).
+run(1 tall calibrate ${OUT}/frames --height-m 5.2 --focal-px 344.2161
+    --principal-point 317.9034,256.5352 --output ${OUT}/tall.json)
+if(EXISTS ${OUT}/tall.json)
+  message(FATAL_ERROR "lane calibrate wrote a config that failed its self-check")
+endif()
+expect_contains("${tall_err}" "failed its self-check" "calibrate with a wrong height")
+expect_contains("${tall_err}" "no config written" "calibrate with a wrong height")
+
 # Frames without markings: a clear failure, not a config.
 file(MAKE_DIRECTORY ${OUT}/blank)
 run(0 blank_render render --config ${CONFIG} --count 1 --output ${OUT}/one)

@@ -130,10 +130,11 @@ std::string ConfigHeader(const lane::CalibrationResult& r, const lane::LaneGeome
   absl::StrAppendFormat(
       &h,
       "// Vanishing point (%.1f, %.1f) px +- (%.1f, %.1f) (95 %% interval, bootstrap over the "
-      "frames), from %d of %d frames\n// (%d curved, %d without markings, %d stationary, %d "
-      "outliers) and %d marking segments.\n",
+      "frames), from %d of %d frames\n// (%d curved, %d without markings, %d meeting "
+      "elsewhere, %d stationary, %d outliers) and %d marking segments.\n",
       vp.point.x(), vp.point.y(), r.interval_px.x(), r.interval_px.y(), vp.frames_used, r.frames,
-      r.frames_curved, r.frames_no_markings, r.frames_stationary, vp.frames_rejected, r.segments);
+      r.frames_curved, r.frames_no_markings, r.frames_elsewhere, r.frames_stationary,
+      vp.frames_rejected, r.segments);
   absl::StrAppendFormat(&h, "// Camera height %.3f m (given); focal length %.1f px (%s).\n",
                         r.camera.height_m, r.camera.fu,
                         r.focal_assumed ? "assumed: 0.61 x image width; only the along-road "
@@ -238,10 +239,10 @@ void PrintCalibration(const lane::CalibrationResult& r, const lane::LaneGeometry
       vp.point.x(), vp.point.y(), r.interval_px.x(), r.interval_px.y(),
       vp.frames_used + vp.frames_rejected, vp.spread.x(), vp.spread.y());
   std::printf(
-      "frames            %d read, %d used, %d curved, %d without markings, %d stationary, %d "
-      "outliers\n",
-      r.frames, vp.frames_used, r.frames_curved, r.frames_no_markings, r.frames_stationary,
-      vp.frames_rejected);
+      "frames            %d read, %d used, %d curved, %d without markings, %d meeting "
+      "elsewhere, %d stationary, %d outliers\n",
+      r.frames, vp.frames_used, r.frames_curved, r.frames_no_markings, r.frames_elsewhere,
+      r.frames_stationary, vp.frames_rejected);
   std::printf("segments          %d supporting\n", r.segments);
   std::printf("pitch, yaw        %.3f +- %.3f, %.3f +- %.3f deg (95 %% interval)\n",
               r.camera.pitch_deg, r.pitch_interval_deg, r.camera.yaw_deg, r.yaw_interval_deg);
@@ -299,7 +300,10 @@ int RunCalibrate(const CalibrateFlags& flags) {
     return kExitFailure;
   }
   const absl::StatusOr<lane::CalibrationResult> result = calibrator.Finish();
-  if (!result.ok()) return Failure("calibrate", std::string(result.status().message()));
+  if (!result.ok()) {
+    return Failure("calibrate",
+                   absl::StrCat(result.status().message(), "; ", kSelfCheckAdvice));
+  }
   const lane::CalibrationResult& r = *result;
   if (flags.overlay && !best.bgr.empty()) DrawOverlay(best, r, *flags.overlay);
   const absl::StatusOr<lane::LaneGeometryReport> check = SelfCheck(r, flags);

@@ -323,7 +323,49 @@ void DrawPole(const CameraModel& cam, const Object& o, cv::Mat& img) {
            o.colour);
 }
 
-void DrawObjects(const CameraModel& cam, std::vector<Object> objects, cv::Mat& img) {
+void DrawSign(const CameraModel& cam, const Object& o, cv::Mat& img) {
+  const double x0 = o.x, x1 = o.x + o.extra, z0 = o.height - o.size, z1 = o.height;
+  const double post = 0.05;
+  for (const double px : {x0 + 0.2 * o.extra, x1 - 0.2 * o.extra}) {
+    FillPoly(img,
+             {Project(cam, px - post, o.y, 0), Project(cam, px + post, o.y, 0),
+              Project(cam, px + post, o.y, z0), Project(cam, px - post, o.y, z0)},
+             cv::Scalar(120, 120, 120));
+  }
+  FillPoly(img,
+           {Project(cam, x0, o.y, z0), Project(cam, x1, o.y, z0), Project(cam, x1, o.y, z1),
+            Project(cam, x0, o.y, z1)},
+           o.colour2);
+  const double b = 0.08;
+  FillPoly(img,
+           {Project(cam, x0 + b, o.y, z0 + b), Project(cam, x1 - b, o.y, z0 + b),
+            Project(cam, x1 - b, o.y, z1 - b), Project(cam, x0 + b, o.y, z1 - b)},
+           o.colour);
+}
+
+// A strip along the road at `offset`, from o.y for o.extra metres, with a
+// dark post every 4 m.
+void DrawGuardrail(const CameraModel& cam, const Road& road, const Object& o, cv::Mat& img) {
+  constexpr double kStep = 1.0, kLow = 0.45;
+  for (double y = o.y; y < o.y + o.extra; y += kStep) {
+    const double y1 = y + kStep;
+    const double xa = road.X(o.offset, y), xb = road.X(o.offset, y1);
+    if (Depth(cam, xa, y, 0) < 1.0 || Depth(cam, xb, y1, 0) < 1.0) continue;
+    if (std::fmod(y - o.y, 4.0) < kStep) {
+      FillPoly(img,
+               {Project(cam, xa - 0.06, y, 0), Project(cam, xa + 0.06, y, 0),
+                Project(cam, xa + 0.06, y, kLow), Project(cam, xa - 0.06, y, kLow)},
+               o.colour2);
+    }
+    FillPoly(img,
+             {Project(cam, xa, y, kLow), Project(cam, xb, y1, kLow), Project(cam, xb, y1, o.height),
+              Project(cam, xa, y, o.height)},
+             o.colour);
+  }
+}
+
+void DrawObjects(const CameraModel& cam, const Road& road, std::vector<Object> objects,
+                 cv::Mat& img) {
   std::stable_sort(objects.begin(), objects.end(),
                    [](const Object& a, const Object& b) { return a.y > b.y; });
   for (const Object& o : objects) {
@@ -340,6 +382,12 @@ void DrawObjects(const CameraModel& cam, std::vector<Object> objects, cv::Mat& i
         break;
       case Object::kPole:
         DrawPole(cam, o, img);
+        break;
+      case Object::kSign:
+        DrawSign(cam, o, img);
+        break;
+      case Object::kGuardrail:
+        DrawGuardrail(cam, road, o, img);
         break;
     }
   }
@@ -393,7 +441,7 @@ SyntheticFrame RenderScene(const CameraModel& camera, const SyntheticOptions& op
   RenderGround(camera, road, look, scene.shadows, canvas);
   cv::Mat img;
   canvas.convertTo(img, CV_8UC3);
-  DrawObjects(camera, scene.objects, img);
+  DrawObjects(camera, road, scene.objects, img);
   cv::GaussianBlur(img, img, cv::Size(3, 3), look.blur_sigma);
 
   // Exposure and sensor noise.
@@ -432,6 +480,8 @@ absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
   scene.shadows = SampleShadows(options, scene.road, y_bottom, rng);
   scene.objects = SampleObjects(options, scene.road, y_bottom, rng);
   scene.noise_seed = rng();
+  Rng clutter(seed ^ 0x9e3779b97f4a7c15ULL);
+  AddClutter(options, y_bottom, clutter, &scene.road, &scene.objects);
   return RenderScene(camera, options, scene);
 }
 

@@ -161,6 +161,13 @@ absl::Status ValidateOptions(const SyntheticOptions& o) {
     return bad("noise_sigma must be in [0, 255]");
   }
   if (o.jpeg_quality < 0 || o.jpeg_quality > 100) return bad("jpeg_quality must be in 0..100");
+  if (o.extra_roadside_objects < 0 || o.extra_roadside_objects > 256) {
+    return bad("extra_roadside_objects must be in 0..256");
+  }
+  for (double p :
+       {o.tree_row_probability, o.sign_probability, o.guardrail_probability, o.worn_probability}) {
+    if (!(p >= 0.0 && p <= 1.0)) return bad("clutter probabilities must be in [0, 1]");
+  }
   if (!std::isfinite(o.truth_near_m) || o.truth_near_m < 0) return bad("truth_near_m must be >= 0");
   if (!std::isfinite(o.truth_far_m) || o.truth_far_m <= o.truth_near_m) {
     return bad("truth_far_m must be > truth_near_m");
@@ -451,9 +458,76 @@ Object SampleRoadsideObject(const Road& road, double near, double far, double po
       break;
     }
     case Object::kVehicle:
+    case Object::kSign:
+    case Object::kGuardrail:
       break;
   }
   return r;
+}
+
+void AddClutter(const SyntheticOptions& o, double y_min, Rng& rng, Road* road,
+                std::vector<Object>* objects) {
+  const double near = std::max(y_min + 2.0, 6.0);
+  for (int i = 0; i < o.extra_roadside_objects; ++i) {
+    objects->push_back(SampleRoadsideObject(*road, near, 150.0, 1.5, rng));
+  }
+  if (Chance(rng, o.tree_row_probability)) {
+    // An avenue: trees at a steady spacing close to the asphalt, their
+    // trunks painted white half the time (bright bars like markings).
+    const bool left = Chance(rng, 0.5);
+    const double spacing = Uniform(rng, 6.0, 12.0), clearance = Uniform(rng, 1.0, 3.0);
+    const bool white = Chance(rng, 0.5);
+    for (double y = near + Uniform(rng, 0.0, spacing); y < 120.0; y += spacing) {
+      Object t;
+      t.kind = Object::kTree;
+      t.y = y;
+      const double edge = left ? road->edge_left : road->edge_right;
+      t.x = road->X(edge, y) + (left ? -clearance : clearance);
+      t.size = Uniform(rng, 1.5, 3.0);
+      t.height = Uniform(rng, 5.0, 9.0);
+      t.colour = cv::Scalar(Uniform(rng, 25, 60), Uniform(rng, 55, 100), Uniform(rng, 30, 60));
+      const double g = white ? Uniform(rng, 190, 235) : Uniform(rng, 35, 60);
+      t.colour2 = cv::Scalar(g, g, g);
+      objects->push_back(t);
+    }
+  }
+  if (Chance(rng, o.sign_probability)) {
+    // A panel facing the road on two posts, light with a white border.
+    Object sgn;
+    sgn.kind = Object::kSign;
+    const bool left = Chance(rng, 0.5);
+    sgn.y = Uniform(rng, near + 4.0, 60.0);
+    const double edge = left ? road->edge_left : road->edge_right;
+    sgn.extra = Uniform(rng, 1.5, 3.5);
+    sgn.x = road->X(edge, sgn.y) + (left ? -1.0 - sgn.extra : 1.0);
+    sgn.size = Uniform(rng, 1.0, 2.0);    // panel height
+    sgn.height = Uniform(rng, 2.5, 4.5);  // top above the ground
+    const int palette = UniformInt(rng, 0, 2);
+    sgn.colour = palette == 0   ? cv::Scalar(60, 120, 30)     // green
+                 : palette == 1 ? cv::Scalar(150, 70, 20)     // blue
+                                : cv::Scalar(225, 225, 225);  // white
+    sgn.colour2 = cv::Scalar(235, 235, 235);
+    objects->push_back(sgn);
+  }
+  if (Chance(rng, o.guardrail_probability)) {
+    // Bright galvanised steel along a road edge, 0.45-0.75 m high.
+    Object g;
+    g.kind = Object::kGuardrail;
+    const bool left = Chance(rng, 0.5);
+    g.offset = (left ? road->edge_left : road->edge_right) + (left ? -0.5 : 0.5);
+    g.y = std::max(y_min, 0.5);
+    g.x = road->X(g.offset, g.y);
+    g.extra = Uniform(rng, 40.0, 120.0);
+    g.height = 0.75;
+    const double grey = Uniform(rng, 150, 210);
+    g.colour = cv::Scalar(grey, grey, grey);
+    g.colour2 = cv::Scalar(40, 40, 40);
+    objects->push_back(g);
+  }
+  for (Boundary& b : road->boundaries) {
+    if (!Chance(rng, o.worn_probability)) continue;
+    b.alpha *= Chance(rng, 0.3) ? 0.0 : Uniform(rng, 0.0, 0.3);
+  }
 }
 
 }  // namespace lane::synthetic_internal

@@ -112,11 +112,14 @@ struct Look {
 
 // An object standing on the ground drawn over the rendered road.
 struct Object {
-  enum Kind { kVehicle, kTree, kBuilding, kPole } kind = kVehicle;
+  enum Kind { kVehicle, kTree, kBuilding, kPole, kSign, kGuardrail } kind = kVehicle;
   double x = 0, y = 0;  // ground position of its base (nearest point), metres
   double size = 0;      // building length / tree crown radius
   double height = 0;
-  double extra = 0;  // building: depth (signed, away from the road); vehicle: lane
+  // Building: depth (signed, away from the road); vehicle: lane; sign:
+  // panel width; guardrail: length along the road (it follows `offset`).
+  double extra = 0;
+  double offset = 0;  // guardrail: lateral offset at y = 0 (Road::X)
   cv::Scalar colour, colour2;
 };
 
@@ -151,6 +154,11 @@ std::vector<Object> SampleObjects(const SyntheticOptions& o, const Road& road, d
 // One tree, building or pole beside the road at y in [near, far] (denser
 // near `near` for power > 1).
 Object SampleRoadsideObject(const Road& road, double near, double far, double power, Rng& rng);
+// The clutter options' objects (SyntheticOptions: extra roadside objects,
+// tree rows, signs, guardrails) and worn paint, from their own engine, so
+// that the rest of the frame stays as without them.
+void AddClutter(const SyntheticOptions& o, double y_min, Rng& rng, Road* road,
+                std::vector<Object>* objects);
 double ShadowFactor(const std::vector<Shadow>& shadows, double x, double y, double foot);
 double PaintedUpTo(const Boundary& m, double s);
 // Everything random of one frame, then drawn by RenderScene.

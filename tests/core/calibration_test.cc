@@ -158,6 +158,45 @@ TEST(CalibrationTest, RandomCamerasAreRecoveredFromRenderedDrives) {
   }
 }
 
+// A first pass led astray (here: it saw another camera's frames, 60 px to
+// the side) is caught in pass 2: the frames' markings meet away from its
+// point ("elsewhere", not "without markings"), and the estimate is refused
+// with the reason instead of a camera built on the few frames near it.
+TEST(CalibrationTest, AFirstPassLedAstrayIsRefused) {
+  const CameraModel truth = TestCamera(8.0, 0.0, 1.6);
+  const CameraModel astray =
+      CameraFromVanishingPoint(truth, truth.VanishingPoint() + Eigen::Vector2d(60, -20));
+  SyntheticOptions so;
+  so.max_heading_rad = 0.005;
+  so.straight_probability = 0.8;
+  CalibrationOptions o;
+  o.height_m = truth.height_m;
+  o.focal_px = truth.fu;
+  CameraCalibrator calibrator(o);
+  for (int i = 0; i < 20; ++i) {
+    absl::StatusOr<SyntheticFrame> f = RenderSyntheticFrame(astray, so, 300 + i);
+    ASSERT_TRUE(f.ok());
+    ASSERT_TRUE(calibrator.AddFirstPass(f->bgr).ok());
+  }
+  ASSERT_TRUE(calibrator.FinishFirstPass().ok());
+  int elsewhere = 0;
+  for (int i = 0; i < 20; ++i) {
+    absl::StatusOr<SyntheticFrame> f = RenderSyntheticFrame(truth, so, 400 + i);
+    ASSERT_TRUE(f.ok());
+    const absl::StatusOr<FrameVanishingPoint> p = calibrator.AddSecondPass(f->bgr);
+    ASSERT_TRUE(p.ok());
+    if (p->result == VpFrameResult::kElsewhere) {
+      ++elsewhere;
+      EXPECT_LT((p->point - truth.VanishingPoint()).norm(), 20.0) << p->point.transpose();
+    }
+  }
+  EXPECT_GE(elsewhere, 10);
+  const absl::StatusOr<CalibrationResult> r = calibrator.Finish();
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(std::string(r.status().message()).find("meet elsewhere"), std::string::npos)
+      << r.status();
+}
+
 // Online refinement: a camera whose pitch drifts by 1 degree during a
 // stream is followed, from the detector's own lanes, with the detector
 // re-derived as the estimate moves.
@@ -271,31 +310,46 @@ TEST(CalibrationTest, CaltechCordova1VanishingPoint) {
   o.height_m = caltech->camera.height_m;
   const absl::StatusOr<CalibrationResult> r = CalibrateFiles(Frames(dir, ".png"), o);
   ASSERT_TRUE(r.ok()) << r.status();
-  // The Caltech camera's vanishing point, (317.9, 170.7).
-  EXPECT_LT((r->vanishing_point.point - caltech->camera.VanishingPoint()).norm(), 6.0)
+  // The Caltech camera's vanishing point, (317.9, 170.7): the target is 3 px.
+  EXPECT_LT((r->vanishing_point.point - caltech->camera.VanishingPoint()).norm(), 3.0)
       << r->vanishing_point.point.transpose();
   EXPECT_GT(r->frames_curved, 0);
 }
 
-// The CULane dev clip: 60 frames 3 s apart, 14 of them in a standstill.
-// The issue's target is 6 px from the hand estimate (755, 380); this
-// measures 6.5 px with the hood row given (5.5 px of it in v). The hand
-// estimate is the median of the labels' vanishing points, and the labels of
-// the standstill frames (copied, 379.4) pull it up: over the moving frames
-// the labels meet at v ~ 384.7 (docs/calibration.md). The bound here is the
-// measured figure with a margin, not the target.
+// The self-check of `lane calibrate` on a clip's used frames.
+LaneGeometryReport SelfCheckFiles(const std::vector<std::string>& files, const CalibrationResult& r,
+                                  double lane_width_m) {
+  absl::StatusOr<CalibrationSelfCheck> check = CalibrationSelfCheck::Create(r, lane_width_m);
+  EXPECT_TRUE(check.ok()) << check.status();
+  if (!check.ok()) return {};
+  for (int k : r.used_frames) {
+    EXPECT_TRUE(check->AddFrame(cv::imread(files[static_cast<size_t>(k)], cv::IMREAD_COLOR)).ok());
+  }
+  return check->Report();
+}
+
+// The CULane dev clip: 60 frames 3 s apart, 14 of them in a standstill,
+// with only the height and the focal length given (issue 35). The
+// reference is where the labels that are not copies meet, (753.9, 384.2)
+// (docs/calibration.md); the target is 4 px. The estimate passes its
+// self-check and its 95 % interval covers the reference.
 TEST(CalibrationTest, CulaneDevClipVanishingPoint) {
   const std::string dir = testing::FindSharedClip("culane-driver161-a");
   if (dir.empty()) GTEST_SKIP() << "../shared/data/culane-driver161-a is absent";
   CalibrationOptions o;
   o.height_m = 1.3;
   o.focal_px = 1000.0;
-  o.road_bottom_row = 546;
-  const absl::StatusOr<CalibrationResult> r = CalibrateFiles(Frames(dir, ".jpg"), o);
+  const std::vector<std::string> files = Frames(dir, ".jpg");
+  const absl::StatusOr<CalibrationResult> r = CalibrateFiles(files, o);
   ASSERT_TRUE(r.ok()) << r.status();
-  EXPECT_LT((r->vanishing_point.point - Eigen::Vector2d(755, 380)).norm(), 8.0)
-      << r->vanishing_point.point.transpose();
+  const Eigen::Vector2d reference(753.9, 384.2);
+  const Eigen::Vector2d error = r->vanishing_point.point - reference;
+  EXPECT_LT(error.norm(), 4.0) << r->vanishing_point.point.transpose();
+  EXPECT_LE(std::abs(error.x()), r->interval_px.x());
+  EXPECT_LE(std::abs(error.y()), r->interval_px.y());
   EXPECT_GT(r->frames_stationary, 5);  // the standstill is recognised
+  const LaneGeometryReport check = SelfCheckFiles(files, *r, o.lane_width_m);
+  EXPECT_TRUE(check.verdict.ok()) << check.verdict;
 }
 
 }  // namespace

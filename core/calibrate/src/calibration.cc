@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "lane/calibrate/vanishing_point.h"
 
 namespace lane {
@@ -241,6 +242,10 @@ absl::StatusOr<FrameVanishingPoint> CameraCalibrator::AddSecondPass(
     case VpFrameResult::kNoMarkings:
       ++no_markings_;
       break;
+    case VpFrameResult::kElsewhere:
+      ++elsewhere_;
+      elsewhere_points_.push_back(p.point);
+      break;
     case VpFrameResult::kStationary:
       break;
   }
@@ -249,6 +254,15 @@ absl::StatusOr<FrameVanishingPoint> CameraCalibrator::AddSecondPass(
 }
 
 absl::StatusOr<CalibrationResult> CameraCalibrator::Finish() const {
+  if (elsewhere_ > static_cast<int>(points_.size())) {
+    const std::optional<CombinedVanishingPoint> other = CombineVanishingPoints(elsewhere_points_);
+    return absl::FailedPreconditionError(absl::StrFormat(
+        "the first pass put the vanishing point at (%.1f, %.1f), but only %d frames' markings "
+        "meet there and %d frames' meet elsewhere (median near (%.1f, %.1f)): the first pass "
+        "was led by edges that are not lane markings",
+        first_point_.x(), first_point_.y(), static_cast<int>(points_.size()), elsewhere_,
+        other->point.x(), other->point.y()));
+  }
   const std::optional<CombinedVanishingPoint> c = CombineVanishingPoints(points_, 1.0);
   if (!c) {
     return absl::FailedPreconditionError(
@@ -270,12 +284,16 @@ absl::StatusOr<CalibrationResult> CameraCalibrator::Finish() const {
   r.frames = frames_;
   r.frames_no_markings = no_markings_;
   r.frames_curved = curved_;
+  r.frames_elsewhere = elsewhere_;
   r.frames_stationary = stationary_count_;
   r.segments = segments_;
   r.road_bottom_row = road_bottom_;
   r.far_point = r.camera.GroundToImage({0.0, 1e5});
   for (int k : c->used) r.used_frames.push_back(point_frames_[static_cast<size_t>(k)]);
-  r.interval_px = BootstrapInterval(points_, 1.0);
+  const Eigen::Vector2d systematic(intrinsics_.fu * std::tan(kSystematicIntervalDeg * kDegToRad),
+                                   intrinsics_.fv * std::tan(kSystematicIntervalDeg * kDegToRad));
+  const Eigen::Vector2d spread = BootstrapInterval(points_, 1.0);
+  r.interval_px = (spread.cwiseProduct(spread) + systematic.cwiseProduct(systematic)).cwiseSqrt();
   // The interval in degrees: the cameras at the interval's ends.
   const CameraModel du =
       CameraFromVanishingPoint(intrinsics_, c->point + Eigen::Vector2d(r.interval_px.x(), 0));

@@ -308,6 +308,8 @@ const char* VpFrameResultName(VpFrameResult result) {
       return "curved";
     case VpFrameResult::kStationary:
       return "stationary";
+    case VpFrameResult::kElsewhere:
+      return "elsewhere";
   }
   return "?";
 }
@@ -346,7 +348,19 @@ FrameVanishingPoint EstimateFrameVanishingPoint(const std::vector<ImageSegment>&
   const double gate_px = o.focal_px * std::tan(o.prior_gate_deg * kDegToRad);
   const std::optional<Consensus> all =
       BestPoint(segments, use, tol, o.min_inliers, spread, o.prior, gate_px, o.bounds);
-  if (!all) return out;
+  if (!all) {
+    // Markings that meet away from the prior disagree with it: told apart
+    // from a frame without markings.
+    if (o.prior) {
+      const std::optional<Consensus> free =
+          BestPoint(segments, use, tol, o.min_inliers, spread, std::nullopt, gate_px, o.bounds);
+      if (free) {
+        out.result = VpFrameResult::kElsewhere;
+        out.point = free->point;
+      }
+    }
+    return out;
+  }
   out.point = all->point;
   out.support = all->support;
   out.inliers = static_cast<int>(all->support.size());

@@ -39,6 +39,13 @@ struct SyntheticOptions {
   int max_shadows = 3;
   double noise_sigma = 4.0;  // grey levels
   int jpeg_quality = 80;     // 0 = no JPEG round trip
+  // Roadside clutter that competes with the markings (calibration tests).
+  // All 0 by default: the frame is then exactly as without these options.
+  int extra_roadside_objects = 0;    // trees, buildings and poles beyond the usual 3-16
+  double tree_row_probability = 0;   // a row of trees (white trunks half the time) along a verge
+  double sign_probability = 0;       // a sign on two posts beside the road
+  double guardrail_probability = 0;  // a guardrail along one road edge
+  double worn_probability = 0;       // per boundary: the paint worn to 0-30 %, or gone
   // Ground truth covers the boundary from this far ahead (metres) ...
   double truth_near_m = 0.0;  // 0 = the bottom of the image
   // ... to this far ahead (metres).

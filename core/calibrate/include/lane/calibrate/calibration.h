@@ -31,6 +31,14 @@
 
 namespace lane {
 
+// A systematic term added (in quadrature) to the bootstrap interval of
+// `lane calibrate`'s vanishing point, degrees (95 %): the bias the spread
+// across frames cannot show. On 50 rendered cameras in clutter (seed 777,
+// not the test's) the estimate sat 0.8 px (0.12 deg) above the truth on
+// average (slight curves that pass the curve test lift every frame's point
+// alike); this term brought the interval's coverage from 40 to 49 of 50.
+inline constexpr double kSystematicIntervalDeg = 0.15;
+
 // Focal length assumed when none is given: 0.61 x the image width, a 79°
 // horizontal field of view, typical of dash cameras (the CULane camera's
 // workable 1000 px at 1640 px).
@@ -101,10 +109,13 @@ struct CalibrationResult {
   bool focal_assumed = false;
   int frames = 0;              // frames of pass 2
   int frames_no_markings = 0;  // left out: fewer than two consistent markings
-  int frames_curved = 0;       // left out: near and far markings disagree
-  int frames_stationary = 0;   // left out: the same view as the frame before
-  int segments = 0;            // segments supporting the used frames' points
-  int road_bottom_row = 0;     // first row below the road (hood), or the height
+  // Left out: markings that meet further than prior_gate_deg from pass 1's
+  // point. More of these than used frames refuses the estimate.
+  int frames_elsewhere = 0;
+  int frames_curved = 0;      // left out: near and far markings disagree
+  int frames_stationary = 0;  // left out: the same view as the frame before
+  int segments = 0;           // segments supporting the used frames' points
+  int road_bottom_row = 0;    // first row below the road (hood), or the height
   GroundView view;
   // Far ground point (0, 1e5 m) projected by the camera, for the check
   // against the vanishing point.
@@ -131,7 +142,8 @@ class CameraCalibrator {
   absl::StatusOr<FrameVanishingPoint> AddSecondPass(const cv::Mat& frame,
                                                     std::vector<ImageSegment>* segments = nullptr);
   // FAILED_PRECONDITION when fewer than kMinFramesUsed frames of pass 2
-  // gave a point.
+  // gave a point, or when more frames' markings met away from pass 1's
+  // point than at it.
   absl::StatusOr<CalibrationResult> Finish() const;
   static constexpr int kMinFramesUsed = 3;
 
@@ -158,7 +170,8 @@ class CameraCalibrator {
   int second_frames_ = 0, stationary_count_ = 0;
   std::vector<Eigen::Vector2d> points_;
   std::vector<int> point_frames_;  // pass-2 index of each point
-  int frames_ = 0, no_markings_ = 0, curved_ = 0, segments_ = 0;
+  int frames_ = 0, no_markings_ = 0, curved_ = 0, elsewhere_ = 0, segments_ = 0;
+  std::vector<Eigen::Vector2d> elsewhere_points_;
 };
 
 // The self-check of an estimate (self_check.h) before it is written: the

@@ -92,8 +92,10 @@ struct VanishingPointOptions {
   std::optional<cv::Rect2d> bounds;
 };
 
-// Why a frame gave no vanishing point (kOk when it did).
-enum class VpFrameResult { kOk, kNoMarkings, kCurved, kStationary };
+// Why a frame gave no vanishing point (kOk when it did). kElsewhere: its
+// markings meet, but further than prior_gate_deg from the prior (pass 1's
+// point), so they disagree with it rather than being absent.
+enum class VpFrameResult { kOk, kNoMarkings, kCurved, kStationary, kElsewhere };
 const char* VpFrameResultName(VpFrameResult result);
 
 struct FrameVanishingPoint {
