@@ -37,6 +37,8 @@ struct RenderFlags {
   int jpeg_quality = lane::SyntheticOptions().jpeg_quality;
   std::string format = "png";
   bool sequence = false;
+  bool clutter = false;
+  bool straight = false;
   double fps = lane::SyntheticDriveOptions().fps;
   double speed_mps = lane::SyntheticDriveOptions().speed_mps;
 };
@@ -64,6 +66,11 @@ int RunRender(const RenderFlags& flags) {
   lane::SyntheticOptions options;
   options.num_lanes = flags.num_lanes;
   options.jpeg_quality = flags.jpeg_quality;
+  if (flags.clutter) lane::SetRoadsideClutter(&options);
+  if (flags.straight) {
+    options.straight_probability = 1.0;
+    options.max_heading_rad = 0.005;
+  }
   const bool jpg = flags.format == "jpg";
   std::vector<int> write_params;
   if (jpg) {
@@ -147,9 +154,19 @@ Command AddRenderCommand(CLI::App& lane) {
       ->type_name("Q")
       ->check(Between(0, 100));
   OneOf(app->add_option("--format", flags->format, "image file format"), {"png", "jpg"});
-  app->add_flag("--sequence", flags->sequence,
-                "one continuous drive (lane change, bends, traffic, a dashed line turning "
-                "solid, changing light) instead of independent frames");
+  CLI::Option* sequence =
+      app->add_flag("--sequence", flags->sequence,
+                    "one continuous drive (lane change, bends, traffic, a dashed line turning "
+                    "solid, changing light) instead of independent frames");
+  app->add_flag("--clutter", flags->clutter,
+                "roadside clutter that competes with the markings: tree rows (white trunks half "
+                "the time), signs, guardrails, more buildings, poles and vehicles, worn paint "
+                "(independent frames)")
+      ->excludes(sequence);
+  app->add_flag("--straight", flags->straight,
+                "straight roads only, nearly aligned with the car (independent frames): "
+                "calibration footage")
+      ->excludes(sequence);
   app->add_option("--fps", flags->fps, "--sequence: frames per second")
       ->type_name("F")
       ->check(CLI::Range(1.0, 240.0));

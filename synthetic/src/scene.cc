@@ -531,3 +531,16 @@ void AddClutter(const SyntheticOptions& o, double y_min, Rng& rng, Road* road,
 }
 
 }  // namespace lane::synthetic_internal
+
+namespace lane {
+
+void SetRoadsideClutter(SyntheticOptions* o) {
+  o->max_vehicles = std::max(o->max_vehicles, 3);
+  o->extra_roadside_objects = 10;
+  o->tree_row_probability = 0.6;
+  o->sign_probability = 0.4;
+  o->guardrail_probability = 0.4;
+  o->worn_probability = 0.25;
+}
+
+}  // namespace lane

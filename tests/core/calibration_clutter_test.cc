@@ -41,12 +41,7 @@ struct Outcome {
 Outcome CalibrateCluttered(const CameraModel& truth, int frames, uint64_t seed) {
   SyntheticOptions so;
   so.max_heading_rad = 0.005;
-  so.max_vehicles = 3;
-  so.extra_roadside_objects = 10;
-  so.tree_row_probability = 0.6;
-  so.sign_probability = 0.4;
-  so.guardrail_probability = 0.4;
-  so.worn_probability = 0.25;
+  SetRoadsideClutter(&so);
   std::vector<cv::Mat> images;
   for (int i = 0; i < frames; ++i) {
     absl::StatusOr<SyntheticFrame> f = RenderSyntheticFrame(truth, so, seed + i);

@@ -52,6 +52,12 @@ struct SyntheticOptions {
   double truth_far_m = 40.0;
 };
 
+// The clutter of `lane render --clutter` and the calibration clutter test:
+// 10 extra roadside objects, a tree row in 60 % of the frames, a sign and a
+// guardrail in 40 % each, up to 3 vehicles ahead, a quarter of the
+// boundaries worn or gone.
+void SetRoadsideClutter(SyntheticOptions* options);
+
 // One painted boundary of the rendered road.
 struct SyntheticBoundary {
   std::array<Eigen::Vector2d, 4> image;  // Bezier control points, image pixels
