@@ -44,6 +44,8 @@ CalibrationSnapshot Session::Calibration() const {
   s.drift_pitch_deg = calibrator_.drift_pitch_deg();
   s.drift_yaw_deg = calibrator_.drift_yaw_deg();
   s.rederived = static_cast<uint32_t>(calibrator_.rederived());
+  s.refused = static_cast<uint32_t>(calibrator_.refused());
+  s.last_refusal = std::string(calibrator_.last_refusal().message());
   return s;
 }
 

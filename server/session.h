@@ -95,6 +95,8 @@ struct CalibrationSnapshot {
   double drift_pitch_deg = 0;
   double drift_yaw_deg = 0;
   uint32_t rederived = 0;
+  uint32_t refused = 0;
+  std::string last_refusal;
 };
 
 struct Session {

@@ -86,6 +86,8 @@ void SessionToProto(const Session& session, absl::Time last_used, v1::Session* o
   state->set_drift_pitch_deg(c.drift_pitch_deg);
   state->set_drift_yaw_deg(c.drift_yaw_deg);
   state->set_rederived(c.rederived);
+  state->set_refused(c.refused);
+  state->set_last_refusal(c.last_refusal);
 }
 
 }  // namespace lane::server

@@ -225,6 +225,9 @@ TEST(HttpEndpointTest, AutoCalibratingSessionFollowsTheCameraAndExportsItsDrift)
   EXPECT_NEAR(drift.calibration().drift_yaw_deg(), 0.0, 0.3);
   EXPECT_GT(drift.calibration().frames_used(), kFrames / 2u);
   EXPECT_GE(drift.calibration().rederived(), 3u);
+  // A refusal by the self-check always comes with its reason.
+  EXPECT_EQ(drift.calibration().refused() == 0, drift.calibration().last_refusal().empty())
+      << drift.calibration().DebugString();
   EXPECT_GT(drift.calibration().confidence(), 0.5);
   // The configured camera is what the session was created with.
   EXPECT_DOUBLE_EQ(drift.config().camera().pitch_deg(), 13.0);
