@@ -22,9 +22,29 @@ double PixelsPerMetreAcross(const CameraModel& camera, const Eigen::Vector2d& p)
 }
 
 struct Bar {
-  double offset = 0;    // along the normal, pixels
+  double offset = 0;    // from the profile's centre, samples
   double contrast = 0;  // peak minus the brighter side
 };
+
+// The strongest bar of the smoothed profile `s` within +-half samples of its
+// centre: the local maximum that most exceeds the brighter of its two sides
+// `side` samples out, refined by a parabola. A marking is a bar, brighter
+// than the road on both sides; the bright side of a step (a shadow's border,
+// a curb, the hood's reflection) is not, however bright.
+std::optional<Bar> StrongestBar(const std::vector<double>& s, int half, int side) {
+  const int n = static_cast<int>(s.size()), c = (n - 1) / 2;
+  std::optional<Bar> best;
+  for (int i = std::max(c - half, side + 1); i <= std::min(c + half, n - side - 2); ++i) {
+    if (!(s[i] >= s[i - 1] && s[i] >= s[i + 1])) continue;
+    const double contrast = s[i] - std::max(s[i - side], s[i + side]);
+    if (contrast <= 0 || (best && contrast <= best->contrast)) continue;
+    double off = i;
+    const double denom = s[i - 1] - 2 * s[i] + s[i + 1];
+    if (denom < 0) off += std::clamp(0.5 * (s[i - 1] - s[i + 1]) / denom, -0.5, 0.5);
+    best = Bar{off - c, contrast};
+  }
+  return best;
+}
 
 // The strongest bar of the smoothed profile across `p` (normal `n`).
 std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
@@ -42,48 +62,12 @@ std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
   raw.resize(2 * h + 1);
   if (!image.SampleAlong(p, n, h, raw.data())) return std::nullopt;  // it leaves the image
   SmoothProfile(raw, sigma, smooth);
-  // Best bar within +-half of the centre.
-  const int s = static_cast<int>(std::lround(side));
-  std::optional<Bar> best;
-  const int lo = h - static_cast<int>(std::lround(half)),
-            hi = h + static_cast<int>(std::lround(half));
-  for (int i = std::max(lo, s + 1); i <= std::min(hi, static_cast<int>(raw.size()) - s - 2); ++i) {
-    if (!(smooth[i] >= smooth[i - 1] && smooth[i] >= smooth[i + 1])) continue;
-    const double c = smooth[i] - std::max(smooth[i - s], smooth[i + s]);
-    if (c <= 0 || (best && c <= best->contrast)) continue;
-    double off = i;
-    const double l = smooth[i - 1], m = smooth[i], r = smooth[i + 1];
-    const double denom = l - 2 * m + r;
-    if (denom < 0) off += std::clamp(0.5 * (l - r) / denom, -0.5, 0.5);
-    best = Bar{off - h, c};
-  }
-  return best;
+  return StrongestBar(smooth, static_cast<int>(std::lround(half)),
+                      static_cast<int>(std::lround(side)));
 }
 
 // LocalizeInImage's profile samples per smoothing sigma.
 constexpr double kSamplesPerSigma = 4.0;
-
-// The offset (samples from the centre) of the strongest bar of the smoothed
-// profile `s` within +-half samples of its centre: the local maximum that
-// most exceeds the brighter of its two sides `side` samples out. A marking
-// is a bar, brighter than the road on both sides; the bright side of a step
-// (a shadow's border, a curb, the hood's reflection) is not, however bright.
-std::optional<double> StrongestBarOffset(const std::vector<double>& s, int half, int side) {
-  const int n = static_cast<int>(s.size()), c = (n - 1) / 2;
-  std::optional<double> best_offset;
-  double best = 0;
-  for (int i = std::max(c - half, side + 1); i <= std::min(c + half, n - side - 2); ++i) {
-    if (!(s[i] >= s[i - 1] && s[i] >= s[i + 1])) continue;
-    const double contrast = s[i] - std::max(s[i - side], s[i + side]);
-    if (contrast <= best) continue;
-    best = contrast;
-    double off = i;
-    const double denom = s[i - 1] - 2 * s[i] + s[i + 1];
-    if (denom < 0) off += std::clamp(0.5 * (s[i - 1] - s[i + 1]) / denom, -0.5, 0.5);
-    best_offset = off - c;
-  }
-  return best_offset;
-}
 
 }  // namespace
 
@@ -118,9 +102,9 @@ std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& i
       SampleProfile(image, p, spacing * normal, half_samples + side_samples + 1, profile);
       thread_local std::vector<double> smooth;
       SmoothProfile(profile, sigma_samples, smooth);
-      const auto bar = StrongestBarOffset(smooth, half_samples, side_samples);
+      const auto bar = StrongestBar(smooth, half_samples, side_samples);
       if (!bar) continue;
-      offset = spacing * *bar;
+      offset = spacing * bar->offset;
     } else {
       SampleProfile(image, p, spacing * normal, half / spacing, profile);
       const auto peak = FindProfilePeak(profile, sigma_samples);
@@ -284,24 +268,17 @@ std::vector<Eigen::Vector2d> ExtrapolateDownOnGround(const std::vector<Eigen::Ve
   const double det = n * syy - sy * sy;
   if (n < 2 || det < 1e-9) return out;
   const double b = (n * sxy - sy * sx) / det, a = (sx - b * sy) / n;
-  // Ground distance of max_row below the end: where the line meets that row.
+  // A line on the ground is a line in the image: through the images of two
+  // of its points, the nearest evidence's and one a metre further.
   const Eigen::Vector2d start = camera.GroundToImage(Eigen::Vector2d(a + b * y_near, y_near));
-  if (!start.allFinite()) return out;
+  const Eigen::Vector2d further =
+      camera.GroundToImage(Eigen::Vector2d(a + b * (y_near + 1.0), y_near + 1.0));
+  if (!start.allFinite() || !further.allFinite() || !(start.y() - further.y() > 1e-9)) return out;
+  const double du_dv = (start.x() - further.x()) / (start.y() - further.y());
   for (double row = start.y() + step_px; row < max_row + step_px; row += step_px) {
     const double r = std::min(row, max_row);
-    // The ground point of the line seen at image row r: solve on the ground
-    // by bisection over y (rows grow as y shrinks).
-    double lo = 0.05, hi = y_near;
-    for (int it = 0; it < 40; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      const Eigen::Vector2d q = camera.GroundToImage(Eigen::Vector2d(a + b * mid, mid));
-      if (q.allFinite() && q.y() > r)
-        lo = mid;
-      else
-        hi = mid;
-    }
-    const Eigen::Vector2d q = camera.GroundToImage(Eigen::Vector2d(a + b * hi, hi));
-    if (!q.allFinite() || q.x() < 0 || q.x() > cols - 1) break;
+    const Eigen::Vector2d q(start.x() + (r - start.y()) * du_dv, r);
+    if (q.x() < 0 || q.x() > cols - 1) break;
     out.push_back(q);
     if (r >= max_row) break;
   }
