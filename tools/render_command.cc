@@ -39,6 +39,7 @@ struct RenderFlags {
   bool sequence = false;
   bool clutter = false;
   bool straight = false;
+  bool night = false;
   double fps = lane::SyntheticDriveOptions().fps;
   double speed_mps = lane::SyntheticDriveOptions().speed_mps;
 };
@@ -67,6 +68,7 @@ int RunRender(const RenderFlags& flags) {
   options.num_lanes = flags.num_lanes;
   options.jpeg_quality = flags.jpeg_quality;
   if (flags.clutter) lane::SetRoadsideClutter(&options);
+  options.night = flags.night;
   if (flags.straight) {
     options.straight_probability = 1.0;
     options.max_heading_rad = 0.005;
@@ -162,6 +164,10 @@ Command AddRenderCommand(CLI::App& lane) {
                 "roadside clutter that competes with the markings: tree rows (white trunks half "
                 "the time), signs, guardrails, more buildings, poles and vehicles, worn paint "
                 "(independent frames)")
+      ->excludes(sequence);
+  app->add_flag("--night", flags->night,
+                "night: the road lit by the car's low beams over a little ambient light, with "
+                "street lights and oncoming headlights (independent frames)")
       ->excludes(sequence);
   app->add_flag("--straight", flags->straight,
                 "straight roads only, nearly aligned with the car (independent frames): "

@@ -393,6 +393,40 @@ void DrawObjects(const CameraModel& cam, const Road& road, std::vector<Object> o
   }
 }
 
+// Relights a day image for the night: the ground by the low beams over the
+// ambient light, everything above the horizon by the ambient light only,
+// then the light sources with their glare.
+void ApplyNight(const CameraModel& cam, const Night& night, cv::Mat& img) {
+  const double horizon = cam.HorizonRow();
+  const double tan_half = std::tan(night.half_angle_deg * kDegToRad);
+  cv::Mat3f f;
+  img.convertTo(f, CV_32FC3);
+  for (int v = 0; v < f.rows; ++v) {
+    cv::Vec3f* row = f.ptr<cv::Vec3f>(v);
+    for (int u = 0; u < f.cols; ++u) {
+      double light = night.ambient;
+      if (v > horizon + 0.5) {
+        const Eigen::Vector2d g =
+            cam.ImageToGround({static_cast<double>(u), static_cast<double>(v)});
+        if (g.allFinite() && g.y() > 0) {
+          const double along = g.y() < night.reach_m ? 1.0 : std::pow(night.reach_m / g.y(), 2);
+          const double across = g.x() / (g.y() * tan_half);
+          const double near = std::min(1.0, g.y() / 3.0);  // the hood's shadow close by
+          light += night.beam * along * near * std::exp(-across * across);
+        }
+      }
+      row[u] *= static_cast<float>(light);
+    }
+  }
+  for (const Night::Light& l : night.lights) {
+    cv::circle(f, Fp(l.at.x(), l.at.y()), cvRound(3.0 * l.radius * 16), cv::Scalar(60, 70, 80),
+               cv::FILLED, cv::LINE_AA, kShift);
+    cv::circle(f, Fp(l.at.x(), l.at.y()), cvRound(l.radius * 16), cv::Scalar(235, 245, 255),
+               cv::FILLED, cv::LINE_AA, kShift);
+  }
+  f.convertTo(img, CV_8UC3);
+}
+
 double BottomDistance(const CameraModel& cam) {
   const int w = cam.image_width;
   const int h = cam.image_height;
@@ -442,6 +476,7 @@ SyntheticFrame RenderScene(const CameraModel& camera, const SyntheticOptions& op
   cv::Mat img;
   canvas.convertTo(img, CV_8UC3);
   DrawObjects(camera, road, scene.objects, img);
+  if (scene.night.on) ApplyNight(camera, scene.night, img);
   cv::GaussianBlur(img, img, cv::Size(3, 3), look.blur_sigma);
 
   // Exposure and sensor noise.
@@ -450,7 +485,9 @@ SyntheticFrame RenderScene(const CameraModel& camera, const SyntheticOptions& op
   if (options.noise_sigma > 0) {
     cv::Mat noise(f.size(), CV_32FC3);
     cv::RNG cvrng(scene.noise_seed);
-    cvrng.fill(noise, cv::RNG::NORMAL, 0.0, options.noise_sigma);
+    // At night the sensor's gain is up: 2.5 times the noise.
+    cvrng.fill(noise, cv::RNG::NORMAL, 0.0,
+               options.noise_sigma * (scene.night.on ? kNightNoiseGain : 1.0));
     f += noise;
   }
   f.convertTo(img, CV_8UC3);
@@ -482,6 +519,10 @@ absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
   scene.noise_seed = rng();
   Rng clutter(seed ^ 0x9e3779b97f4a7c15ULL);
   AddClutter(options, y_bottom, clutter, &scene.road, &scene.objects);
+  if (options.night) {
+    scene.night = SampleNight(camera, clutter);
+    scene.shadows.clear();  // no sun
+  }
   return RenderScene(camera, options, scene);
 }
 

@@ -465,6 +465,28 @@ Object SampleRoadsideObject(const Road& road, double near, double far, double po
   return r;
 }
 
+Night SampleNight(const CameraModel& cam, Rng& rng) {
+  Night n;
+  n.on = true;
+  n.ambient = Uniform(rng, 0.03, 0.10);
+  n.beam = Uniform(rng, 0.8, 1.2);
+  n.reach_m = Uniform(rng, 20.0, 35.0);
+  n.half_angle_deg = Uniform(rng, 20.0, 30.0);
+  // Street lights above the horizon, oncoming headlights on it.
+  const double horizon = cam.HorizonRow();
+  const int count = UniformInt(rng, 0, 4);
+  for (int i = 0; i < count; ++i) {
+    Night::Light l;
+    const bool street = Chance(rng, 0.5);
+    l.at = {Uniform(rng, 0.0, cam.image_width - 1.0),
+            street ? Uniform(rng, std::max(0.0, horizon - 0.3 * cam.image_height), horizon)
+                   : horizon + Uniform(rng, 0.0, 0.05 * cam.image_height)};
+    l.radius = Uniform(rng, 1.5, 5.0) * cam.image_width / 640.0;
+    n.lights.push_back(l);
+  }
+  return n;
+}
+
 void AddClutter(const SyntheticOptions& o, double y_min, Rng& rng, Road* road,
                 std::vector<Object>* objects) {
   const double near = std::max(y_min + 2.0, 6.0);

@@ -161,6 +161,24 @@ void AddClutter(const SyntheticOptions& o, double y_min, Rng& rng, Road* road,
                 std::vector<Object>* objects);
 double ShadowFactor(const std::vector<Shadow>& shadows, double x, double y, double foot);
 double PaintedUpTo(const Boundary& m, double s);
+// Night lighting (SyntheticOptions::night): image = day image x
+// (ambient + beam(x, y)) on the ground, ambient above the horizon, plus
+// light sources (image points, radius px).
+struct Night {
+  bool on = false;
+  double ambient = 0.06;
+  double beam = 1.0;           // gain inside the beam
+  double reach_m = 25.0;       // full brightness up to here, then (reach / y)^2
+  double half_angle_deg = 25;  // the beam's half width
+  struct Light {
+    Eigen::Vector2d at;
+    double radius = 3;
+  };
+  std::vector<Light> lights;
+};
+Night SampleNight(const CameraModel& cam, Rng& rng);
+constexpr double kNightNoiseGain = 2.5;
+
 // Everything random of one frame, then drawn by RenderScene.
 struct Scene {
   Road road;
@@ -168,6 +186,7 @@ struct Scene {
   std::vector<Shadow> shadows;
   std::vector<Object> objects;
   uint64_t noise_seed = 0;
+  Night night;
 };
 // The ground distance of the bottom row's centre (0.5 when the ground is not
 // visible there).

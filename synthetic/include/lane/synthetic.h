@@ -46,6 +46,12 @@ struct SyntheticOptions {
   double sign_probability = 0;       // a sign on two posts beside the road
   double guardrail_probability = 0;  // a guardrail along one road edge
   double worn_probability = 0;       // per boundary: the paint worn to 0-30 %, or gone
+  // Night: the scene lit by the car's low beams (bright from a few metres
+  // to 20-35 m ahead, falling off with the square of the distance beyond,
+  // within a cone of +-20-30 deg) over an ambient 3-10 % of daylight, with
+  // street lights and oncoming headlights near the horizon, and 2.5 times
+  // the sensor noise (the gain is up).
+  bool night = false;
   // Ground truth covers the boundary from this far ahead (metres) ...
   double truth_near_m = 0.0;  // 0 = the bottom of the image
   // ... to this far ahead (metres).
