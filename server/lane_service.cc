@@ -65,7 +65,7 @@ void LaneServiceImpl::StartDrain() {
 
 bool LaneServiceImpl::WaitForStreams(absl::Time deadline) {
   absl::MutexLock lock(&mu_);
-  return mu_.AwaitWithDeadline(absl::Condition(this, &LaneServiceImpl::NoStreams), deadline);
+  return mu_.AwaitWithDeadline(no_streams_, deadline);
 }
 
 size_t LaneServiceImpl::open_streams() const {

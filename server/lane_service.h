@@ -107,6 +107,12 @@ class LaneServiceImpl final : public RawLaneService {
   bool NoStreams() const ABSL_SHARED_LOCKS_REQUIRED(mu_) { return streams_.empty(); }
 
   mutable absl::Mutex mu_;
+  // Conditions that other threads evaluate are members, not temporaries on
+  // the waiter's stack: absl evaluates a waiter's Condition on the thread
+  // that unlocks, inside its (uninstrumented) lock code, so TSan saw that
+  // thread read the waiter's stack after the waiter had returned and reused
+  // it (a loaded run of the suite, issue 40).
+  const absl::Condition no_streams_{this, &LaneServiceImpl::NoStreams};
   State state_ ABSL_GUARDED_BY(mu_) = State::kStarting;
   std::unordered_set<FrameStream*> streams_ ABSL_GUARDED_BY(mu_);
 };

@@ -252,7 +252,7 @@ void LaneServer::SweepLoop() {
       std::clamp(options_.session_ttl / 4, absl::Milliseconds(10), absl::Seconds(1));
   absl::MutexLock lock(&mu_);
   while (!stopping_) {
-    mu_.AwaitWithTimeout(absl::Condition(&stopping_), interval);
+    mu_.AwaitWithTimeout(stopping_cond_, interval);
     if (stopping_) break;
     mu_.Unlock();
     sessions_->EvictIdle();
@@ -280,7 +280,7 @@ void LaneServer::Drain() {
   {
     absl::MutexLock lock(&mu_);
     if (shutting_down_) {
-      mu_.Await(absl::Condition(&drained_));
+      mu_.Await(drained_cond_);
       return;
     }
     shutting_down_ = true;
@@ -302,6 +302,6 @@ void LaneServer::Drain() {
   drained_ = true;  // wakes Wait and other Drains
 }
 
-void LaneServer::Wait() { absl::MutexLock lock(&mu_, absl::Condition(&drained_)); }
+void LaneServer::Wait() { absl::MutexLock lock(&mu_, drained_cond_); }
 
 }  // namespace lane::server

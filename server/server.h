@@ -148,7 +148,16 @@ class LaneServer {
   std::atomic<bool> ready_{false};  // /readyz: serving and not draining
 
   std::thread sweeper_;
-  absl::Mutex mu_;
+  bool Stopping() const ABSL_SHARED_LOCKS_REQUIRED(mu_) { return stopping_; }
+  bool Drained() const ABSL_SHARED_LOCKS_REQUIRED(mu_) { return drained_; }
+  mutable absl::Mutex mu_;
+  // Conditions that other threads evaluate are members, not temporaries on
+  // the waiter's stack: absl evaluates a waiter's Condition on the thread
+  // that unlocks, inside its (uninstrumented) lock code, so TSan saw that
+  // thread read the waiter's stack after the waiter had returned and reused
+  // it (a loaded run of the suite, issue 40).
+  const absl::Condition stopping_cond_{this, &LaneServer::Stopping};
+  const absl::Condition drained_cond_{this, &LaneServer::Drained};
   bool stopping_ ABSL_GUARDED_BY(mu_) = false;       // the sweeper stops
   bool draining_ ABSL_GUARDED_BY(mu_) = false;       // BeginDrain has run
   bool shutting_down_ ABSL_GUARDED_BY(mu_) = false;  // a Drain is past BeginDrain

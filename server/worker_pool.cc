@@ -49,7 +49,7 @@ void WorkerPool::Run() {
   for (;;) {
     std::function<void()> task;
     {
-      absl::MutexLock lock(&mu_, absl::Condition(this, &WorkerPool::WorkOrStopping));
+      absl::MutexLock lock(&mu_, work_or_stopping_);
       if (queue_.empty()) return;  // stopping, nothing left
       task = std::move(queue_.front());
       queue_.pop_front();

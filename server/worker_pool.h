@@ -56,6 +56,12 @@ class WorkerPool {
   int num_threads_ = 0;
   absl::Mutex shutdown_mu_;  // serialises Shutdown
   mutable absl::Mutex mu_;
+  // Conditions that other threads evaluate are members, not temporaries on
+  // the waiter's stack: absl evaluates a waiter's Condition on the thread
+  // that unlocks, inside its (uninstrumented) lock code, so TSan saw that
+  // thread read the waiter's stack after the waiter had returned and reused
+  // it (a loaded run of the suite, issue 40).
+  const absl::Condition work_or_stopping_{this, &WorkerPool::WorkOrStopping};
   std::deque<std::function<void()>> queue_ ABSL_GUARDED_BY(mu_);
   bool stopping_ ABSL_GUARDED_BY(mu_) = false;
   std::vector<std::thread> threads_ ABSL_GUARDED_BY(shutdown_mu_);
