@@ -5,6 +5,9 @@
 #
 #   scripts/loaded-ci.sh [RUNS] [LOG_DIR]      (defaults: 3, out/loaded-ci)
 #
+# LOADED_CMD runs another command under the same load instead of .ci/run,
+# e.g. LOADED_CMD="./scripts/sanitize.sh tsan" for the TSan step alone.
+#
 # The first run builds everything; later runs reuse the build trees, so they
 # time the tests under load. Installs stress-ng if needed.
 set -euo pipefail
@@ -22,7 +25,7 @@ trap 'kill $burner 2>/dev/null || true' EXIT
 for i in $(seq 1 "$runs"); do
   start=$(date +%s)
   rc=0
-  ./.ci/run >"$logs/run$i.log" 2>&1 || rc=$?
-  echo "run $i: exit $rc in $(( $(date +%s) - start )) s (load: stress-ng --cpu $(nproc))" | tee -a "$logs/summary.txt"
+  ${LOADED_CMD:-./.ci/run} >"$logs/run$i.log" 2>&1 || rc=$?
+  echo "run $i (${LOADED_CMD:-.ci/run}): exit $rc in $(( $(date +%s) - start )) s (load: stress-ng --cpu $(nproc))" | tee -a "$logs/summary.txt"
   [ "$rc" -eq 0 ] || exit "$rc"
 done
