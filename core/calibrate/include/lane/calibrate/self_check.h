@@ -36,8 +36,10 @@ struct LaneGeometryCheckOptions {
   double max_heading_deg = 1.0;
   double max_divergence_deg = 1.0;
   // At least this share of the checked frames, and at least min_frames
-  // frames, must show a lane pair.
-  double min_pair_fraction = 0.5;
+  // frames, must show a lane pair. A third: in dense traffic the detector
+  // sees both boundaries of a lane in about half the frames (9 of 15 on
+  // culane-driver161-a), while a top view across the verge shows none.
+  double min_pair_fraction = 1.0 / 3.0;
   int min_frames = 3;
 };
 
