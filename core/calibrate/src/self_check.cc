@@ -6,21 +6,12 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "lane/base/median.h"
 
 namespace lane {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const size_t h = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(h), v.end());
-  double m = v[h];
-  if (v.size() % 2 == 0)
-    m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + static_cast<long>(h)));
-  return m;
-}
 
 struct ChordLine {
   double heading_deg = 0;

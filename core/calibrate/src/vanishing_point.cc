@@ -8,6 +8,8 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 
+#include "lane/base/median.h"
+
 namespace lane {
 namespace {
 
@@ -424,21 +426,13 @@ std::optional<PooledVanishingPoint> EstimatePooledVanishingPoint(
 std::optional<CombinedVanishingPoint> CombineVanishingPoints(
     const std::vector<Eigen::Vector2d>& points, double min_spread_px) {
   if (points.empty()) return std::nullopt;
-  auto median = [](std::vector<double> v) {
-    const size_t h = v.size() / 2;
-    std::nth_element(v.begin(), v.begin() + static_cast<long>(h), v.end());
-    double m = v[h];
-    if (v.size() % 2 == 0)
-      m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + static_cast<long>(h)));
-    return m;
-  };
   Eigen::Vector2d med, sigma;
   for (int axis = 0; axis < 2; ++axis) {
     std::vector<double> v;
     for (const Eigen::Vector2d& p : points) v.push_back(p(axis));
-    med(axis) = median(v);
+    med(axis) = Median(v);
     for (double& x : v) x = std::abs(x - med(axis));
-    sigma(axis) = std::max(min_spread_px, 1.4826 * median(v));
+    sigma(axis) = std::max(min_spread_px, 1.4826 * Median(v));
   }
   CombinedVanishingPoint c;
   Eigen::Vector2d sum = Eigen::Vector2d::Zero(), sum_sq = Eigen::Vector2d::Zero();
