@@ -26,16 +26,20 @@ cd "$(dirname "$0")/.."
 which="${1:-all}"
 jobs="${JOBS:-$(nproc)}"
 
-# A build directory made by another compiler is started afresh.
-fresh_if_not() {  # dir compiler-pattern
-  if [ -f "$1/CMakeCache.txt" ] && ! grep -q "^CMAKE_CXX_COMPILER:.*$2" "$1/CMakeCache.txt"; then
+# A build directory made by another compiler is started afresh. The
+# pattern is an extended regex on the compiler's path: gcc's is /usr/bin/c++
+# or g++, and "clang++" contains both "c++" and "g++", hence the anchors
+# (until 2026-12-06 the TSan tree matched nothing and was rebuilt whole on
+# every run).
+fresh_if_not() {  # dir compiler-regex
+  if [ -f "$1/CMakeCache.txt" ] && ! grep -qE "^CMAKE_CXX_COMPILER:[^=]*=(.*/)?$2\$" "$1/CMakeCache.txt"; then
     rm -rf "$1"
   fi
 }
 
 run_asan() {
   echo "== sanitize: ASan+UBSan build with clang (build-asan)"
-  fresh_if_not build-asan clang
+  fresh_if_not build-asan 'clang\+\+(-[0-9]+)?'
   CC=clang CXX=clang++ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DLANE_FUZZ=ON -DLANE_BUILD_TESTS=ON -DLANE_BUILD_BENCH=OFF -DLANE_BUILD_SERVICE=ON \
     -DLANE_LINE_TABLES=ON >/dev/null
@@ -59,7 +63,7 @@ run_asan() {
 
 run_tsan() {
   echo "== sanitize: TSan build of the server and client tests with gcc (build-tsan)"
-  fresh_if_not build-tsan "g++"
+  fresh_if_not build-tsan '(c|g)\+\+(-[0-9]+)?'
   cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLANE_SANITIZE=thread \
     -DLANE_WERROR=ON -DLANE_BUILD_TESTS=ON -DLANE_BUILD_BENCH=OFF -DLANE_BUILD_SERVICE=ON \
     -DLANE_LINE_TABLES=ON >/dev/null
