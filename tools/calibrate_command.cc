@@ -301,8 +301,7 @@ int RunCalibrate(const CalibrateFlags& flags) {
   }
   const absl::StatusOr<lane::CalibrationResult> result = calibrator.Finish();
   if (!result.ok()) {
-    return Failure("calibrate",
-                   absl::StrCat(result.status().message(), "; ", kSelfCheckAdvice));
+    return Failure("calibrate", absl::StrCat(result.status().message(), "; ", kSelfCheckAdvice));
   }
   const lane::CalibrationResult& r = *result;
   if (flags.overlay && !best.bgr.empty()) DrawOverlay(best, r, *flags.overlay);
