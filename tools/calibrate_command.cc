@@ -175,9 +175,7 @@ absl::Status WriteCalibratedConfig(const lane::Config& base, const lane::Calibra
                                    const CalibrateFlags& flags) {
   lane::Config config = base;
   config.camera = r.camera;
-  config.ipm.view = lane::IpmView::kGround;
-  config.ipm.ground = r.view;
-  config.ipm.interpolation = lane::Interpolation::kArea;
+  config.ipm = lane::GroundViewIpm(r.view, config.ipm);
   if (absl::StatusOr<lane::Detector> d =
           lane::Detector::Create(config.camera, config.ipm, config.detector);
       !d.ok()) {
@@ -223,8 +221,8 @@ absl::StatusOr<lane::LaneGeometryReport> SelfCheck(const lane::CalibrationResult
   return check->Report();
 }
 
-// What to try when the self-check refuses.
-constexpr char kSelfCheckAdvice[] =
+// What to try when the estimate is refused (by Finish or the self-check).
+constexpr char kRefusalAdvice[] =
     "no config written. Try: more frames, or a straight stretch of road with markings on both "
     "sides; --focal-px if the focal length is known (0.61 x image width is assumed); "
     "--road-bottom-row if the hood shows in the frames; --overlay to see what voted";
@@ -301,7 +299,7 @@ int RunCalibrate(const CalibrateFlags& flags) {
   }
   const absl::StatusOr<lane::CalibrationResult> result = calibrator.Finish();
   if (!result.ok()) {
-    return Failure("calibrate", absl::StrCat(result.status().message(), "; ", kSelfCheckAdvice));
+    return Failure("calibrate", absl::StrCat(result.status().message(), "; ", kRefusalAdvice));
   }
   const lane::CalibrationResult& r = *result;
   if (flags.overlay && !best.bgr.empty()) DrawOverlay(best, r, *flags.overlay);
@@ -312,7 +310,7 @@ int RunCalibrate(const CalibrateFlags& flags) {
     return Failure("calibrate",
                    absl::StrFormat("the estimate (%.1f, %.1f) failed its self-check: %s; %s",
                                    r.vanishing_point.point.x(), r.vanishing_point.point.y(),
-                                   check->verdict.message(), kSelfCheckAdvice));
+                                   check->verdict.message(), kRefusalAdvice));
   }
   if (absl::Status s = WriteCalibratedConfig(*base, r, *check, flags); !s.ok()) {
     return Failure("calibrate", std::string(s.message()));

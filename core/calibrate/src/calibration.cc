@@ -243,7 +243,6 @@ absl::StatusOr<FrameVanishingPoint> CameraCalibrator::AddSecondPass(
       ++no_markings_;
       break;
     case VpFrameResult::kElsewhere:
-      ++elsewhere_;
       elsewhere_points_.push_back(p.point);
       break;
     case VpFrameResult::kStationary:
@@ -254,13 +253,14 @@ absl::StatusOr<FrameVanishingPoint> CameraCalibrator::AddSecondPass(
 }
 
 absl::StatusOr<CalibrationResult> CameraCalibrator::Finish() const {
-  if (elsewhere_ > static_cast<int>(points_.size())) {
+  const int elsewhere = static_cast<int>(elsewhere_points_.size());
+  if (elsewhere > static_cast<int>(points_.size())) {
     const std::optional<CombinedVanishingPoint> other = CombineVanishingPoints(elsewhere_points_);
     return absl::FailedPreconditionError(absl::StrFormat(
         "the first pass put the vanishing point at (%.1f, %.1f), but only %d frames' markings "
         "meet there and %d frames' meet elsewhere (median near (%.1f, %.1f)): the first pass "
         "was led by edges that are not lane markings",
-        first_point_.x(), first_point_.y(), static_cast<int>(points_.size()), elsewhere_,
+        first_point_.x(), first_point_.y(), static_cast<int>(points_.size()), elsewhere,
         other->point.x(), other->point.y()));
   }
   const std::optional<CombinedVanishingPoint> c = CombineVanishingPoints(points_, 1.0);
@@ -284,7 +284,7 @@ absl::StatusOr<CalibrationResult> CameraCalibrator::Finish() const {
   r.frames = frames_;
   r.frames_no_markings = no_markings_;
   r.frames_curved = curved_;
-  r.frames_elsewhere = elsewhere_;
+  r.frames_elsewhere = elsewhere;
   r.frames_stationary = stationary_count_;
   r.segments = segments_;
   r.road_bottom_row = road_bottom_;
@@ -309,6 +309,13 @@ absl::StatusOr<CalibrationResult> CameraCalibrator::Finish() const {
 
 // ---------------------------------------------------------------------------
 // Self-check
+
+IpmOptions GroundViewIpm(const GroundView& view, IpmOptions ipm) {
+  ipm.view = IpmView::kGround;
+  ipm.ground = view;
+  ipm.interpolation = Interpolation::kArea;
+  return ipm;
+}
 
 LaneGeometryCheckOptions GeometryCheckForWidth(double lane_width_m) {
   LaneGeometryCheckOptions o;
@@ -342,12 +349,8 @@ std::vector<GroundChord> LaneChords(const std::vector<std::array<Eigen::Vector2d
 
 absl::StatusOr<CalibrationSelfCheck> CalibrationSelfCheck::Create(const CalibrationResult& result,
                                                                   double lane_width_m) {
-  IpmOptions ipm;
-  ipm.view = IpmView::kGround;
-  ipm.ground = result.view;
-  ipm.interpolation = Interpolation::kArea;
-  absl::StatusOr<Detector> detector =
-      Detector::Create(result.camera, ipm, DetectorOptions::ForMode(Mode::kAll));
+  absl::StatusOr<Detector> detector = Detector::Create(result.camera, GroundViewIpm(result.view),
+                                                       DetectorOptions::ForMode(Mode::kAll));
   if (!detector.ok()) return detector.status();
   return CalibrationSelfCheck(*std::move(detector), GeometryCheckForWidth(lane_width_m));
 }

@@ -170,8 +170,8 @@ class CameraCalibrator {
   int second_frames_ = 0, stationary_count_ = 0;
   std::vector<Eigen::Vector2d> points_;
   std::vector<int> point_frames_;  // pass-2 index of each point
-  int frames_ = 0, no_markings_ = 0, curved_ = 0, elsewhere_ = 0, segments_ = 0;
-  std::vector<Eigen::Vector2d> elsewhere_points_;
+  int frames_ = 0, no_markings_ = 0, curved_ = 0, segments_ = 0;
+  std::vector<Eigen::Vector2d> elsewhere_points_;  // kElsewhere frames' own points
 };
 
 // The self-check of an estimate (self_check.h) before it is written: the
@@ -191,6 +191,10 @@ class CalibrationSelfCheck {
   Detector detector_;
   LaneGeometryCheck check_;
 };
+
+// The IPM options of a calibrated config: `base` (a template's) with its
+// ground view, area-averaged.
+IpmOptions GroundViewIpm(const GroundView& view, IpmOptions base = {});
 
 // Lane pairs `lane_width_m` apart, widened to the default 2.5-4.5 m.
 LaneGeometryCheckOptions GeometryCheckForWidth(double lane_width_m);
