@@ -423,6 +423,15 @@ std::vector<Object> SampleObjects(const SyntheticOptions& o, const Road& road, d
   return out;
 }
 
+double BesideRoad(const Road& road, bool left, double y, double clearance) {
+  const double edge = left ? road.edge_left : road.edge_right;
+  return road.X(edge, y) + (left ? -clearance : clearance);
+}
+
+cv::Scalar CrownColour(Rng& rng) {
+  return cv::Scalar(Uniform(rng, 25, 60), Uniform(rng, 55, 100), Uniform(rng, 30, 60));
+}
+
 Object SampleRoadsideObject(const Road& road, double near, double far, double power, Rng& rng) {
   Object r;
   const double pick = Uniform(rng, 0.0, 1.0);
@@ -431,13 +440,12 @@ Object SampleRoadsideObject(const Road& road, double near, double far, double po
   r.y = near + (far - near) * std::pow(Uniform(rng, 0.0, 1.0), power);
   const double clearance =
       r.kind == Object::kPole ? Uniform(rng, 0.8, 3.0) : Uniform(rng, 3.0, 14.0);
-  const double edge = left ? road.edge_left : road.edge_right;
-  r.x = road.X(edge, r.y) + (left ? -clearance : clearance);
+  r.x = BesideRoad(road, left, r.y, clearance);
   switch (r.kind) {
     case Object::kTree: {
       r.size = Uniform(rng, 1.5, 3.5);
       r.height = Uniform(rng, 4.0, 11.0);
-      r.colour = cv::Scalar(Uniform(rng, 25, 60), Uniform(rng, 55, 100), Uniform(rng, 30, 60));
+      r.colour = CrownColour(rng);
       r.colour2 = cv::Scalar(Uniform(rng, 30, 50), Uniform(rng, 40, 60), Uniform(rng, 50, 70));
       break;
     }
@@ -503,11 +511,10 @@ void AddClutter(const SyntheticOptions& o, double y_min, Rng& rng, Road* road,
       Object t;
       t.kind = Object::kTree;
       t.y = y;
-      const double edge = left ? road->edge_left : road->edge_right;
-      t.x = road->X(edge, y) + (left ? -clearance : clearance);
+      t.x = BesideRoad(*road, left, y, clearance);
       t.size = Uniform(rng, 1.5, 3.0);
       t.height = Uniform(rng, 5.0, 9.0);
-      t.colour = cv::Scalar(Uniform(rng, 25, 60), Uniform(rng, 55, 100), Uniform(rng, 30, 60));
+      t.colour = CrownColour(rng);
       const double g = white ? Uniform(rng, 190, 235) : Uniform(rng, 35, 60);
       t.colour2 = cv::Scalar(g, g, g);
       objects->push_back(t);

@@ -151,6 +151,10 @@ std::vector<Shadow> SampleShadows(const SyntheticOptions& o, const Road& road, d
                                   Rng& rng);
 std::vector<Object> SampleObjects(const SyntheticOptions& o, const Road& road, double y_min,
                                   Rng& rng);
+// The lateral position `clearance` metres beyond the asphalt's edge on one
+// side, `y` ahead; a tree crown's green.
+double BesideRoad(const Road& road, bool left, double y, double clearance);
+cv::Scalar CrownColour(Rng& rng);
 // One tree, building or pole beside the road at y in [near, far] (denser
 // near `near` for power > 1).
 Object SampleRoadsideObject(const Road& road, double near, double far, double power, Rng& rng);
