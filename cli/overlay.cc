@@ -29,8 +29,9 @@ bool Finite(const Eigen::Vector2d& p) { return std::isfinite(p.x()) && std::isfi
 // A cubic Bezier mapped through `to_canvas`: a polyline of samples and small
 // circles on the control points.
 template <class ToCanvas>
+// `dashed`: an inferred boundary (Lane::inferred), drawn in dashes.
 void DrawBezier(cv::Mat& canvas, const std::array<Eigen::Vector2d, 4>& control,
-                const cv::Scalar& colour, ToCanvas to_canvas) {
+                const cv::Scalar& colour, ToCanvas to_canvas, bool dashed = false) {
   const lane::Bezier curve{control};
   std::vector<cv::Point> polyline;
   for (const Eigen::Vector2d& p : curve.Sample(kCurveSamples)) {
@@ -38,7 +39,14 @@ void DrawBezier(cv::Mat& canvas, const std::array<Eigen::Vector2d, 4>& control,
     // Far outside points only make OpenCV's clipping overflow.
     if (Finite(q) && q.cwiseAbs().maxCoeff() < 1e5) polyline.push_back(Fixed(q));
   }
-  if (polyline.size() >= 2) {
+  if (dashed) {
+    // Dashes and gaps of 3 samples each.
+    for (size_t i = 0; i + 1 < polyline.size(); ++i) {
+      if ((i / 3) % 2 == 0) {
+        cv::line(canvas, polyline[i], polyline[i + 1], colour, 2, cv::LINE_AA, kShift);
+      }
+    }
+  } else if (polyline.size() >= 2) {
     cv::polylines(canvas, polyline, /*isClosed=*/false, colour, 2, cv::LINE_AA, kShift);
   }
   for (const Eigen::Vector2d& p : control) {
@@ -114,8 +122,9 @@ cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
 
   for (size_t i = 0; i < detection.lanes.size(); ++i) {
     const lane::Lane& lane = detection.lanes[i];
-    DrawBezier(canvas, lane.image, LaneColour(static_cast<int>(i)),
-               [](const Eigen::Vector2d& p) { return p; });
+    DrawBezier(
+        canvas, lane.image, LaneColour(static_cast<int>(i)),
+        [](const Eigen::Vector2d& p) { return p; }, lane.inferred);
     if (lane.id >= 0) {
       // Tracked: "#id colour type" at the lane's lower end, '?' until
       // confirmed, "predicted" for a track's prediction (not detected).
@@ -175,10 +184,12 @@ cv::Mat DrawIpmView(const cv::Mat& frame, const lane::Detection& detection,
   // its centre is at scale*(col+0.5) - 0.5 in OpenCV's pixel coordinates.
   const double s = scale;
   for (size_t i = 0; i < detection.lanes.size(); ++i) {
-    DrawBezier(canvas, detection.lanes[i].ipm, LaneColour(static_cast<int>(i)),
-               [s](const Eigen::Vector2d& p) {
-                 return Eigen::Vector2d((p.x() + 0.5) * s - 0.5, (p.y() + 0.5) * s - 0.5);
-               });
+    DrawBezier(
+        canvas, detection.lanes[i].ipm, LaneColour(static_cast<int>(i)),
+        [s](const Eigen::Vector2d& p) {
+          return Eigen::Vector2d((p.x() + 0.5) * s - 0.5, (p.y() + 0.5) * s - 0.5);
+        },
+        detection.lanes[i].inferred);
   }
   return canvas;
 }

@@ -75,6 +75,7 @@ std::string DetectionJsonLine(const std::string& frame, int width, int height, l
     l["ipm"] = Points(lane.ipm, 1e3);
     l["ground"] = Points(lane.ground, 1e4);
     l["score"] = Round(lane.score, 1e4);
+    l["inferred"] = lane.inferred;
     if (tracked) AddLaneTrackingFields(lane, l);
     lanes.push_back(std::move(l));
   }

@@ -52,6 +52,7 @@ void IdentityToProto(const lane::Lane& lane, v1::Lane* l) {
   // MarkingType's order is the proto's.
   l->set_type(static_cast<v1::MarkingType>(static_cast<int>(lane.type)));
   l->set_predicted(lane.predicted);
+  l->set_inferred(lane.inferred);
 }
 
 void LaneToProto(const lane::Lane& lane, v1::Lane* l) {
@@ -99,6 +100,7 @@ std::vector<lane::Lane> LanesFromProto(const v1::FrameResponse& response) {
     lane.id = l.id() > 0 ? l.id() : -1;
     lane.confirmed = l.confirmed();
     lane.predicted = l.predicted();
+    lane.inferred = l.inferred();
     lane.color = ColorFromProto(l.color());
     lane.type = l.type() >= v1::MARKING_TYPE_UNKNOWN && l.type() <= v1::MARKING_TYPE_ROAD_EDGE
                     ? static_cast<lane::MarkingType>(static_cast<int>(l.type()))

@@ -163,9 +163,10 @@ absl::StatusOr<DriveResults> ParseDriveResults(absl::string_view text, absl::str
             std::string colour = "unknown", type = "unknown";
             if (!OptionalBool(l, "confirmed", lane.confirmed) ||
                 !OptionalBool(l, "predicted", lane.predicted) ||
+                !OptionalBool(l, "inferred", lane.inferred) ||
                 !OptionalString(l, "color", colour) || !OptionalString(l, "type", type)) {
               return error(absl::StrCat("lanes[", i,
-                                        "]: confirmed and predicted must be booleans, color and "
+                                        "]: confirmed, predicted and inferred must be booleans, color and "
                                         "type strings"));
             }
             for (MarkingColor c : {MarkingColor::kWhite, MarkingColor::kYellow}) {

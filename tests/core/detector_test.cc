@@ -27,11 +27,15 @@ bool InView(const Bezier& truth, const Roi& roi) {
 
 struct Tally {
   int frames = 0, truths = 0, found = 0, detections = 0, false_positives = 0;
+  // Detections with Lane::inferred set, and those matched to a boundary.
+  int inferred = 0, inferred_found = 0;
 };
 
 // One-to-one matching under the paper's rule, best pairs first.
-void Score(const std::vector<Bezier>& dets, const std::vector<Bezier>& truths,
-           const std::vector<Bezier>& all_truths, int width, Tally& tally) {
+// `inferred[i]`: detection i is an inferred boundary.
+void Score(const std::vector<Bezier>& dets, const std::vector<bool>& inferred,
+           const std::vector<Bezier>& truths, const std::vector<Bezier>& all_truths, int width,
+           Tally& tally) {
   std::vector<bool> used(dets.size(), false);
   int matched = 0;
   for (const auto& t : truths) {
@@ -48,6 +52,8 @@ void Score(const std::vector<Bezier>& dets, const std::vector<Bezier>& truths,
   tally.found += matched;
   tally.detections += static_cast<int>(dets.size());
   for (size_t i = 0; i < dets.size(); ++i) {
+    tally.inferred += inferred[i] ? 1 : 0;
+    tally.inferred_found += inferred[i] && used[i] ? 1 : 0;
     if (used[i]) continue;
     // A detection that matches a boundary outside the view (or a second
     // detection of one) is not a false positive of the detector's view; any
@@ -61,12 +67,15 @@ void Score(const std::vector<Bezier>& dets, const std::vector<Bezier>& truths,
   ++tally.frames;
 }
 
+// `infer_hidden`: the road model's inferred boundaries (off by default).
 Tally RunSynthetic(Mode mode, int frames, uint64_t seed0, const SyntheticOptions& so = {},
-                   const char* what = "") {
+                   const char* what = "", bool infer_hidden = false) {
   const CameraModel cam;  // the Caltech Lanes camera, 640x480
   IpmOptions ipm;
   if (mode == Mode::kTwo) ipm.roi = {140, 500, 220, 360};
-  auto det = Detector::Create(cam, ipm, DetectorOptions::ForMode(mode));
+  DetectorOptions options = DetectorOptions::ForMode(mode);
+  options.road_model.infer_hidden = infer_hidden;
+  auto det = Detector::Create(cam, ipm, options);
   EXPECT_TRUE(det.ok()) << det.status();
   Tally tally;
   if (!det.ok()) return tally;
@@ -90,15 +99,20 @@ Tally RunSynthetic(Mode mode, int frames, uint64_t seed0, const SyntheticOptions
     EXPECT_TRUE(result.ok()) << result.status();
     if (!result.ok()) continue;
     std::vector<Bezier> dets;
-    for (const auto& lane : result->lanes) dets.push_back(Bezier{lane.image});
-    Score(dets, truths, all_truths, cam.image_width, tally);
+    std::vector<bool> inferred;
+    for (const auto& lane : result->lanes) {
+      dets.push_back(Bezier{lane.image});
+      inferred.push_back(lane.inferred);
+    }
+    Score(dets, inferred, truths, all_truths, cam.image_width, tally);
   }
   std::printf(
       "[ synthetic %s%s ] frames %d boundaries %d found %d (%.1f%%) detections %d fp %d "
-      "(%.3f/frame)\n",
+      "(%.3f/frame) inferred %d (found %d)\n",
       ModeName(mode), what, tally.frames, tally.truths, tally.found,
       100.0 * tally.found / std::max(1, tally.truths), tally.detections, tally.false_positives,
-      static_cast<double>(tally.false_positives) / tally.frames);
+      static_cast<double>(tally.false_positives) / tally.frames, tally.inferred,
+      tally.inferred_found);
   return tally;
 }
 
@@ -128,6 +142,27 @@ TEST(DetectorEndToEnd, FindsSyntheticBoundariesAtNightAndInClutter) {
   ASSERT_EQ(c.frames, 40);
   EXPECT_GE(c.found, 0.78 * c.truths);           // measured 60 of 71 (some paint is gone)
   EXPECT_LE(c.false_positives, 0.3 * c.frames);  // measured 0.125 per frame
+}
+
+// The road model (lane/road_model.h) on rendered roads of 3 lanes whose
+// paint is worn to 0-30 % or gone on about half the boundaries: an inner
+// boundary without paint lies half-way between its painted neighbours, and
+// is reported there with `inferred` set. Inference only adds lanes: the
+// same frames without it find fewer boundaries.
+TEST(DetectorEndToEnd, InfersBoundariesWhosePaintIsGone) {
+  SyntheticOptions worn;
+  worn.num_lanes = 3;
+  worn.worn_probability = 0.5;
+  worn.max_vehicles = 3;
+  const Tally plain = RunSynthetic(Mode::kAll, 40, 9000, worn, " worn");
+  const Tally road = RunSynthetic(Mode::kAll, 40, 9000, worn, " worn, inferred", true);
+  ASSERT_EQ(road.frames, 40);
+  EXPECT_EQ(plain.inferred, 0);
+  EXPECT_EQ(road.detections, plain.detections + road.inferred);
+  EXPECT_GE(road.inferred, 5);                              // measured
+  EXPECT_GE(road.inferred_found, 0.8 * road.inferred);      // measured
+  EXPECT_GE(road.found, plain.found + road.inferred_found - 1);
+  EXPECT_LE(road.false_positives, plain.false_positives + road.inferred - road.inferred_found);
 }
 
 TEST(DetectorEndToEnd, FindsTheEgoLaneInTwoLanesMode) {

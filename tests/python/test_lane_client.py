@@ -304,6 +304,32 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(lanes_of(self.client.detect("default", wide[:, ::2])), lanes_of(raw))
 
     @unittest.skipIf(np is None, NO_NUMPY)
+    @unittest.skipIf(np is None, NO_NUMPY)
+    def test_hidden_boundary_is_reported_as_inferred(self):
+        """With detector.road_model.infer_hidden, the boundary between two
+        found ones two lane widths apart is reported with `inferred` set;
+        without it, the lanes carry inferred = False."""
+        import json
+        with open(SYNTHETIC) as f:
+            config = json.load(f)
+        config.setdefault("detector", {})["road_model"] = {"infer_hidden": True}
+        self.client.create_session("py-inferred", config)
+        try:
+            frame = road_frame(lanes_x=(-5.4, -1.8, 5.4))  # the boundary at 1.8 m is gone
+            response = self.client.detect("py-inferred", frame)
+            self.assert_lanes(response, at_least=4)
+            offsets = ground_offsets(response)
+            self.assertEqual(len(offsets), 4, offsets)
+            for got, painted in zip(offsets, [-5.4, -1.8, 1.8, 5.4]):
+                self.assertAlmostEqual(got, painted, delta=0.15, msg=offsets)
+            self.assertEqual([lane.inferred for lane in response.lanes],
+                             [False, False, True, False])
+            plain = self.client.detect("default", frame)
+            self.assertEqual(len(plain.lanes), 3, ground_offsets(plain))
+            self.assertFalse(any(lane.inferred for lane in plain.lanes))
+        finally:
+            self.client.delete_session("py-inferred")
+
     def test_detect_ndarray_gray(self):
         grey = road_frame()[:, :, 1]
         self.assert_lanes(self.client.detect("default", grey), at_least=2)

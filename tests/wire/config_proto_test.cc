@@ -145,6 +145,7 @@ TEST(ConvertTest, Lanes) {
   }
   lane.score = 4.5;
   detection.lanes = {lane, lane};
+  detection.lanes[1].inferred = true;
   detection.timings.total_ms = 3;
   v1::FrameResponse response;
   LanesToProto(detection, &response);
@@ -156,6 +157,8 @@ TEST(ConvertTest, Lanes) {
   EXPECT_DOUBLE_EQ(l.ipm().control_points(2).x(), 4.0);
   EXPECT_DOUBLE_EQ(l.ground().control_points(1).y(), 5.0);
   EXPECT_DOUBLE_EQ(l.score(), 4.5);
+  EXPECT_FALSE(l.inferred());
+  EXPECT_TRUE(response.lanes(1).inferred());
   EXPECT_DOUBLE_EQ(response.timings().detect_ms(), 3);
 }
 

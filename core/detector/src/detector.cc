@@ -110,7 +110,8 @@ DetectorOptions DetectorOptions::ForMode(Mode mode) {
 absl::Status DetectorOptions::Validate() const {
   for (const absl::Status& s :
        {filter.Validate(), threshold.Validate(), hough.Validate(), line_ransac.Validate(),
-        spline_ransac.Validate(), postprocess.Validate(), two_lanes.Validate()}) {
+        spline_ransac.Validate(), postprocess.Validate(), two_lanes.Validate(),
+        road_model.Validate()}) {
     if (!s.ok()) return s;
   }
   return absl::OkStatus();
@@ -395,6 +396,35 @@ std::vector<Lane> Detector::ToLanes(const std::vector<SplineCandidate>& done) co
   return lanes;
 }
 
+void Detector::AddInferredLanes(std::vector<Lane>& lanes) const {
+  if (options_.mode != Mode::kAll) return;
+  std::vector<Bezier> ground;
+  ground.reserve(lanes.size());
+  for (const Lane& lane : lanes) ground.push_back(Bezier{lane.ground});
+  const std::vector<InferredBoundary> hidden =
+      InferHiddenBoundaries(ground, options_.road_model);
+  if (hidden.empty()) return;
+  const CameraModel& cam = ipm_.camera();
+  for (const InferredBoundary& h : hidden) {
+    const auto image_fit =
+        MapSpline(h.ground, 21, [&cam](const Eigen::Vector2d& p) { return cam.GroundToImage(p); });
+    if (!image_fit) continue;
+    const auto ipm_fit = MapSpline(*image_fit, 21,
+                                   [this](const Eigen::Vector2d& p) { return ipm_.ImageToIpm(p); });
+    if (!ipm_fit) continue;
+    Lane lane;
+    lane.image = image_fit->p;
+    lane.ipm = ipm_fit->p;
+    lane.ground = h.ground.p;
+    lane.score = std::min(lanes[static_cast<size_t>(h.left)].score,
+                          lanes[static_cast<size_t>(h.right)].score);
+    lane.inferred = true;
+    lanes.push_back(lane);
+  }
+  std::sort(lanes.begin(), lanes.end(),
+            [](const Lane& a, const Lane& b) { return a.ground[3].x() < b.ground[3].x(); });
+}
+
 absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
                                            const DetectionPrior* prior) const {
   if (absl::Status s = CheckFrame(frame); !s.ok()) return s;
@@ -445,6 +475,7 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
   det.lanes =
       ToLanes(PostprocessCandidates(candidates, images, opt.postprocess, opt.filter.marking_width_m,
                                     opt.spline_ransac.merge_distance_px));
+  AddInferredLanes(det.lanes);
   lap(time.postprocess_ms);
   time.total_ms = MsSince(t_start);
 

@@ -337,6 +337,9 @@ void ReadMarkings(const cv::Mat& frame, const CameraModel& camera, std::vector<L
   if (lanes.empty()) return;
   const PlaneMaps maps(camera);  // one per frame, for every lane
   for (Lane& lane : lanes) {
+    // An inferred boundary is hidden (by a vehicle): what lies there is not
+    // its paint.
+    if (lane.inferred) continue;
     lane.color = ColorWithMaps(frame, lane, camera, maps, top_row, bottom_row);
     lane.type = TypeWithMaps(frame, lane, camera, maps, top_row, bottom_row);
   }

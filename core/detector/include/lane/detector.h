@@ -19,6 +19,7 @@
 #include "lane/geometry/camera.h"
 #include "lane/geometry/ipm.h"
 #include "lane/postprocess/postprocess.h"
+#include "lane/road_model.h"
 #include "lane/stages/filter.h"
 #include "lane/stages/line_detection.h"
 #include "lane/stages/line_fit.h"
@@ -53,6 +54,7 @@ struct DetectorOptions {
   SplineRansacOptions spline_ransac;
   PostprocessOptions postprocess;
   TwoLaneOptions two_lanes;
+  RoadModelOptions road_model;
   // Seed of the RANSAC sampler. The same frame, options and seed always give
   // the same lanes.
   uint64_t seed = 1;
@@ -89,6 +91,10 @@ struct Lane {
   // prediction, reported for a few frames after it was last seen
   // (LaneTrackingOptions::coast_frames).
   bool predicted = false;
+  // Not seen in this frame: inferred by the road model (lane/road_model.h)
+  // half-way between two found boundaries two lane widths apart, where a
+  // vehicle hides it. Its score is the weaker neighbour's.
+  bool inferred = false;
   MarkingColor color = MarkingColor::kUnknown;
   MarkingType type = MarkingType::kUnknown;
 };
@@ -227,6 +233,9 @@ class Detector {
                                           const std::vector<double>& half_widths_px,
                                           std::mt19937_64& rng) const;
   std::vector<Lane> ToLanes(const std::vector<SplineCandidate>& done) const;
+  // All-lanes mode: the road model's hidden boundaries (lane/road_model.h),
+  // added to `lanes` (sorted left to right) with `inferred` set.
+  void AddInferredLanes(std::vector<Lane>& lanes) const;
   // The camera's column in the top view (x = 0 at its near edge).
   double CameraColumn() const;
 

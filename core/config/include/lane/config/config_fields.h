@@ -165,6 +165,15 @@ LANE_FIELDS(TwoLaneOptions) {
   v.Field("min_pair_score", s.min_pair_score);
 }
 
+LANE_FIELDS(RoadModelOptions) {
+  v.Field("infer_hidden", s.infer_hidden);
+  v.Field("min_lane_width_m", s.min_lane_width_m);
+  v.Field("max_lane_width_m", s.max_lane_width_m);
+  v.Field("width_tolerance", s.width_tolerance);
+  v.Field("max_gap_change_m", s.max_gap_change_m);
+  v.Field("min_overlap_m", s.min_overlap_m);
+}
+
 // `mode` is also applied before everything else by ConfigFromJson.
 // keep_intermediates is a debugging switch of the API, not configuration.
 LANE_FIELDS(DetectorOptions) {
@@ -178,6 +187,7 @@ LANE_FIELDS(DetectorOptions) {
   v.Section("spline_ransac", s.spline_ransac);
   v.Section("postprocess", s.postprocess);
   v.Section("two_lanes", s.two_lanes);
+  v.Section("road_model", s.road_model);
 }
 
 LANE_FIELDS(Config) {
