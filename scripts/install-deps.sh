@@ -26,6 +26,8 @@ PACKAGES=(
   openssl                # tests/server/security_test: a test CA made at test time
   python3-yaml           # tests/deploy: parses the compose file and Kubernetes manifests
   python3-grpcio python3-protobuf python3-numpy   # client/python: the Python client and tests/python (numpy: array frames; cv2 stays optional)
+  python3-setuptools python3-venv python3-pip     # pip install ./client/python (tests/python/install_test.sh)
+  lintian                # the .deb's check (scripts/package-test.sh)
 )
 
 missing=()

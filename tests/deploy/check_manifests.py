@@ -148,6 +148,20 @@ check(re.search(r"^COPY\s+configs/\S+\s+%s\s*$" % re.escape(image_default_config
                 dockerfile, re.M) is not None,
       "Dockerfile: LANE_DEFAULT_CONFIG=%s is not copied into the image" % image_default_config)
 
+# Every file the Dockerfile copies from the context is let through by its
+# .dockerignore ("*" then "!path" lines): a path left out fails the build.
+with open(os.path.join(DEPLOY, "Dockerfile.dockerignore")) as f:
+    allowed = [line.strip()[1:].rstrip("/") for line in f if line.strip().startswith("!")]
+for line in dockerfile.splitlines():
+    m = re.match(r"^COPY\s+(?!--from)(.*)$", line.strip())
+    if not m:
+        continue
+    for source in m.group(1).split()[:-1]:
+        source = source.rstrip("/")
+        check(any(source == a or source.startswith(a + "/") for a in allowed),
+              "Dockerfile: COPY %s, which Dockerfile.dockerignore leaves out of the context"
+              % source)
+
 # ---- compose ------------------------------------------------------------------
 compose_path = os.path.join(DEPLOY, "compose.yaml")
 (compose,) = load_all(compose_path)
@@ -156,6 +170,11 @@ check({"lane-server", "prometheus", "grafana"} <= set(services),
       "compose.yaml: services %s" % sorted(services))
 server = services.get("lane-server", {})
 compose_image = server.get("image")
+# One version (VERSION): the image is tagged with it.
+with open(os.path.join(ROOT, "VERSION")) as f:
+    version = f.readline().strip()
+check(compose_image == "lanedet/lane-server:%s" % version,
+      "compose.yaml: image %s is not tagged with VERSION %s" % (compose_image, version))
 compose_env = {k: str(v) for k, v in (server.get("environment") or {}).items()}
 compose_flags = flags_of(server.get("command"))
 check_server_flags("compose.yaml lane-server command", compose_flags)

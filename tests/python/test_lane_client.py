@@ -625,6 +625,115 @@ class ReconnectTest(unittest.TestCase):
         self.assertIn("no frame answered", str(caught.exception))
 
 
+class AsyncClientTest(unittest.TestCase):
+    """AsyncLaneClient (grpc.aio): the blocking client's calls and stream,
+    awaited; a restarted server mid-stream; the command line."""
+
+    def setUp(self):
+        self.server = Server().start()
+
+    def tearDown(self):
+        self.server.kill()
+
+    def run_async(self, coroutine):
+        import asyncio
+        return asyncio.run(coroutine)
+
+    def test_sessions_detect_and_stream(self):
+        async def main():
+            async with lane_client.AsyncLaneClient(self.server.target, token="") as client:
+                created = await client.create_session("aio", SYNTHETIC)
+                self.assertEqual(created.outcome, pb2.CREATE_OUTCOME_CREATED)
+                self.assertIn("aio", [s.camera_id for s in await client.list_sessions()])
+                response = await client.detect("aio", JPEGS[0], frame_id=7)
+                self.assertEqual(response.frame_id, 7)
+                self.assertTrue(response.lanes)
+                with self.assertRaises(lane_client.InvalidFrameError):
+                    await client.detect("aio", b"\xff\xd8 not a jpeg")
+                with self.assertRaises(lane_client.SessionNotFoundError):
+                    await client.get_session("no-such-camera")
+                # A list, with a bad frame in the middle: answered in place.
+                frames = [JPEGS[i % len(JPEGS)] for i in range(12)]
+                frames[5] = b"\xff\xd8 broken"
+                stream = client.stream("aio", frames, window=3)
+                responses = [r async for r in stream]
+                self.assertEqual([r.frame_id for r in responses], list(range(12)))
+                self.assertEqual(responses[5].status.code, pb2.FRAME_CODE_INVALID_ARGUMENT)
+                self.assertTrue(all(r.status.code == pb2.FRAME_CODE_OK
+                                    for i, r in enumerate(responses) if i != 5))
+                self.assertEqual(stream.connections, 1)
+
+                # An async source (a camera read without blocking the loop).
+                async def camera():
+                    for i in range(6):
+                        await asyncio.sleep(0.005)
+                        yield (100 + i, JPEGS[i % len(JPEGS)])
+                import asyncio
+                ids = [r.frame_id async for r in client.stream("aio", camera())]
+                self.assertEqual(ids, list(range(100, 106)))
+                await client.delete_session("aio")
+        self.run_async(main())
+
+    def test_stream_survives_a_killed_server(self):
+        frames = [JPEGS[i % len(JPEGS)] for i in range(30)]
+
+        async def main():
+            async with lane_client.AsyncLaneClient(self.server.target, token="") as client:
+                stream = client.stream("aio-restart", frames, window=4, config=SYNTHETIC)
+                ids = []
+                async for response in stream:
+                    ids.append(response.frame_id)
+                    self.assertEqual(response.status.code, pb2.FRAME_CODE_OK)
+                    if len(ids) == 8:
+                        self.server.kill()
+                        self.server.start()  # the same port
+                return stream, ids
+        stream, ids = self.run_async(main())
+        self.assertEqual(ids, list(range(30)), "each frame answered once, in order")
+        self.assertGreaterEqual(stream.connections, 2, stream.failures)
+        self.assertIn("UNAVAILABLE", " ".join(stream.failures))
+
+    def test_closing_the_stream_early_cancels_the_call(self):
+        async def main():
+            async with lane_client.AsyncLaneClient(self.server.target, token="") as client:
+                stream = client.stream("default", [JPEGS[0]] * 1000, window=4)
+                async for response in stream:
+                    if response.frame_id == 3:
+                        break
+                await stream.aclose()
+                return stream.frames
+        self.assertEqual(self.run_async(main()), 4)
+        # The server is still there and serves the next call.
+        with lane_client.LaneClient(self.server.target, token="") as client:
+            self.assertTrue(client.detect("default", JPEGS[0]).lanes)
+
+    def test_command_line(self):
+        env = dict(os.environ, PYTHONPATH=PACKAGE_DIR)
+
+        def cli(*args):
+            return subprocess.run([sys.executable, "-m", "lane_client", "--target",
+                                   self.server.target] + list(args), env=env,
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                  universal_newlines=True, timeout=60)
+        health = cli("health")
+        self.assertEqual(health.returncode, 0, health.stderr)
+        self.assertIn('"SERVING"', health.stdout)
+        frame = os.path.join(TMP, "cli-frame.jpg")
+        with open(frame, "wb") as f:
+            f.write(JPEGS[0])
+        detect = cli("detect", "cli-cam", frame, "--config", SYNTHETIC)
+        self.assertEqual(detect.returncode, 0, detect.stderr)
+        import json
+        self.assertTrue(json.loads(detect.stdout)["lanes"])
+        listed = cli("session", "list")
+        self.assertIn('"camera_id": "cli-cam"', listed.stdout)
+        missing = cli("session", "get", "no-such-camera")
+        self.assertEqual(missing.returncode, 1)
+        self.assertIn("NOT_FOUND", missing.stderr)
+        usage = cli("session")
+        self.assertEqual(usage.returncode, 2)
+
+
 class SecurityTest(unittest.TestCase):
     """Bearer token and TLS with a CA that openssl makes now."""
 

@@ -15,17 +15,38 @@ frames), and stubs generated once from the proto: `python3 -m
 lane_client.generate` (see client/python/README.md).
 
 Modules: client (LaneClient), streaming (FrameStream: the reconnecting
-stream), frames (what a frame may be), errors (LaneError and subclasses),
-generate (the stubs), reflection (a grpcurl-like command line).
+stream), aio (AsyncLaneClient, AsyncFrameStream: the same over asyncio),
+frames (what a frame may be), errors (LaneError and subclasses), generate
+(the stubs), reflection (a grpcurl-like command line); `python3 -m
+lane_client --help`: health, sessions and detection from the shell.
 """
 
 from .errors import (InvalidFrameError, LaneError, SessionNotFoundError, StreamError,
                      StubsNotFoundError, UnauthenticatedError)
 
-__version__ = "0.1.0"
+
+def _find_version() -> str:
+    """The project's version (the file VERSION at the repository's root):
+    written into the built package by setup.py, else read from the checkout
+    this package sits in."""
+    try:
+        from ._version import __version__ as built
+        return built
+    except ImportError:
+        pass
+    import os
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "..")
+    try:
+        with open(os.path.join(root, "VERSION"), encoding="utf-8") as f:
+            return f.readline().strip()
+    except OSError:
+        return "unknown"
+
+
+__version__ = _find_version()
 
 __all__ = [
-    "LaneClient", "FrameStream", "load_stubs", "LaneError", "InvalidFrameError",
+    "LaneClient", "FrameStream", "AsyncLaneClient", "AsyncFrameStream", "load_stubs", "LaneError", "InvalidFrameError",
     "SessionNotFoundError", "StreamError", "StubsNotFoundError", "UnauthenticatedError",
 ]
 
@@ -46,4 +67,7 @@ def __getattr__(name):
     if name == "FrameStream":
         from .streaming import FrameStream
         return FrameStream
+    if name in ("AsyncLaneClient", "AsyncFrameStream"):
+        from . import aio
+        return getattr(aio, name)
     raise AttributeError(f"module 'lane_client' has no attribute {name!r}")

@@ -2,6 +2,7 @@
 
 import json
 import os
+from typing import Any, Iterable, List, Optional, Sequence, Tuple, Union
 
 import grpc
 
@@ -25,6 +26,58 @@ _CHANNEL_OPTIONS = [
     ("grpc.max_send_message_length", -1),
     ("grpc.max_receive_message_length", 64 * 1024 * 1024),
 ]
+
+
+# What a config may be (LaneClient.session_config), and a frame (frames.py).
+Config = Union[dict, str, bytes, "os.PathLike[str]", Any]
+Image = Union[bytes, str, "os.PathLike[str]", Any]
+
+
+def session_config(pb2: Any, config: Config) -> Any:
+    """A SessionConfig from a dict, a JSON string, a path to a configs/*.json
+    file, or a SessionConfig (returned as is); both clients use it."""
+    if isinstance(config, pb2.SessionConfig):
+        return config
+    if isinstance(config, dict):
+        return pb2.SessionConfig(config_json=json.dumps(config))
+    if isinstance(config, (bytes, bytearray)):
+        config = bytes(config).decode("utf-8")
+    if isinstance(config, str) and config.lstrip().startswith("{"):
+        return pb2.SessionConfig(config_json=config)
+    if isinstance(config, (str, os.PathLike)):
+        try:
+            with open(config, "r", encoding="utf-8") as f:
+                return pb2.SessionConfig(config_json=f.read())
+        except OSError as e:
+            raise LaneError(f"config {os.fspath(config)!r} is neither JSON nor a readable "
+                            f"file: {e.strerror}") from e
+    raise TypeError("config must be a dict, a JSON string, a path to a JSON config file "
+                    f"or a SessionConfig, not {type(config).__name__}")
+
+
+def channel_credentials(ca: Any, cert: Any, key: Any, server_name: Optional[str],
+                        channel_options: List[Tuple[str, Any]]) -> Optional[Any]:
+    """TLS credentials for `ca` (and `cert`/`key` for mutual TLS), or None for
+    plaintext; adds the name override to `channel_options`. Both clients use it."""
+    if ca is None:
+        if cert is not None or key is not None:
+            raise ValueError("cert and key need ca= (mutual TLS runs over TLS)")
+        return None
+    if (cert is None) != (key is None):
+        raise ValueError("cert and key go together (mutual TLS)")
+    if server_name:
+        channel_options.append(("grpc.ssl_target_name_override", server_name))
+    return grpc.ssl_channel_credentials(
+        root_certificates=_read_pem(ca, "CA file"),
+        private_key=_read_pem(key, "key file"),
+        certificate_chain=_read_pem(cert, "certificate file"))
+
+
+def bearer_metadata(token: Optional[str]) -> Tuple[Tuple[str, str], ...]:
+    """The metadata for `token` (None: $LANE_TOKEN, as lane-client; "": none)."""
+    if token is None:
+        token = os.environ.get("LANE_TOKEN", "").strip()
+    return (("authorization", f"Bearer {token}"),) if token else ()
 
 
 def _read_pem(value, what):
@@ -64,49 +117,40 @@ class LaneClient:
     Usable as a context manager; close() closes the channel.
     """
 
-    def __init__(self, target="127.0.0.1:50051", token=None, ca=None, *, cert=None, key=None,
-                 server_name=None, timeout=10.0, options=None):
+    def __init__(self, target: str = "127.0.0.1:50051", token: Optional[str] = None,
+                 ca: Any = None, *, cert: Any = None, key: Any = None,
+                 server_name: Optional[str] = None, timeout: float = 10.0,
+                 options: Optional[Sequence[Tuple[str, Any]]] = None) -> None:
         self.pb2, pb2_grpc = _stubs.load()
         self.target = target
         self.timeout = timeout
-        if token is None:
-            token = os.environ.get("LANE_TOKEN", "").strip()
-        self._metadata = (("authorization", f"Bearer {token}"),) if token else ()
+        self._metadata = bearer_metadata(token)
         channel_options = list(_CHANNEL_OPTIONS) + list(options or [])
-        if ca is not None:
-            if (cert is None) != (key is None):
-                raise ValueError("cert and key go together (mutual TLS)")
-            if server_name:
-                channel_options.append(("grpc.ssl_target_name_override", server_name))
-            credentials = grpc.ssl_channel_credentials(
-                root_certificates=_read_pem(ca, "CA file"),
-                private_key=_read_pem(key, "key file"),
-                certificate_chain=_read_pem(cert, "certificate file"))
+        credentials = channel_credentials(ca, cert, key, server_name, channel_options)
+        if credentials is not None:
             self._channel = grpc.secure_channel(target, credentials, options=channel_options)
         else:
-            if cert is not None or key is not None:
-                raise ValueError("cert and key need ca= (mutual TLS runs over TLS)")
             self._channel = grpc.insecure_channel(target, options=channel_options)
         self._stub = pb2_grpc.LaneServiceStub(self._channel)
 
     # -- plumbing -----------------------------------------------------------
 
-    def close(self):
+    def close(self) -> None:
         self._channel.close()
 
-    def __enter__(self):
+    def __enter__(self) -> "LaneClient":
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: Any) -> None:
         self.close()
 
     @property
-    def channel(self):
+    def channel(self) -> grpc.Channel:
         """The grpc.Channel (for other services on the same port, e.g. health)."""
         return self._channel
 
     @property
-    def metadata(self):
+    def metadata(self) -> Tuple[Tuple[str, str], ...]:
         """The metadata sent with every call (the Bearer token), as gRPC wants it."""
         return self._metadata
 
@@ -120,30 +164,14 @@ class LaneClient:
 
     # -- sessions -----------------------------------------------------------
 
-    def session_config(self, config):
+    def session_config(self, config: Config) -> Any:
         """A SessionConfig from a dict, a JSON string, a path to a configs/*.json
         file, or a SessionConfig (returned as is). The JSON goes to the
         server as `config_json`; the server parses and checks it."""
-        pb2 = self.pb2
-        if isinstance(config, pb2.SessionConfig):
-            return config
-        if isinstance(config, dict):
-            return pb2.SessionConfig(config_json=json.dumps(config))
-        if isinstance(config, (bytes, bytearray)):
-            config = bytes(config).decode("utf-8")
-        if isinstance(config, str) and config.lstrip().startswith("{"):
-            return pb2.SessionConfig(config_json=config)
-        if isinstance(config, (str, os.PathLike)):
-            try:
-                with open(config, "r", encoding="utf-8") as f:
-                    return pb2.SessionConfig(config_json=f.read())
-            except OSError as e:
-                raise LaneError(f"config {os.fspath(config)!r} is neither JSON nor a readable "
-                                f"file: {e.strerror}") from e
-        raise TypeError("config must be a dict, a JSON string, a path to a JSON config file "
-                        f"or a SessionConfig, not {type(config).__name__}")
+        return session_config(self.pb2, config)
 
-    def create_session(self, camera_id, config, *, replace=False, timeout=None):
+    def create_session(self, camera_id: str, config: Config, *, replace: bool = False,
+                       timeout: Optional[float] = None) -> Any:
         """Creates the camera's session, or confirms it (CreateSession).
 
         Returns the CreateSessionResponse: `.session` (version, resolved
@@ -156,32 +184,34 @@ class LaneClient:
                                                 replace=replace)
         return self._call("CreateSession", request, timeout)
 
-    def get_session(self, camera_id, *, timeout=None):
+    def get_session(self, camera_id: str, *, timeout: Optional[float] = None) -> Any:
         """The Session of a camera; SessionNotFoundError when there is none."""
         return self._call("GetSession", self.pb2.GetSessionRequest(camera_id=camera_id), timeout)
 
-    def list_sessions(self, *, timeout=None):
+    def list_sessions(self, *, timeout: Optional[float] = None) -> List[Any]:
         """All sessions, sorted by camera id (a list of Session)."""
         return list(self._call("ListSessions", self.pb2.ListSessionsRequest(), timeout).sessions)
 
-    def delete_session(self, camera_id, *, timeout=None):
+    def delete_session(self, camera_id: str, *, timeout: Optional[float] = None) -> None:
         """Deletes a camera's session; SessionNotFoundError when there is none."""
         self._call("DeleteSession", self.pb2.DeleteSessionRequest(camera_id=camera_id), timeout)
 
-    def server_info(self, *, timeout=None):
+    def server_info(self, *, timeout: Optional[float] = None) -> Any:
         """ServerInfo: version, build, formats, limits and detector defaults."""
         return self._call("GetServerInfo", self.pb2.GetServerInfoRequest(), timeout)
 
     # -- frames -------------------------------------------------------------
 
-    def frame_request(self, camera_id, image, *, frame_id=0, capture_time_unix_ns=0, rgb=False):
+    def frame_request(self, camera_id: str, image: Image, *, frame_id: int = 0,
+                      capture_time_unix_ns: int = 0, rgb: bool = False) -> Any:
         """The FrameRequest for `image` (see lane_client.frames for what it may be)."""
         request = self.pb2.FrameRequest(camera_id=camera_id, frame_id=frame_id,
                                         capture_time_unix_ns=capture_time_unix_ns)
         return fill_image(request, image, self.pb2, rgb=rgb)
 
-    def detect(self, camera_id, image, *, frame_id=0, capture_time_unix_ns=0, rgb=False,
-               config=None, replace=False, timeout=None):
+    def detect(self, camera_id: str, image: Image, *, frame_id: int = 0,
+               capture_time_unix_ns: int = 0, rgb: bool = False, config: Optional[Config] = None,
+               replace: bool = False, timeout: Optional[float] = None) -> Any:
         """Detects the lanes of one frame (unary Detect) and returns the
         FrameResponse: `.lanes` (each with `.image`, `.ipm`, `.ground` Bezier
         curves of 4 `.control_points`, and `.score`), `.timings`, ...
@@ -199,9 +229,10 @@ class LaneClient:
             request.replace_session = replace
         return self._call("Detect", request, timeout)
 
-    def stream(self, camera_id, frames, *, config=None, replace=False, window=8,
-               first_frame_id=0, rgb=False, reconnect=True, give_up_after=60.0,
-               stall_timeout=30.0):
+    def stream(self, camera_id: str, frames: Iterable[Any], *, config: Optional[Config] = None,
+               replace: bool = False, window: int = 8, first_frame_id: int = 0,
+               rgb: bool = False, reconnect: bool = True, give_up_after: float = 60.0,
+               stall_timeout: Optional[float] = 30.0) -> FrameStream:
         """Streams frames (StreamFrames) and returns a FrameStream: an
         iterator of FrameResponse, one per frame, in the frames' order.
 
