@@ -16,6 +16,7 @@ Command AddDetectCommand(CLI::App& lane);
 Command AddRenderCommand(CLI::App& lane);
 Command AddConfigCommand(CLI::App& lane);
 Command AddCalibrateCommand(CLI::App& lane);
+Command AddBackfillCommand(CLI::App& lane);
 // `args`: the words after "eval", recorded in a --write-baseline file.
 Command AddEvalCommand(CLI::App& lane, const std::vector<std::string>& args);
 

@@ -14,9 +14,9 @@ int main(int argc, char** argv) {
   const std::vector<std::string> eval_args =
       args.size() > 1 ? std::vector<std::string>(args.begin() + 1, args.end())
                       : std::vector<std::string>();
-  const std::vector<Command> commands = {AddDetectCommand(app), AddRenderCommand(app),
-                                         AddConfigCommand(app), AddEvalCommand(app, eval_args),
-                                         AddCalibrateCommand(app)};
+  const std::vector<Command> commands = {AddDetectCommand(app),    AddRenderCommand(app),
+                                         AddConfigCommand(app),    AddEvalCommand(app, eval_args),
+                                         AddCalibrateCommand(app), AddBackfillCommand(app)};
   if (const std::optional<int> exit_code = ParseCommandLine(app, args)) return *exit_code;
   return RunChosen(commands);
 }

@@ -165,9 +165,10 @@ absl::StatusOr<DriveResults> ParseDriveResults(absl::string_view text, absl::str
                 !OptionalBool(l, "predicted", lane.predicted) ||
                 !OptionalBool(l, "inferred", lane.inferred) ||
                 !OptionalString(l, "color", colour) || !OptionalString(l, "type", type)) {
-              return error(absl::StrCat("lanes[", i,
-                                        "]: confirmed, predicted and inferred must be booleans, color and "
-                                        "type strings"));
+              return error(
+                  absl::StrCat("lanes[", i,
+                               "]: confirmed, predicted and inferred must be booleans, color and "
+                               "type strings"));
             }
             for (MarkingColor c : {MarkingColor::kWhite, MarkingColor::kYellow}) {
               if (colour == MarkingColorName(c)) lane.color = c;

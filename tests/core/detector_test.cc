@@ -159,8 +159,8 @@ TEST(DetectorEndToEnd, InfersBoundariesWhosePaintIsGone) {
   ASSERT_EQ(road.frames, 40);
   EXPECT_EQ(plain.inferred, 0);
   EXPECT_EQ(road.detections, plain.detections + road.inferred);
-  EXPECT_GE(road.inferred, 5);                              // measured
-  EXPECT_GE(road.inferred_found, 0.8 * road.inferred);      // measured
+  EXPECT_GE(road.inferred, 5);                          // measured
+  EXPECT_GE(road.inferred_found, 0.8 * road.inferred);  // measured
   EXPECT_GE(road.found, plain.found + road.inferred_found - 1);
   EXPECT_LE(road.false_positives, plain.false_positives + road.inferred - road.inferred_found);
 }

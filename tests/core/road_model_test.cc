@@ -62,8 +62,7 @@ TEST(RoadModelTest, AnInferredBoundaryRunsAsFarAsEitherNeighbour) {
   // The left neighbour is seen from 3 to 40 m, the right one from 6 to 25 m:
   // the hidden boundary runs from 3 to 40 m, half a gap from whichever
   // neighbour is there.
-  const std::vector<Bezier> found = {Boundary(-1.8, 0.02, 0, 3, 40),
-                                     Boundary(5.2, 0.02, 0, 6, 25)};
+  const std::vector<Bezier> found = {Boundary(-1.8, 0.02, 0, 3, 40), Boundary(5.2, 0.02, 0, 6, 25)};
   const std::vector<InferredBoundary> hidden = InferHiddenBoundaries(found, On());
   ASSERT_EQ(hidden.size(), 1u);
   const auto p = LateralProfile::FromGround(hidden[0].ground);
@@ -83,9 +82,9 @@ TEST(RoadModelTest, InfersNothingWhereTheGapIsNotTwoLanes) {
   // Two lane widths at the near end but converging (not parallel).
   EXPECT_TRUE(InferHiddenBoundaries({Boundary(-1.75), Boundary(5.25, -0.05)}, options).empty());
   // Overlapping over less than min_overlap_m.
-  EXPECT_TRUE(InferHiddenBoundaries({Boundary(-1.75, 0, 0, 3, 9), Boundary(5.25, 0, 0, 6, 40)},
-                                    options)
-                  .empty());
+  EXPECT_TRUE(
+      InferHiddenBoundaries({Boundary(-1.75, 0, 0, 3, 9), Boundary(5.25, 0, 0, 6, 40)}, options)
+          .empty());
   // Switched off (the default).
   const RoadModelOptions off;
   EXPECT_TRUE(InferHiddenBoundaries({Boundary(-1.75), Boundary(5.25)}, off).empty());
@@ -94,12 +93,10 @@ TEST(RoadModelTest, InfersNothingWhereTheGapIsNotTwoLanes) {
 TEST(RoadModelTest, AGapMustMatchTheLaneWidthTheFrameShows) {
   // The frame shows 3.0 m lanes (-4.5 | -1.5 | 1.5); a 7.6 m gap would be two
   // 3.8 m lanes, 27 % wider: a shoulder or a turn bay, not a hidden line.
-  const std::vector<Bezier> wide = {Boundary(-4.5), Boundary(-1.5), Boundary(1.5),
-                                    Boundary(9.1)};
+  const std::vector<Bezier> wide = {Boundary(-4.5), Boundary(-1.5), Boundary(1.5), Boundary(9.1)};
   EXPECT_TRUE(InferHiddenBoundaries(wide, On()).empty());
   // A 6.2 m gap (two 3.1 m lanes) is.
-  const std::vector<Bezier> two = {Boundary(-4.5), Boundary(-1.5), Boundary(1.5),
-                                   Boundary(7.7)};
+  const std::vector<Bezier> two = {Boundary(-4.5), Boundary(-1.5), Boundary(1.5), Boundary(7.7)};
   const std::vector<InferredBoundary> hidden = InferHiddenBoundaries(two, On());
   ASSERT_EQ(hidden.size(), 1u);
   EXPECT_EQ(hidden[0].left, 2);

@@ -67,7 +67,7 @@ def flags_of(args):
     """--name=value arguments as a dict (the last occurrence wins, as in abseil)."""
     out = {}
     for a in args or []:
-        m = re.match(r"^--?([a-z_]+)(?:=(.*))?$", str(a))
+        m = re.match(r"^--?([a-z][a-z_-]*)(?:=(.*))?$", str(a))
         if m:
             out[m.group(1)] = m.group(2) if m.group(2) is not None else "true"
     return out
@@ -410,6 +410,51 @@ for p in pdbs:
 adapter = [doc for f in k8s_files if "adapter" in os.path.basename(f) for doc in load_all(f)]
 check(any("lanesvc_inflight_frames" in json.dumps(d) for d in adapter),
       "k8s: no prometheus-adapter rule for lanesvc_inflight_frames")
+
+# ---- the back-fill Job (deploy/k8s/backfill, docs/backfill.md) -----------------------
+backfill_dir = os.path.join(DEPLOY, "k8s", "backfill")
+(bkust,) = load_all(os.path.join(backfill_dir, "kustomization.yaml"))
+for r in bkust.get("resources", []):
+    check(os.path.exists(os.path.join(backfill_dir, r)), "backfill kustomization: %s is missing" % r)
+jobs = [o for f, o in by_kind.get("Job", []) if o["metadata"]["name"] == "lane-backfill"]
+check(len(jobs) == 1, "k8s: expected the Job lane-backfill")
+if jobs:
+    job = jobs[0]["spec"]
+    check(job.get("completionMode") == "Indexed", "lane-backfill: not an Indexed Job")
+    check(job.get("completions") == job.get("parallelism"),
+          "lane-backfill: completions != parallelism")
+    check(isinstance(job.get("backoffLimit"), int), "lane-backfill: no backoffLimit")
+    (bc,) = job["template"]["spec"]["containers"]
+    check(bc.get("image") == compose_image, "lane-backfill: image %s, compose %s"
+          % (bc.get("image"), compose_image))
+    check(bc.get("command") == ["lane", "backfill"], "lane-backfill: command is not lane backfill")
+    bflags = flags_of(bc.get("args"))
+    shard = bflags.get("shard", "")
+    check(shard == "$(JOB_COMPLETION_INDEX)/%s" % job.get("completions"),
+          "lane-backfill: --shard %s does not map the completion index onto %s shards"
+          % (shard, job.get("completions")))
+    env_names = {e["name"]: e for e in bc.get("env", [])}
+    check("job-completion-index" in json.dumps(env_names.get("JOB_COMPLETION_INDEX", {})),
+          "lane-backfill: JOB_COMPLETION_INDEX does not come from the completion index")
+    check(all(k in bflags for k in ("manifest", "output-dir")),
+          "lane-backfill: --manifest and --output-dir are required")
+    check(bc.get("resources", {}).get("requests", {}).get("cpu") == bflags.get("jobs"),
+          "lane-backfill: the CPU request should equal --jobs")
+    mounts = {m["mountPath"] for m in bc.get("volumeMounts", [])}
+    check(any(bflags.get("manifest", "").startswith(m + "/") for m in mounts),
+          "lane-backfill: the manifest is not on a mounted volume")
+    claims = {v["persistentVolumeClaim"]["claimName"] for v in job["template"]["spec"]["volumes"]
+              if "persistentVolumeClaim" in v}
+    pvcs = {o["metadata"]["name"] for f, o in by_kind.get("PersistentVolumeClaim", [])}
+    check(claims and claims <= pvcs, "lane-backfill: claims %s, PVCs %s" % (claims, pvcs))
+    # `kubectl kustomize` renders it, where kubectl is installed.
+    import shutil
+    import subprocess
+    if shutil.which("kubectl"):
+        rendered = subprocess.run(["kubectl", "kustomize", backfill_dir], capture_output=True,
+                                  text=True)
+        check(rendered.returncode == 0 and "kind: Job" in rendered.stdout,
+              "kubectl kustomize deploy/k8s/backfill: %s" % rendered.stderr.strip())
 
 print("deploy manifests: %d checks over compose.yaml, %d Kubernetes files (%d objects), "
       "Prometheus, Grafana (%d queries) and the Dockerfile" % (

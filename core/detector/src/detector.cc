@@ -401,16 +401,15 @@ void Detector::AddInferredLanes(std::vector<Lane>& lanes) const {
   std::vector<Bezier> ground;
   ground.reserve(lanes.size());
   for (const Lane& lane : lanes) ground.push_back(Bezier{lane.ground});
-  const std::vector<InferredBoundary> hidden =
-      InferHiddenBoundaries(ground, options_.road_model);
+  const std::vector<InferredBoundary> hidden = InferHiddenBoundaries(ground, options_.road_model);
   if (hidden.empty()) return;
   const CameraModel& cam = ipm_.camera();
   for (const InferredBoundary& h : hidden) {
     const auto image_fit =
         MapSpline(h.ground, 21, [&cam](const Eigen::Vector2d& p) { return cam.GroundToImage(p); });
     if (!image_fit) continue;
-    const auto ipm_fit = MapSpline(*image_fit, 21,
-                                   [this](const Eigen::Vector2d& p) { return ipm_.ImageToIpm(p); });
+    const auto ipm_fit =
+        MapSpline(*image_fit, 21, [this](const Eigen::Vector2d& p) { return ipm_.ImageToIpm(p); });
     if (!ipm_fit) continue;
     Lane lane;
     lane.image = image_fit->p;

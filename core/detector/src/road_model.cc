@@ -9,8 +9,7 @@ namespace lane {
 
 absl::Status RoadModelOptions::Validate() const {
   if (!(min_lane_width_m > 0) || !(max_lane_width_m > min_lane_width_m)) {
-    return absl::InvalidArgumentError(
-        "road_model: need 0 < min_lane_width_m < max_lane_width_m");
+    return absl::InvalidArgumentError("road_model: need 0 < min_lane_width_m < max_lane_width_m");
   }
   if (!(width_tolerance > 0) || !(max_gap_change_m > 0) || !(min_overlap_m > 0)) {
     return absl::InvalidArgumentError(

@@ -9,13 +9,18 @@ namespace lane {
 FrameTracker::FrameTracker(const CameraModel& camera, LaneTrackingOptions lanes, EgoOptions ego)
     : tracker_(camera, lanes, ego) {}
 
+DetectionPrior FrameTracker::Prior(const Detector& detector) const {
+  absl::MutexLock lock(&mu_);
+  return tracker_.Prior(detector.ipm());
+}
+
 absl::StatusOr<Detection> FrameTracker::Measure(const Detector& detector,
                                                 const cv::Mat& frame) const {
-  DetectionPrior prior;
-  {
-    absl::MutexLock lock(&mu_);
-    prior = tracker_.Prior(detector.ipm());
-  }
+  return Measure(detector, frame, Prior(detector));
+}
+
+absl::StatusOr<Detection> FrameTracker::Measure(const Detector& detector, const cv::Mat& frame,
+                                                const DetectionPrior& prior) const {
   absl::StatusOr<Detection> detection = detector.Detect(frame, &prior);
   if (!detection.ok()) return detection;
   const FrameNeeds& needs = detector.Needs();

@@ -24,7 +24,8 @@ int main(int argc, char** argv) {
   }
   std::ifstream in(argv[2], std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const absl::StatusOr<cv::Mat> frame = lane::decode::DecodeImage(bytes, lane::decode::DecodeOptions{});
+  const absl::StatusOr<cv::Mat> frame =
+      lane::decode::DecodeImage(bytes, lane::decode::DecodeOptions{});
   if (!frame.ok()) {
     std::fprintf(stderr, "decode: %s\n", std::string(frame.status().message()).c_str());
     return 1;

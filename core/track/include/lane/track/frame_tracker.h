@@ -42,6 +42,16 @@ class FrameTracker {
   // once, and concurrently with Commit.
   absl::StatusOr<Detection> Measure(const Detector& detector, const cv::Mat& frame) const;
 
+  // The prior Measure would search now: the tracker's predicted lanes after
+  // the last committed frame.
+  DetectionPrior Prior(const Detector& detector) const;
+  // Step 1 with a prior taken earlier (Prior): the lanes depend on the frame
+  // and that prior only, not on when this runs. A batch that takes frame i's
+  // prior right after committing frame i - k gets the same lanes whatever
+  // its threads' timing (lane backfill).
+  absl::StatusOr<Detection> Measure(const Detector& detector, const cv::Mat& frame,
+                                    const DetectionPrior& prior) const;
+
   // Step 2, in frame order. `detection` (from Measure) gets its lanes' ids,
   // confirmed flags and voted colours and types, the predicted lanes of
   // confirmed tracks missed for a few frames, drawn in `detector`'s top view,
