@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# `lane backfill` end to end (issue 38), on rendered drives:
+# `lane backfill` end to end (issue 38), on rendered drives (and on the two
+# real clips of ../shared/data, read in place, when they are there):
 #   1. one unsharded run: the good recordings done, a corrupt one and a
 #      missing one reported as failed (exit 1), the others unaffected;
 #   2. 4 shards (scripts/backfill-local.sh): each recording in exactly one
@@ -52,6 +53,19 @@ cat >"$dir/manifest.jsonl" <<JSON
 {"recording": "missing", "config": "$src/configs/synthetic.json", "output": "missing"}
 JSON
 good="cam1-drive1 cam1-drive2 cam2-drive3 cam2-drive4 caltech-cordova"
+# The real clips too, when ../shared/data is there (never copied: read in place).
+data=$(cd "$src/.." && pwd)/shared/data
+real=0
+if [ -d "$data/culane-driver161-a" ] && [ -d "$data/caltech-cordova1" ]; then
+  cat >>"$dir/manifest.jsonl" <<JSON
+{"recording": "$data/culane-driver161-a", "config": "$src/configs/culane-driver161.json", "output": "culane-driver161-a"}
+{"recording": "$data/caltech-cordova1", "config": "$src/configs/caltech.json", "output": "caltech-cordova1"}
+JSON
+  good="$good culane-driver161-a caltech-cordova1"
+  real=2
+else
+  echo "note: ../shared/data is absent: rendered drives only"
+fi
 
 # stripped DIR: each output without its timings, into DIR.stripped/.
 stripped() {
@@ -71,22 +85,25 @@ status=0
 "$lane" backfill --manifest "$dir/manifest.jsonl" --output-dir "$dir/all" --quiet \
   2>"$dir/all.err" || status=$?
 [ "$status" -eq 1 ] || { cat "$dir/all.err" >&2; fail "unsharded run: exit $status, expected 1"; }
-python3 - "$dir/all/summary-shard-0-of-1.json" <<'PY' || fail "unsharded summary"
+python3 - "$dir/all/summary-shard-0-of-1.json" "$real" <<'PY' || fail "unsharded summary"
 import json, sys
 s = json.load(open(sys.argv[1]))
+real = int(sys.argv[2])
 by = {r["output"]: r for r in s["recordings"]}
-assert s["done"] == 5 and s["failed"] == 2 and s["skipped"] == 0, s
+assert s["done"] == 5 + real and s["failed"] == 2 and s["skipped"] == 0, s
+if real:
+    assert by["culane-driver161-a"]["frames"] == 60 and by["caltech-cordova1"]["frames"] == 250, by
 assert by["corrupt"]["status"] == "failed" and by["missing"]["status"] == "failed", by
 for name in ("cam1-drive1", "cam1-drive2", "cam2-drive3", "cam2-drive4", "caltech-cordova"):
     r = by[name]
     assert r["status"] == "done" and r["failed_frames"] == 0, r
     assert r["frames"] in (30, 40), r
     assert 1.5 <= r["lanes_per_frame"] <= 6, r
-print(f"ok: unsharded: {s['frames']} frames, 5 recordings done, 2 failed and reported")
+print(f"ok: unsharded: {s['frames']} frames, {5 + real} recordings done, 2 failed and reported")
 PY
 for name in $good; do
   [ -f "$dir/all/$name.jsonl" ] || fail "no output for $name"
-  n=$(grep -c '"lanes"' "$dir/all/$name.jsonl")
+  n=$(grep -c '"lanes"' "$dir/all/$name.jsonl" || true)
   ids=$(grep -c '"id":' "$dir/all/$name.jsonl" || true)
   [ "$n" -ge 30 ] && [ "$ids" -ge 15 ] || fail "$name: $n frames, $ids with tracked lane ids"
 done
@@ -99,14 +116,15 @@ status=0
 "$src/scripts/backfill-local.sh" "$dir/manifest.jsonl" "$dir/four" 4 "$lane" >"$dir/four.out" \
   2>&1 || status=$?
 [ "$status" -eq 1 ] || { cat "$dir/four.out" >&2; fail "4 shards: exit $status, expected 1"; }
-python3 - "$dir/four" <<'PY' || fail "4 shards' summaries"
+python3 - "$dir/four" "$real" <<'PY' || fail "4 shards' summaries"
 import collections, json, sys
 seen = collections.Counter()
 for i in range(4):
     s = json.load(open(f"{sys.argv[1]}/summary-shard-{i}-of-4.json"))
     seen.update(r["output"] for r in s["recordings"])
-assert len(seen) == 7 and set(seen.values()) == {1}, seen
-print("ok: 4 shards: each of the 7 recordings in exactly one shard")
+n = 7 + int(sys.argv[2])
+assert len(seen) == n and set(seen.values()) == {1}, seen
+print(f"ok: 4 shards: each of the {n} recordings in exactly one shard")
 PY
 stripped "$dir/four"
 diff -r "$dir/all.stripped" "$dir/four.stripped" >/dev/null ||
@@ -133,7 +151,8 @@ kill -9 "$bg" 2>/dev/null || true
 wait "$bg" 2>/dev/null || true
 bg=
 finished=$(count '*.jsonl')
-[ "$finished" -ge 1 ] && [ "$finished" -lt 6 ] || fail "the kill came at a bad time: $finished finished"
+total=$((6 + real))
+[ "$finished" -ge 1 ] && [ "$finished" -lt "$total" ] || fail "the kill came at a bad time: $finished finished"
 [ "$(count '.*.partial')" -eq 1 ] || fail "no partial output at the kill"
 (cd "$dir/kill" && stat -c '%n %Y.%y' ./*.jsonl) >"$dir/before.txt"
 sleep 1.1
@@ -144,10 +163,10 @@ status=0
 while read -r name stamp; do
   [ "$(cd "$dir/kill" && stat -c '%Y.%y' "$name")" = "$stamp" ] || fail "$name was recomputed"
 done <"$dir/before.txt"
-python3 - "$dir/kill/summary-shard-0-of-1.json" "$finished" <<'PY' || fail "resumed summary"
+python3 - "$dir/kill/summary-shard-0-of-1.json" "$finished" "$total" <<'PY' || fail "resumed summary"
 import json, sys
 s = json.load(open(sys.argv[1]))
-assert s["skipped"] == int(sys.argv[2]) and s["done"] == 6 - int(sys.argv[2]), s
+assert s["skipped"] == int(sys.argv[2]) and s["done"] == int(sys.argv[3]) - int(sys.argv[2]), s
 assert [r for r in s["recordings"] if r["output"] == "long"][0]["frames"] in (0, 400), s
 PY
 [ "$(count '.*.partial')" -eq 0 ] || fail "partial files left after the resumed run"
