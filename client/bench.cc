@@ -6,6 +6,7 @@
 #include <chrono>
 #include <memory>
 #include <queue>
+#include <set>
 #include <thread>
 #include <tuple>
 #include <utility>
@@ -69,6 +70,27 @@ class LoadRun {
     }
   }
 
+  // The servers' CPU seconds now (one call per target); negative when a
+  // server does not answer or does not say.
+  double ServerCpuSeconds() {
+    double total = 0;
+    std::set<std::string> asked;
+    for (size_t c = 0; c < spec_.channels.size(); ++c) {
+      const std::string& target = spec_.channel_targets[c % spec_.channel_targets.size()];
+      if (!asked.insert(target).second) continue;
+      auto stub = v1::LaneService::NewStub(spec_.channels[c]);
+      grpc::ClientContext context;
+      context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(2));
+      v1::ServerInfo info;
+      if (!stub->GetServerInfo(&context, v1::GetServerInfoRequest(), &info).ok() ||
+          info.process_cpu_seconds() <= 0) {
+        return -1;
+      }
+      total += info.process_cpu_seconds();
+    }
+    return total;
+  }
+
   LoadResult Run() {
     run_.start = Clock::now();
     run_.start_unix_ns = absl::GetCurrentTimeNanos();
@@ -85,7 +107,16 @@ class LoadRun {
       if (CameraStream* stream = camera->current()) stream->HalfClose();
     }
     Drain();
-    return Collect();
+    const double cpu_end = ServerCpuSeconds();
+    LoadResult result = Collect();
+    if (cpu_start_ >= 0 && cpu_end >= cpu_start_) {
+      result.server_cpu_s = cpu_end - cpu_start_;
+      if (result.frames_sent > 0) {
+        result.server_cpu_ms_per_frame =
+            1e3 * result.server_cpu_s / static_cast<double>(result.frames_sent);
+      }
+    }
+    return result;
   }
 
  private:
@@ -114,9 +145,15 @@ class LoadRun {
   // whose call failed (the shared reconnect policy; its schedule starts again
   // after a call that was answered).
   void Supervise() {
+    bool cpu_sampled = false;
     while (true) {
       const auto now = Clock::now();
       if (now >= run_.measure_end) break;
+      if (!cpu_sampled && now >= run_.measure_start) {
+        // The servers' CPU from the start of the measured window.
+        cpu_start_ = ServerCpuSeconds();
+        cpu_sampled = true;
+      }
       for (auto& camera : cameras_) {
         CameraStream* stream = camera->current();
         if (stream == nullptr || !stream->done()) continue;
@@ -135,6 +172,8 @@ class LoadRun {
       WaitDoneUntil(std::min(run_.measure_end, now + std::chrono::milliseconds(50)));
     }
   }
+
+  double cpu_start_ = -1;  // the servers' CPU seconds at the start of the measured window
 
   void ReportProgress(const char* phase) {
     Progress p;

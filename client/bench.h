@@ -136,7 +136,15 @@ struct LoadResult {
   uint64_t stream_failures = 0;
   std::map<std::string, uint64_t> ok_by_target;
   std::vector<TimelinePoint> timeline;  // empty unless LoadSpec::timeline_interval > 0
+  // The servers' CPU time over the measured window and the drain (their
+  // ServerInfo.process_cpu_seconds, summed over the targets), and per frame
+  // sent in the window; negative when a server did not say.
+  double server_cpu_s = -1;
+  double server_cpu_ms_per_frame = -1;
 };
+
+// CPU time this process has used, user + system, seconds (getrusage).
+double ProcessCpuSeconds();
 
 // Creates (or confirms) the sessions, runs the load, waits for the answers.
 // An error only when the sessions cannot be created.
@@ -172,6 +180,10 @@ struct InprocessResult {
   // reference ran once):
   double fps_before = 0;
   double fps_after = 0;
+  // This process's CPU time over the measured part (all its threads: the
+  // workers, nothing else runs then), and per measured frame.
+  double cpu_s = 0;
+  double cpu_ms_per_frame = 0;
   std::vector<double> latency_samples;  // what latency_ms summarizes
 };
 

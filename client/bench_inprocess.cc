@@ -1,5 +1,7 @@
 // The in-process reference of `lane-client bench`: the service's decode and
 // detect on the same frames, without gRPC.
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -103,6 +105,15 @@ void ReportProgress(const InprocessRun& run, double total_s, const ProgressFn& p
 
 }  // namespace
 
+double ProcessCpuSeconds() {
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) != 0) return 0;
+  const auto seconds = [](const timeval& t) {
+    return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_usec) * 1e-6;
+  };
+  return seconds(usage.ru_utime) + seconds(usage.ru_stime);
+}
+
 absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& frames,
                                              const v1::SessionConfig& session, int workers,
                                              absl::Duration warmup, absl::Duration duration,
@@ -133,8 +144,17 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
   run.end = run.measure_start + absl::ToChronoNanoseconds(duration);
   std::vector<std::thread> threads;
   for (int w = 0; w < workers; ++w) threads.emplace_back([&run] { RunWorker(run); });
+  // This process's CPU over the measured part: from its start to the
+  // workers' end (they stop at run.end, having measured up to it).
+  double cpu_start = 0;
+  std::thread cpu_sampler([&run, &cpu_start] {
+    std::this_thread::sleep_until(run.measure_start);
+    cpu_start = ProcessCpuSeconds();
+  });
   if (progress) ReportProgress(run, absl::ToDoubleSeconds(warmup + duration), progress);
   for (std::thread& t : threads) t.join();
+  cpu_sampler.join();
+  const double cpu_s = ProcessCpuSeconds() - cpu_start;
   // The workers are joined; what they left is read under the lock they wrote it under.
   absl::MutexLock lock(&run.mu);
   if (!run.failure.empty()) return absl::InternalError(absl::StrCat("in-process: ", run.failure));
@@ -146,6 +166,9 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
   result.fps = static_cast<double>(result.frames) / absl::ToDoubleSeconds(duration);
   result.latency_ms = Summarize(run.latency);
   result.latency_samples = std::move(run.latency);
+  result.cpu_s = cpu_s;
+  result.cpu_ms_per_frame =
+      result.frames > 0 ? 1e3 * cpu_s / static_cast<double>(result.frames) : 0;
   return result;
 }
 
@@ -159,6 +182,8 @@ InprocessResult CombineInprocess(InprocessResult a, InprocessResult b, absl::Dur
   out.tracked_frames = a.tracked_frames + b.tracked_frames;
   out.fps_before = a.fps;
   out.fps_after = b.fps;
+  out.cpu_s = a.cpu_s + b.cpu_s;
+  out.cpu_ms_per_frame = out.frames > 0 ? 1e3 * out.cpu_s / static_cast<double>(out.frames) : 0;
   out.latency_samples = std::move(a.latency_samples);
   out.latency_samples.insert(out.latency_samples.end(), b.latency_samples.begin(),
                              b.latency_samples.end());

@@ -227,6 +227,13 @@ Json RunJson(const Report& r, const LoadResult& run) {
   for (const auto& [target, n] : run.ok_by_target) x["ok_by_target"][target] = n;
   const std::optional<double> ratio = r.Ratio(run);
   x["service_vs_inprocess"] = ratio ? Json(Round3(*ratio)) : Json();
+  // CPU per frame: the servers' (over the measured window and the drain, per
+  // frame sent in the window) against the in-process reference's. Unlike the
+  // throughput ratio, it does not depend on the client sharing the cores.
+  x["server_cpu_ms_per_frame"] =
+      run.server_cpu_ms_per_frame >= 0 ? Json(Round3(run.server_cpu_ms_per_frame)) : Json();
+  const std::optional<double> cpu_ratio = r.CpuRatio(run);
+  x["server_cpu_vs_inprocess"] = cpu_ratio ? Json(Round3(*cpu_ratio)) : Json();
   x["slo_met"] = r.slo_p99_ms ? Json(r.SloMet(run)) : Json();
   x["warnings"] = Warnings(r, run);
   if (r.show_timeline && !run.timeline.empty()) x["timeline"] = TimelineJson(run.timeline);
@@ -243,6 +250,7 @@ Json InprocessJson(const InprocessResult& in) {
   x["tracked_frames"] = in.tracked_frames;
   x["fps_before"] = Round3(in.fps_before);
   x["fps_after"] = Round3(in.fps_after);
+  x["cpu_ms_per_frame"] = Round3(in.cpu_ms_per_frame);
   x["latency_ms"] = LatencyJson(in.latency_ms);
   return x;
 }
@@ -289,9 +297,11 @@ std::string CsvReport(const Report& r) {
       << SummaryHeader("server_queue") << ',' << SummaryHeader("server_decode") << ','
       << SummaryHeader("server_detect")
       << ",max_send_lag_ms,stream_failures,ok_by_target,inprocess_fps,service_vs_inprocess,"
+         "server_cpu_ms_per_frame,server_cpu_vs_inprocess,"
          "slo_p99_ms,slo_met,warnings,date_utc,client_version,server_version,machine\n";
   for (const LoadResult& run : r.runs) {
     const std::optional<double> ratio = r.Ratio(run);
+    const std::optional<double> cpu_ratio = r.CpuRatio(run);
     std::vector<std::string> by_target;
     for (const auto& [target, n] : run.ok_by_target)
       by_target.push_back(absl::StrCat(target, ":", n));
@@ -308,6 +318,9 @@ std::string CsvReport(const Report& r) {
         << run.stream_failures << ',' << CsvCell(absl::StrJoin(by_target, ";")) << ','
         << (r.inprocess ? absl::StrFormat("%.3f", r.inprocess->fps) : std::string()) << ','
         << (ratio ? absl::StrFormat("%.3f", *ratio) : std::string()) << ','
+        << (run.server_cpu_ms_per_frame >= 0 ? absl::StrFormat("%.3f", run.server_cpu_ms_per_frame)
+                                             : std::string())
+        << ',' << (cpu_ratio ? absl::StrFormat("%.3f", *cpu_ratio) : std::string()) << ','
         << (r.slo_p99_ms ? absl::StrCat(*r.slo_p99_ms) : std::string()) << ','
         << (r.slo_p99_ms ? (r.SloMet(run) ? "true" : "false") : "") << ','
         << CsvCell(absl::StrJoin(Warnings(r, run), "; ")) << ',' << CsvCell(r.meta.date_utc) << ','
@@ -361,6 +374,14 @@ std::string TextReport(const Report& r) {
     }
     if (const std::optional<double> ratio = r.Ratio(run)) {
       notes.push_back(absl::StrFormat("service/in-process %.1f %%", *ratio * 100));
+    }
+    if (run.server_cpu_ms_per_frame >= 0) {
+      std::string cpu = absl::StrFormat("server CPU %.2f ms/frame", run.server_cpu_ms_per_frame);
+      if (const std::optional<double> cpu_ratio = r.CpuRatio(run)) {
+        absl::StrAppend(&cpu, absl::StrFormat(" (in-process %.2f ms, %.2fx)",
+                                              r.inprocess->cpu_ms_per_frame, *cpu_ratio));
+      }
+      notes.push_back(cpu);
     }
     out << absl::StrFormat("  %d cameras: ", run.cameras) << absl::StrJoin(notes, "; ") << "\n";
     for (const std::string& warning : Warnings(r, run)) {

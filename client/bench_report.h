@@ -68,6 +68,13 @@ struct Report {
     if (!inprocess || inprocess->fps <= 0) return std::nullopt;
     return run.achieved_fps / inprocess->fps;
   }
+  // The servers' CPU per frame over the in-process reference's.
+  std::optional<double> CpuRatio(const LoadResult& run) const {
+    if (!inprocess || inprocess->cpu_ms_per_frame <= 0 || run.server_cpu_ms_per_frame <= 0) {
+      return std::nullopt;
+    }
+    return run.server_cpu_ms_per_frame / inprocess->cpu_ms_per_frame;
+  }
 };
 
 // Why a run's figures may not be trusted: a service/in-process ratio over

@@ -475,6 +475,13 @@ TEST_F(ClientTest, BenchClosedLoopJsonReport) {
   EXPECT_GT(report["inprocess"]["fps_before"].get<double>(), 0);
   EXPECT_GT(report["inprocess"]["fps_after"].get<double>(), 0);
   EXPECT_GT(run["service_vs_inprocess"].get<double>(), 0);
+  // CPU per frame: the server's (its ServerInfo.process_cpu_seconds over the
+  // run; here the server runs in the test's own process, so the figure also
+  // holds the client's share) and the in-process reference's.
+  ASSERT_TRUE(run["server_cpu_ms_per_frame"].is_number()) << run.dump();
+  EXPECT_GT(run["server_cpu_ms_per_frame"].get<double>(), 0);
+  EXPECT_GT(report["inprocess"]["cpu_ms_per_frame"].get<double>(), 0);
+  EXPECT_GT(run["server_cpu_vs_inprocess"].get<double>(), 0);
   EXPECT_EQ(run["slo_met"], true);
   EXPECT_EQ(report["slo_met"], true);
   // The sessions are deleted at the end.
