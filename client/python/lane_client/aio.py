@@ -26,7 +26,6 @@ import asyncio
 import collections
 import contextlib
 import logging
-import random
 import time
 from typing import Any, AsyncIterable, AsyncIterator, Iterable, List, Optional, Sequence, Tuple, Union
 
@@ -36,9 +35,9 @@ import grpc.aio
 from . import _stubs
 from .client import (_CHANNEL_OPTIONS, Config, Image, bearer_metadata, channel_credentials,
                      session_config)
-from .errors import LaneError, SessionNotFoundError, StreamError, from_rpc_error
+from .errors import LaneError, SessionNotFoundError, from_rpc_error
 from .frames import fill_image
-from .streaming import BACKOFF_INITIAL, BACKOFF_JITTER, BACKOFF_MAX, TRANSIENT, _Pending, _Retry
+from .streaming import TRANSIENT, _Pending, _Reconnect, _Retry
 
 log = logging.getLogger("lane_client")
 
@@ -355,8 +354,7 @@ class AsyncFrameStream:
 
     async def _run(self) -> AsyncIterator[Any]:
         first = True
-        backoff = BACKOFF_INITIAL
-        last_progress = time.monotonic()
+        policy = _Reconnect(self.camera_id, self._reconnect, self._give_up_after, self.failures)
         while not (self._source_done and not self._pending):
             self._progress = False
             try:
@@ -376,22 +374,6 @@ class AsyncFrameStream:
                              f"{len(self._pending)} frames unanswered")
             except _Retry as retry:
                 failure = retry
-            if self._progress:
-                backoff = BACKOFF_INITIAL
-                last_progress = time.monotonic()
-            self.failures.append(failure.text)
-            if not self._reconnect:
-                raise StreamError(f"StreamFrames: {failure.text}", failure.code,
-                                  failures=self.failures)
-            if time.monotonic() - last_progress > self._give_up_after:
-                raise StreamError(
-                    f"StreamFrames: no frame answered for {self._give_up_after:g} s; "
-                    f"last error: {failure.text}", failure.code, failures=self.failures)
-            wait = backoff * random.uniform(1 - BACKOFF_JITTER, 1 + BACKOFF_JITTER)
-            backoff = min(backoff * 2, BACKOFF_MAX)
-            log.warning("lane_client: camera '%s': %s; reconnecting in %.0f ms "
-                        "(%d frames to resend)", self.camera_id, failure.text, wait * 1000,
-                        len(self._pending))
-            await asyncio.sleep(wait)
+            await asyncio.sleep(policy.after(failure, self._progress, len(self._pending)))
         if self._source_error is not None:
             raise self._source_error

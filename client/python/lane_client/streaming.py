@@ -59,6 +59,42 @@ class _Pending:
         self.sent_at = 0.0     # time.monotonic() of the last write
 
 
+class _Reconnect:
+    """What a stream does after a failed call or session step, the same for
+    FrameStream and aio.AsyncFrameStream: record why, give up (StreamError)
+    when reconnection is off or no frame was answered for give_up_after
+    seconds, else wait 0.1 s doubling to 2 s (+-20 %), from 0.1 s again
+    after a call that answered frames."""
+
+    def __init__(self, camera_id, reconnect, give_up_after, failures):
+        self._camera_id = camera_id
+        self._reconnect = reconnect
+        self._give_up_after = give_up_after
+        self._failures = failures  # the stream's public list, appended to
+        self._backoff = BACKOFF_INITIAL
+        self._last_progress = time.monotonic()
+
+    def after(self, failure, progressed, unanswered):
+        """Seconds to wait before the next call; raises StreamError to give up."""
+        if progressed:
+            self._backoff = BACKOFF_INITIAL
+            self._last_progress = time.monotonic()
+        self._failures.append(failure.text)
+        if not self._reconnect:
+            raise StreamError(f"StreamFrames: {failure.text}", failure.code,
+                              failures=self._failures)
+        if time.monotonic() - self._last_progress > self._give_up_after:
+            raise StreamError(
+                f"StreamFrames: no frame answered for {self._give_up_after:g} s; "
+                f"last error: {failure.text}", failure.code, failures=self._failures)
+        wait = self._backoff * random.uniform(1 - BACKOFF_JITTER, 1 + BACKOFF_JITTER)
+        self._backoff = min(self._backoff * 2, BACKOFF_MAX)
+        log.warning("lane_client: camera '%s': %s; reconnecting in %.0f ms "
+                    "(%d frames to resend)", self._camera_id, failure.text, wait * 1000,
+                    unanswered)
+        return wait
+
+
 class _Retry(Exception):
     """A call or session step failed in a way that may be retried."""
 
@@ -302,8 +338,7 @@ class FrameStream:
 
     def _run(self):
         first = True
-        backoff = BACKOFF_INITIAL
-        last_progress = time.monotonic()
+        policy = _Reconnect(self.camera_id, self._reconnect, self._give_up_after, self.failures)
         while True:
             with self._cond:
                 if self._source_done and not self._pending:
@@ -321,24 +356,8 @@ class FrameStream:
                              f"the call ended with OK and {unanswered} frames unanswered")
             except _Retry as retry:
                 failure = retry
-            if self._progress:
-                backoff = BACKOFF_INITIAL
-                last_progress = time.monotonic()
-            self.failures.append(failure.text)
-            if not self._reconnect:
-                raise StreamError(f"StreamFrames: {failure.text}", failure.code,
-                                  failures=self.failures)
-            if time.monotonic() - last_progress > self._give_up_after:
-                raise StreamError(
-                    f"StreamFrames: no frame answered for {self._give_up_after:g} s; "
-                    f"last error: {failure.text}", failure.code, failures=self.failures)
-            wait = backoff * random.uniform(1 - BACKOFF_JITTER, 1 + BACKOFF_JITTER)
-            backoff = min(backoff * 2, BACKOFF_MAX)
             with self._cond:
                 unanswered = len(self._pending)
-            log.warning("lane_client: camera '%s': %s; reconnecting in %.0f ms "
-                        "(%d frames to resend)", self.camera_id, failure.text, wait * 1000,
-                        unanswered)
-            time.sleep(wait)
+            time.sleep(policy.after(failure, self._progress, unanswered))
         if self._source_error is not None:
             raise self._source_error
