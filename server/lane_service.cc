@@ -1,13 +1,12 @@
 #include "lane_service.h"
 
-#include <sys/resource.h>
-
 #include <utility>
 
 #include "absl/time/clock.h"
 #include "auth.h"
 #include "frame_processor.h"
 #include "frame_stream.h"
+#include "process_metrics.h"
 #include "raw_call.h"
 #include "session_proto.h"
 #include "wire/config_proto.h"
@@ -253,11 +252,7 @@ void LaneServiceImpl::FillServerInfo(v1::ServerInfo* response) const {
   response->set_version(build.version);
   response->set_build("git " + build.git_revision + ", " + build.build_type + ", gRPC " +
                       build.grpc_version + ", OpenCV " + build.opencv_version);
-  rusage usage{};
-  if (getrusage(RUSAGE_SELF, &usage) == 0) {
-    const auto seconds = [](const timeval& t) { return t.tv_sec + t.tv_usec * 1e-6; };
-    response->set_process_cpu_seconds(seconds(usage.ru_utime) + seconds(usage.ru_stime));
-  }
+  response->set_process_cpu_seconds(ProcessCpuSeconds());
   response->add_encoded_formats("jpeg");
   response->add_encoded_formats("png");
   response->add_raw_formats(v1::PIXEL_FORMAT_BGR8);

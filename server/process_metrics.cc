@@ -43,24 +43,36 @@ double BootTime() {
   return 0;
 }
 
-}  // namespace
-
-std::vector<prometheus::MetricFamily> ProcessMetrics::Collect() const {
-  std::vector<prometheus::MetricFamily> families;
-  // /proc/self/stat: "pid (comm) state ..."; comm may hold spaces and ')' so
-  // the fields are counted from the last ')'. After it: field 3 (state) on;
-  // utime 14, stime 15, starttime 22, vsize 23, rss 24 (pages).
+// /proc/self/stat: "pid (comm) state ..."; comm may hold spaces and ')' so
+// the fields are counted from the last ')'. After it: field 3 (state) on;
+// utime 14, stime 15, starttime 22, vsize 23, rss 24 (pages). False when it
+// cannot be read.
+bool ReadSelfStat(double (&values)[25]) {
   std::ifstream stat_file("/proc/self/stat");
   const std::string stat((std::istreambuf_iterator<char>(stat_file)),
                          std::istreambuf_iterator<char>());
   const size_t close = stat.rfind(')');
-  if (close != std::string::npos) {
-    std::istringstream fields(stat.substr(close + 2));
-    std::string field;
-    double values[25] = {};
-    for (int i = 3; i <= 24 && fields >> field; ++i) {
-      values[i] = std::strtod(field.c_str(), nullptr);
-    }
+  if (close == std::string::npos) return false;
+  std::istringstream fields(stat.substr(close + 2));
+  std::string field;
+  for (int i = 3; i <= 24 && fields >> field; ++i) {
+    values[i] = std::strtod(field.c_str(), nullptr);
+  }
+  return true;
+}
+
+}  // namespace
+
+double ProcessCpuSeconds() {
+  double values[25] = {};
+  if (!ReadSelfStat(values)) return 0;
+  return (values[14] + values[15]) / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
+
+std::vector<prometheus::MetricFamily> ProcessMetrics::Collect() const {
+  std::vector<prometheus::MetricFamily> families;
+  double values[25] = {};
+  if (ReadSelfStat(values)) {
     const double ticks = static_cast<double>(sysconf(_SC_CLK_TCK));
     const double page = static_cast<double>(sysconf(_SC_PAGESIZE));
     families.push_back(Family("process_cpu_seconds_total",

@@ -17,6 +17,11 @@
 
 namespace lane::server {
 
+// User + system CPU time of this process, seconds (process_cpu_seconds_total's
+// value; ServerInfo.process_cpu_seconds), to 1/CLK_TCK; 0 when
+// /proc/self/stat is unreadable.
+double ProcessCpuSeconds();
+
 class ProcessMetrics final : public prometheus::Collectable {
  public:
   std::vector<prometheus::MetricFamily> Collect() const override;
