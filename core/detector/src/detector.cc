@@ -397,7 +397,8 @@ std::vector<Lane> Detector::ToLanes(const std::vector<SplineCandidate>& done) co
 }
 
 void Detector::AddInferredLanes(std::vector<Lane>& lanes) const {
-  if (options_.mode != Mode::kAll) return;
+  // Off (the default) or 2-lanes: nothing to do on this frame's path.
+  if (options_.mode != Mode::kAll || !options_.road_model.infer_hidden) return;
   std::vector<Bezier> ground;
   ground.reserve(lanes.size());
   for (const Lane& lane : lanes) ground.push_back(Bezier{lane.ground});
