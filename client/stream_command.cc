@@ -120,8 +120,10 @@ class OverlayWriter {
 };
 
 // The streamer's frames: read from the inputs, as requests of the camera.
-Streamer::Source MakeSource(FrameSource* frames, const std::string& camera_id) {
-  return [frames, camera_id](StreamItem* item) {
+// `fps`: the --fps pace, or 0.
+Streamer::Source MakeSource(FrameSource* frames, const std::string& camera_id, double fps) {
+  return [frames, camera_id, fps, first_ns = int64_t{-1}, count = int64_t{0}](
+             StreamItem* item) mutable {
     ClientFrame frame;
     if (!frames->Next(&frame)) return false;
     item->name = frame.name;
@@ -133,8 +135,16 @@ Streamer::Source MakeSource(FrameSource* frames, const std::string& camera_id) {
     auto request = std::make_shared<v1::FrameRequest>();
     request->set_camera_id(camera_id);
     request->set_frame_id(item->frame_id);
-    // Recorded frames carry no capture time: the time they were read.
-    request->set_capture_time_unix_ns(absl::GetCurrentTimeNanos());
+    // Recorded frames carry no capture time: the time they were read, or
+    // paced at --fps, the first frame's plus i / fps (the recording's own
+    // clock, which a reconnection's pause does not stretch: the tracker then
+    // sees a gap no longer than the camera's, docs/tracking.md).
+    const int64_t now_ns = absl::GetCurrentTimeNanos();
+    if (first_ns < 0) first_ns = now_ns;
+    request->set_capture_time_unix_ns(
+        fps > 0 ? first_ns + static_cast<int64_t>(static_cast<double>(count) * 1e9 / fps)
+                : now_ns);
+    ++count;
     SetRequestImage(frame, request.get());
     item->request = std::move(request);
     return true;
@@ -350,7 +360,7 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
   const int total = static_cast<int>(std::min<long long>(frames.KnownFrameCount(), 1 << 30));
   StreamSink sink(out, options.camera_id, overlays.drawer.get(), streamer, progress, total);
   const absl::Status status =
-      streamer.Run(MakeSource(&frames, options.camera_id),
+      streamer.Run(MakeSource(&frames, options.camera_id, flags.read.fps),
                    [&sink](const StreamItem& item, const v1::FrameResponse* response,
                            double latency_ms) { sink(item, response, latency_ms); });
   const bool overlays_ok = FinishOverlays(flags, overlays);
@@ -360,6 +370,15 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
     Note("stream",
          absl::StrCat(stats.frames, " frames: ", sink.ok(), " ok, ", sink.failed(), " failed; ",
                       stats.connections, " connection(s), ", stats.resent, " frame(s) resent"));
+    if (stats.resumes > 0 || stats.resume_states > 0) {
+      Note("stream", absl::StrCat("tracking resumed on ", stats.resumes, " reconnection(s) (",
+                                  stats.resumes_refused, " refused); ", stats.resume_states,
+                                  " resume state(s) received, ",
+                                  stats.resume_states > 0
+                                      ? stats.resume_state_bytes / stats.resume_states
+                                      : 0,
+                                  " bytes on average"));
+    }
   }
   if (!status.ok()) return Failure("stream", std::string(status.message()));
   if (!out) return Failure("stream", "error writing the results");

@@ -51,6 +51,7 @@ grpc::Status Streamer::PrepareSession(bool first_connection) {
   if (!config_) {
     grpc::ClientContext context;
     SetDeadline(&context, options_.call_timeout);
+    context.AddMetadata(kCameraIdHeader, options_.camera_id);
     v1::GetSessionRequest request;
     request.set_camera_id(options_.camera_id);
     v1::Session session;
@@ -67,6 +68,7 @@ grpc::Status Streamer::PrepareSession(bool first_connection) {
   }
   grpc::ClientContext context;
   SetDeadline(&context, options_.call_timeout);
+  context.AddMetadata(kCameraIdHeader, options_.camera_id);
   v1::CreateSessionRequest request;
   request.set_camera_id(options_.camera_id);
   *request.mutable_config() = *config_;
@@ -172,10 +174,12 @@ std::string Streamer::TakeAnswered(uint64_t frame_id, Clock::time_point now,
 
 grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* progress) {
   grpc::ClientContext context;
+  context.AddMetadata(kCameraIdHeader, options_.camera_id);
   std::unique_ptr<Stream> stream = stub_->StreamFrames(&context);
   ++stats_.connections;
   {
     absl::MutexLock lock(&mu_);
+    resuming_ = options_.resume_tracking && (!resume_state_.empty() || max_lane_id_ > 0);
     passed_ = 0;
     written_ = 0;
     attempt_over_ = false;
@@ -194,6 +198,7 @@ grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* 
     protocol_error = TakeAnswered(response.frame_id(), now, &ready);
     cv_.SignalAll();
     if (!protocol_error.empty()) break;
+    Remember(response);
     for (size_t i = 0; i < ready.size(); ++i) {
       const StreamItem& item = *ready[i];
       if (i + 1 < ready.size()) {
@@ -238,6 +243,22 @@ grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* 
   return status;
 }
 
+void Streamer::Remember(const v1::FrameResponse& response) {
+  if (response.has_resume_status() && response.resume_status().code() != v1::FRAME_CODE_OK) {
+    ++stats_.resumes_refused;
+    Log(absl::StrCat("camera '", options_.camera_id, "': the server did not resume tracking (",
+                     response.resume_status().message(), "); lane ids go on from ",
+                     "the largest seen"));
+  }
+  if (!response.resume_state().empty()) {
+    ++stats_.resume_states;
+    stats_.resume_state_bytes += response.resume_state().size();
+  }
+  absl::MutexLock lock(&mu_);
+  if (!response.resume_state().empty()) resume_state_ = response.resume_state();
+  for (const v1::Lane& lane : response.lanes()) max_lane_id_ = std::max(max_lane_id_, lane.id());
+}
+
 void Streamer::WriterLoop(Stream* stream, const Source& source) {
   mu_.Lock();
   bool first_write = true;
@@ -250,15 +271,22 @@ void Streamer::WriterLoop(Stream* stream, const Source& source) {
       ++item->attempts;
       item->last_sent = Clock::now();
       if (written_++ == 0) last_activity_ = item->last_sent;
-      mu_.Unlock();
       bool ok;
-      if (first_write && config_) {
+      if (first_write && (config_ || resuming_)) {
         // The first request carries the session config too, so the stream is
-        // self-sufficient behind a load balancer.
+        // self-sufficient behind a load balancer, and after a reconnection
+        // what the replica needs to go on tracking.
         v1::FrameRequest request = *item->request;
-        *request.mutable_session_config() = *config_;
+        if (config_) *request.mutable_session_config() = *config_;
+        if (resuming_) {
+          request.set_resume_state(resume_state_);
+          request.set_min_lane_id(static_cast<uint32_t>(max_lane_id_) + 1);
+          ++stats_.resumes;
+        }
+        mu_.Unlock();
         ok = stream->Write(request);
       } else {
+        mu_.Unlock();
         ok = stream->Write(*item->request);
       }
       first_write = false;

@@ -10,6 +10,13 @@
 // it exists), opens a new call and resends every frame that was not answered.
 // Responses already received are never asked for again, so no frame is
 // answered twice.
+//
+// Tracking survives the reconnection too (docs/deployment.md): the streamer
+// keeps the latest resume state the server sent and the largest lane id it
+// has seen, and sends both with the first frame of the next call, so that
+// whichever replica takes the camera goes on with the same lane ids. Every
+// call carries the camera id in the `x-camera-id` header, which a proxy
+// hashes to keep a camera on one replica (deploy/nginx).
 #ifndef LANE_CLIENT_STREAMER_H_
 #define LANE_CLIENT_STREAMER_H_
 
@@ -66,12 +73,21 @@ struct StreamerOptions {
   absl::Duration stall_timeout = absl::Seconds(30);
   // Deadline of the unary calls (GetSession, CreateSession).
   absl::Duration call_timeout = absl::Seconds(10);
+  // Send the resume state and the lowest new lane id on a reconnection.
+  bool resume_tracking = true;
 };
+
+// The metadata header that names a call's camera, for a proxy's affinity.
+inline constexpr char kCameraIdHeader[] = "x-camera-id";
 
 struct StreamerStats {
   uint64_t frames = 0;                // frames handed to the sink
   uint64_t connections = 0;           // StreamFrames calls opened
   uint64_t resent = 0;                // sends of a frame after its first
+  uint64_t resumes = 0;               // calls opened with a resume state or lowest lane id
+  uint64_t resumes_refused = 0;       // ... that the server refused (tracking restarted)
+  uint64_t resume_state_bytes = 0;    // resume states received, bytes in all
+  uint64_t resume_states = 0;         // resume states received
   std::vector<std::string> failures;  // why calls were retried
 };
 
@@ -112,6 +128,8 @@ class Streamer {
   void WriterLoop(Stream* stream, const Source& source);
   void WatchdogLoop(grpc::ClientContext* context);
   void EmitLocalErrors(const Sink& sink);
+  // What a response says for the next call: its resume state, its lane ids.
+  void Remember(const lane::v1::FrameResponse& response);
   void Log(const std::string& message) const;
 
   std::unique_ptr<lane::v1::LaneService::Stub> stub_;
@@ -130,6 +148,10 @@ class Streamer {
   size_t unanswered_ ABSL_GUARDED_BY(mu_) = 0;  // items of pending_ with a request
   size_t written_ ABSL_GUARDED_BY(mu_) = 0;     // items written on this call and not answered
   uint64_t next_frame_id_ ABSL_GUARDED_BY(mu_) = 0;
+  // The latest resume state received, and the largest lane id seen.
+  std::string resume_state_ ABSL_GUARDED_BY(mu_);
+  int32_t max_lane_id_ ABSL_GUARDED_BY(mu_) = 0;
+  bool resuming_ ABSL_GUARDED_BY(mu_) = false;  // this call's first frame resumes
   bool source_done_ ABSL_GUARDED_BY(mu_) = false;
   bool attempt_over_ ABSL_GUARDED_BY(mu_) = false;
   bool writer_done_ ABSL_GUARDED_BY(mu_) = false;

@@ -2,6 +2,7 @@
 
 #include <iterator>
 #include <optional>
+#include <random>
 #include <utility>
 
 #include "absl/time/clock.h"
@@ -19,6 +20,19 @@ enum SlotState : int { kQueued, kRunning, kDropped };
 // frame) a drop_oldest stream stops reading too.
 size_t MaxSlots(uint32_t max_inflight) { return 4 * size_t{max_inflight} + 16; }
 
+// StreamOptions::max_age, drawn for one stream within -10 %..+0 %.
+absl::Duration DrawMaxAge(absl::Duration max_age) {
+  if (max_age == absl::InfiniteDuration()) return max_age;
+  thread_local std::mt19937_64 random{std::random_device{}()};
+  return max_age * std::uniform_real_distribution<double>(0.9, 1.0)(random);
+}
+
+absl::Status StreamAged() {
+  return absl::UnavailableError(
+      "the stream reached the server's --max_connection_age: every frame it received was "
+      "answered; reconnect (the camera's resume state goes with the new stream)");
+}
+
 }  // namespace
 
 struct FrameStream::Slot {
@@ -33,6 +47,7 @@ struct FrameStream::Slot {
   std::shared_ptr<Session> session;  // set at receipt, or by the setup
   std::atomic<int> state{kQueued};   // kQueued -> kRunning | kDropped
   bool setup = false;                // create/confirm the session first
+  bool resume = false;               // then resume its tracker (ResumeTracking)
   // Guarded by the stream's mu_ (a slot is another object, so the
   // compiler cannot check this; every access is in a *Locked method or
   // under a MutexLock):
@@ -58,6 +73,7 @@ void FrameStream::Start(const absl::Status& reject) {
     return;
   }
   if (phase_ == Phase::kCreated) phase_ = Phase::kOpen;  // else a drain came first
+  end_of_life_ = absl::Now() + DrawMaxAge(deps_.options.max_age);
   MaybeReadLocked();
   MaybeFinishLocked();
 }
@@ -83,6 +99,11 @@ void FrameStream::OnReadDone(bool ok) {
   if (phase_ == Phase::kFinished || phase_ == Phase::kCancelled) return;  // read as it ended
   call_metrics_.Received();
   ReceiveLocked();
+  if (phase_ == Phase::kOpen && absl::Now() >= end_of_life_) {
+    // Old enough to move: this frame is the last one read.
+    phase_ = Phase::kDraining;
+    aged_ = true;
+  }
   MaybeWriteLocked();
   MaybeReadLocked();
 }
@@ -115,6 +136,16 @@ void FrameStream::ReceiveLocked() {
   if (absl::Status id = SessionRegistry::ValidateCameraId(slot->camera_id); !id.ok()) {
     AnswerLocked(*slot, id);
     return;
+  }
+  if (!request.resume_state().empty() || request.min_lane_id() > 0) {
+    if (first) {
+      slot->resume = true;
+      awaiting_setup_ = true;  // later frames are measured with the resumed tracker
+    } else {
+      wire::ToFrameStatus(wire::InvalidRequest("resume_state and min_lane_id are only accepted "
+                                               "on a stream's first request; ignored"),
+                          slot->response.mutable_resume_status());
+    }
   }
   if (request.has_session_config()) {
     if (!first) {
@@ -162,6 +193,9 @@ void FrameStream::Process(const std::shared_ptr<Slot>& slot) {
         setup_error = created.status();
       }
     }
+    if (slot->resume && slot->session != nullptr) {
+      ResumeTracking(request, *slot->session, deps_.metrics, &slot->response);
+    }
     if (slot->session != nullptr) {
       // A bad frame's status is in its response; the stream goes on.
       ProcessFrame(request, *slot->session, deps_.limits, slot->arrival, deps_.metrics,
@@ -174,8 +208,8 @@ void FrameStream::Process(const std::shared_ptr<Slot>& slot) {
     absl::MutexLock lock(&mu_);
     slot->done = true;
     slot->skipped = abandon;
+    if (slot->setup || slot->resume) awaiting_setup_ = false;
     if (slot->setup) {
-      awaiting_setup_ = false;
       if (!setup_error.ok()) {
         FailLocked(slot, setup_error);
       } else if (slot->session != nullptr) {
@@ -273,6 +307,7 @@ void FrameStream::MaybeWriteLocked() {
     if (front.session != nullptr) {
       FinishFrame(*front.session, front.session->TracksStreams(), front.detection, &front.response);
       front.detection.reset();
+      MaybeAttachResumeStateLocked(front);
     }
     front.response.set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
     if (absl::Status s = SerializeMessage(front.response, &front.wire); !s.ok()) {
@@ -286,13 +321,26 @@ void FrameStream::MaybeWriteLocked() {
   }
 }
 
+void FrameStream::MaybeAttachResumeStateLocked(Slot& front) {
+  const uint32_t every = deps_.options.resume_state_every;
+  if (every == 0 || !front.session->TracksStreams()) return;
+  const bool due = since_resume_state_ < 0 || since_resume_state_ + 1 >= every ||
+                   phase_ == Phase::kDraining || front.resume;
+  if (!due) {
+    ++since_resume_state_;
+    return;
+  }
+  AttachResumeState(*front.session, deps_.metrics, &front.response);
+  since_resume_state_ = 0;
+}
+
 void FrameStream::MaybeFinishLocked() {
   if (writing_ || !slots_.empty()) return;
   if (phase_ == Phase::kHalfClosed) {
     FinishLocked(absl::OkStatus());
   } else if (phase_ == Phase::kDraining) {
     // A read may still be outstanding: Finish ends it (it completes with !ok).
-    FinishLocked(wire::ServerDraining());
+    FinishLocked(aged_ ? StreamAged() : wire::ServerDraining());
   }
 }
 

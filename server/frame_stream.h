@@ -28,6 +28,7 @@
 #include "absl/base/thread_annotations.h"
 #include "absl/status/status.h"
 #include "absl/synchronization/mutex.h"
+#include "absl/time/time.h"
 #include "frame_processor.h"
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "metrics.h"
@@ -39,12 +40,27 @@ namespace lane::server {
 
 class FrameStream;
 
+// What every stream of the server does beyond its session's policy.
+struct StreamOptions {
+  // A tracked stream's response carries the camera tracker's resume state
+  // (FrameResponse.resume_state) on its first frame, every this many frames
+  // after, and on every frame answered while the stream drains. 0 = never.
+  uint32_t resume_state_every = 15;
+  // A stream older than this (each stream draws it within -10 %..+0 %, so
+  // that streams started together do not all end together) stops reading at
+  // its next frame, answers every frame it received and ends with
+  // UNAVAILABLE: its client reconnects, through the proxy or the resolver,
+  // to whichever replica now owns its camera. Infinite = never.
+  absl::Duration max_age = absl::InfiniteDuration();
+};
+
 // What a stream needs from the server, handed over once.
 struct StreamDeps {
   SessionRegistry& sessions;
   WorkerPool& pool;
   Metrics& metrics;
   FrameLimits limits;
+  StreamOptions options;
   // Called once from OnDone, before the stream deletes itself (the service
   // unregisters it there). May be empty.
   std::function<void(FrameStream*)> on_done;
@@ -81,7 +97,7 @@ class FrameStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc:
     kOpen,        // reading frames
     kHalfClosed,  // the client half-closed (or the read side failed): then OK
     kFailing,     // a stream-level error is queued behind earlier frames: then it
-    kDraining,    // the server drains: then UNAVAILABLE
+    kDraining,    // the server drains, or the stream reached max_age: then UNAVAILABLE
     kCancelled,   // cancelled or the client went away: nothing more is written
     kFinished,    // Finish was called
   };
@@ -94,6 +110,8 @@ class FrameStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc:
   void ReceiveLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   void ApplyPolicyLocked(const Session& session) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   void MaybeReadLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  // The resume state goes into the front slot's response when it is due.
+  void MaybeAttachResumeStateLocked(Slot& front) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   void MaybeWriteLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   void MaybeFinishLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   void FinishLocked(const absl::Status& status) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
@@ -131,6 +149,13 @@ class FrameStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc:
   bool reading_ ABSL_GUARDED_BY(mu_) = false;         // a read is outstanding
   bool writing_ ABSL_GUARDED_BY(mu_) = false;         // a write is outstanding
   bool awaiting_setup_ ABSL_GUARDED_BY(mu_) = false;  // the first frame's session is being created
+                                                      // or its tracker resumed
+  // Responses written since the last one with a resume state; -1 before
+  // the first tracked answer.
+  int64_t since_resume_state_ ABSL_GUARDED_BY(mu_) = -1;
+  // When the stream drains by itself (StreamOptions::max_age).
+  absl::Time end_of_life_ ABSL_GUARDED_BY(mu_) = absl::InfiniteFuture();
+  bool aged_ ABSL_GUARDED_BY(mu_) = false;  // drained by max_age
 };
 
 }  // namespace lane::server

@@ -165,7 +165,7 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* LaneServiceImpl::St
     grpc::CallbackServerContext* context) {
   absl::Status reject = CheckBearerToken(*context, options_.auth_tokens);
   const bool admitted = reject.ok();
-  StreamDeps deps{sessions_, pool_, metrics_, options_.frame_limits, nullptr};
+  StreamDeps deps{sessions_, pool_, metrics_, options_.frame_limits, options_.stream, nullptr};
   if (admitted) deps.on_done = [this](FrameStream* stream) { Unregister(stream); };
   auto* stream = new FrameStream(std::move(deps));
   if (admitted) {

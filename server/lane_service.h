@@ -20,6 +20,7 @@
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "frame_processor.h"
+#include "frame_stream.h"
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "metrics.h"
 #include "session_registry.h"
@@ -32,6 +33,10 @@ class FrameStream;
 struct ServiceOptions {
   // Largest frame accepted and the decode deadline.
   FrameLimits frame_limits;
+  // Tracked streams (StreamOptions in frame_stream.h): how often a response
+  // carries the tracker's resume state, and the longest a stream reads
+  // before it drains so that its client reconnects (rebalancing).
+  StreamOptions stream;
   // Reported by GetServerInfo.
   uint64_t max_receive_message_bytes = 0;
   // Accepted Bearer tokens (authorization metadata); empty = no auth.

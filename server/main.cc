@@ -66,6 +66,17 @@ ABSL_FLAG(absl::Duration, keepalive_min_client_interval, absl::Seconds(10),
           "Shortest interval between client pings the server accepts.");
 ABSL_FLAG(bool, keepalive_permit_without_calls, true,
           "Allow keepalive pings on connections without calls.");
+ABSL_FLAG(absl::Duration, max_connection_age, absl::InfiniteDuration(),
+          "Rebalancing: connections older than this get a GOAWAY, and streams older than this "
+          "(90-100 % of it, drawn per stream) answer what they received and end with "
+          "UNAVAILABLE, so that clients reconnect and spread over the replicas there are now "
+          "('inf': never).");
+ABSL_FLAG(absl::Duration, max_connection_age_grace, absl::Seconds(30),
+          "Time a draining stream of an aged connection gets to answer its frames before the "
+          "transport cancels it.");
+ABSL_FLAG(uint32_t, resume_state_every, 15,
+          "Tracked streams: put the camera tracker's resume state into a response every this "
+          "many frames (and into every response while draining); 0 = never.");
 ABSL_FLAG(absl::Duration, shutdown_deadline, absl::Seconds(10),
           "On SIGTERM/SIGINT: time for open streams to answer their frames before "
           "Shutdown cancels what remains.");
@@ -231,6 +242,9 @@ absl::StatusOr<lane::server::ServerOptions> ServerOptionsFromFlags(
   options.keepalive_min_client_interval = absl::GetFlag(FLAGS_keepalive_min_client_interval);
   options.keepalive_permit_without_calls = absl::GetFlag(FLAGS_keepalive_permit_without_calls);
   options.shutdown_deadline = absl::GetFlag(FLAGS_shutdown_deadline);
+  options.max_connection_age = absl::GetFlag(FLAGS_max_connection_age);
+  options.max_connection_age_grace = absl::GetFlag(FLAGS_max_connection_age_grace);
+  options.resume_state_every = absl::GetFlag(FLAGS_resume_state_every);
   options.default_config_path = absl::GetFlag(FLAGS_default_config);
   options.default_camera_id = absl::GetFlag(FLAGS_default_camera_id);
   options.tls_cert_path = absl::GetFlag(FLAGS_tls_cert);

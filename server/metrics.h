@@ -89,6 +89,15 @@ class Metrics {
     lanes_per_frame_.Observe(static_cast<double>(lanes));
     if (lanes == 0) zero_lane_frames_.Increment();
   }
+  // lanesvc_resume_state_bytes: each resume state sent (what tracking
+  // across replicas costs on the wire).
+  void ObserveResumeStateBytes(size_t bytes) {
+    resume_state_bytes_.Observe(static_cast<double>(bytes));
+  }
+  // lanesvc_stream_resumes_total: streams that came with a resume state or a
+  // lowest lane id, by what the tracker did.
+  enum class Resume { kRestored, kKept, kRefused };
+  void CountResume(Resume outcome) { resumes_[static_cast<int>(outcome)]->Increment(); }
 
  private:
   prometheus::Histogram& frame_latency_;
@@ -101,6 +110,8 @@ class Metrics {
   prometheus::Histogram& frame_bytes_;
   prometheus::Histogram& lanes_per_frame_;
   prometheus::Counter& zero_lane_frames_;
+  prometheus::Histogram& resume_state_bytes_;
+  std::array<prometheus::Counter*, 3> resumes_{};
   GrpcMetrics grpc_;
   struct CameraSeries {
     std::array<prometheus::Counter*, 4> frames{};

@@ -108,6 +108,17 @@ absl::Status ServerOptions::Validate() const {
         {"keepalive_min_client_interval", keepalive_min_client_interval}}) {
     if (!positive(d)) return bad(flag, absl::FormatDuration(d), "must be positive");
   }
+  if (!positive(max_connection_age)) {
+    return bad("max_connection_age", absl::FormatDuration(max_connection_age),
+               "must be positive ('inf': never)");
+  }
+  if (max_connection_age_grace < absl::ZeroDuration()) {
+    return bad("max_connection_age_grace", absl::FormatDuration(max_connection_age_grace),
+               "must not be negative");
+  }
+  if (resume_state_every > 1000000) {
+    return bad("resume_state_every", resume_state_every, "must lie in 0..1000000");
+  }
   if (shutdown_deadline < absl::ZeroDuration()) {
     return bad("shutdown_deadline", absl::FormatDuration(shutdown_deadline),
                "must not be negative");
@@ -197,6 +208,8 @@ void LaneServer::BuildService() {
   service_options.max_receive_message_bytes =
       static_cast<uint64_t>(options_.max_receive_message_bytes);
   service_options.auth_tokens = options_.auth_tokens;
+  service_options.stream.resume_state_every = options_.resume_state_every;
+  service_options.stream.max_age = options_.max_connection_age;
   service_options.build = options_.build;
   service_ = std::make_unique<LaneServiceImpl>(service_options, *sessions_, *pool_, *metrics_);
 }
@@ -218,6 +231,16 @@ absl::Status LaneServer::StartGrpc(const std::shared_ptr<grpc::ServerCredentials
                              options_.keepalive_permit_without_calls ? 1 : 0);
   builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS,
                              ToMillis(options_.keepalive_min_client_interval));
+  if (options_.max_connection_age != absl::InfiniteDuration()) {
+    builder.AddChannelArgument(GRPC_ARG_MAX_CONNECTION_AGE_MS,
+                               ToMillis(options_.max_connection_age));
+    // Streams drain within max_connection_age of their start (FrameStream),
+    // which may be up to max_connection_age after the GOAWAY: the grace
+    // counts from there.
+    builder.AddChannelArgument(
+        GRPC_ARG_MAX_CONNECTION_AGE_GRACE_MS,
+        ToMillis(options_.max_connection_age + options_.max_connection_age_grace));
+  }
   if (options_.max_concurrent_streams > 0) {
     builder.AddChannelArgument(GRPC_ARG_MAX_CONCURRENT_STREAMS, options_.max_concurrent_streams);
   }

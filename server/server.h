@@ -61,6 +61,21 @@ struct ServerOptions {
   absl::Duration keepalive_timeout = absl::Seconds(10);
   absl::Duration keepalive_min_client_interval = absl::Seconds(10);
   bool keepalive_permit_without_calls = true;
+  // Rebalancing (docs/deployment.md): a connection older than
+  // max_connection_age gets an HTTP/2 GOAWAY (its client opens a new one,
+  // through the resolver or the proxy), and a stream older than it (drawn
+  // within -10 %..+0 % per stream) stops reading at its next frame,
+  // answers every frame it received and ends with UNAVAILABLE, so that its
+  // client reconnects with its resume state. The transport cancels a call
+  // still open max_connection_age + max_connection_age_grace after its
+  // connection's GOAWAY (a stream drains within max_connection_age of its
+  // start, so only a stream that needs longer than the grace to answer what
+  // it received is cut). Infinite = never (the default).
+  absl::Duration max_connection_age = absl::InfiniteDuration();
+  absl::Duration max_connection_age_grace = absl::Seconds(30);
+  // A tracked stream's responses carry the tracker's resume state every
+  // this many frames (StreamOptions::resume_state_every); 0 = never.
+  uint32_t resume_state_every = 15;
   // Drain budget: streams get until this deadline to answer what they have
   // received, then Shutdown cancels whatever remains at the same deadline.
   absl::Duration shutdown_deadline = absl::Seconds(10);

@@ -1,5 +1,7 @@
 #include "lane/track/frame_tracker.h"
 
+#include <algorithm>
+#include <random>
 #include <utility>
 
 #include "lane/track/marking_reader.h"
@@ -7,7 +9,10 @@
 namespace lane {
 
 FrameTracker::FrameTracker(const CameraModel& camera, LaneTrackingOptions lanes, EgoOptions ego)
-    : tracker_(camera, lanes, ego) {}
+    : tracker_(camera, lanes, ego) {
+  std::random_device seed;
+  lineage_ = (uint64_t{seed()} << 32) ^ seed();
+}
 
 DetectionPrior FrameTracker::Prior(const Detector& detector) const {
   absl::MutexLock lock(&mu_);
@@ -32,6 +37,7 @@ void FrameTracker::Commit(const Detector& detector, Detection& detection,
                           std::optional<double> time_s) {
   absl::MutexLock lock(&mu_);
   detection.ego = tracker_.Track(detection.lanes, time_s, &detector.ipm());
+  ++frames_;
 }
 
 absl::StatusOr<Detection> FrameTracker::Process(const Detector& detector, const cv::Mat& frame,
@@ -44,6 +50,32 @@ absl::StatusOr<Detection> FrameTracker::Process(const Detector& detector, const 
 void FrameTracker::Reset() {
   absl::MutexLock lock(&mu_);
   tracker_.Reset();
+}
+
+TrackerState FrameTracker::Save() const {
+  absl::MutexLock lock(&mu_);
+  TrackerState state = tracker_.Snapshot();
+  state.lineage = lineage_;
+  state.frames = frames_;
+  return state;
+}
+
+absl::StatusOr<bool> FrameTracker::Resume(const TrackerState& state) {
+  absl::MutexLock lock(&mu_);
+  if (absl::Status valid = ValidateTrackerState(state); !valid.ok()) {
+    tracker_.Reset();
+    return valid;
+  }
+  if (state.lineage == lineage_ && state.frames <= frames_) return false;
+  tracker_.Restore(state);
+  lineage_ = state.lineage;
+  frames_ = state.frames;
+  return true;
+}
+
+void FrameTracker::ReserveIdsBelow(int id) {
+  absl::MutexLock lock(&mu_);
+  tracker_.ReserveIdsBelow(std::min(id, TrackerState::kMaxId));
 }
 
 }  // namespace lane

@@ -81,6 +81,65 @@ void LaneTracker::Reset() {
   ++resets_;
 }
 
+TrackerState LaneTracker::Snapshot() const {
+  TrackerState state;
+  state.next_id = next_id_;
+  state.started = started_;
+  state.time_s = time_s_;
+  std::vector<const Track*> kept;
+  for (const Track& t : tracks_) kept.push_back(&t);
+  if (kept.size() > TrackerState::kMaxTracks) {
+    std::stable_sort(kept.begin(), kept.end(),
+                     [](const Track* a, const Track* b) { return a->hits > b->hits; });
+    kept.resize(TrackerState::kMaxTracks);
+  }
+  for (const Track* t : kept) {
+    TrackSnapshot s;
+    s.id = t->id;
+    s.confirmed = t->confirmed;
+    s.hits = t->hits;
+    s.misses = t->misses;
+    s.age_frames = frame_ - t->born_frame;
+    s.since_hit_frames = frame_ - t->last_hit_frame;
+    s.curve = t->curve;
+    s.covariance = t->covariance;
+    s.white_votes = t->white_votes;
+    s.yellow_votes = t->yellow_votes;
+    s.type_votes = t->type_votes;
+    state.tracks.push_back(s);
+  }
+  return state;
+}
+
+void LaneTracker::Restore(const TrackerState& state) {
+  tracks_.clear();
+  ++resets_;
+  next_id_ = std::max(next_id_, state.next_id);
+  started_ = state.started;
+  time_s_ = state.time_s;
+  // Ages become frame numbers of this tracker's count (only their order
+  // against each other and the frames to come matters).
+  for (const TrackSnapshot& s : state.tracks) {
+    Track t;
+    t.id = s.id;
+    t.confirmed = s.confirmed;
+    t.hits = s.hits;
+    t.misses = s.misses;
+    t.born_frame = frame_ - s.age_frames;
+    t.last_hit_frame = frame_ - s.since_hit_frames;
+    t.curve = s.curve;
+    // Symmetric exactly (the encoding keeps the upper triangle).
+    t.covariance = 0.5 * (s.covariance + s.covariance.transpose());
+    t.white_votes = s.white_votes;
+    t.yellow_votes = s.yellow_votes;
+    t.type_votes = s.type_votes;
+    tracks_.push_back(t);
+  }
+  MarkParallel();
+}
+
+void LaneTracker::ReserveIdsBelow(int id) { next_id_ = std::max(next_id_, id); }
+
 void LaneTracker::MarkParallel() {
   constexpr double kPi = 3.14159265358979323846;
   constexpr double kMinExtentM = 4.0;  // shorter pieces say little of a direction

@@ -24,6 +24,7 @@
 #include "lane/detector.h"
 #include "lane/geometry/camera.h"
 #include "lane/track/sequence_tracker.h"
+#include "lane/track/tracker_state.h"
 
 namespace lane {
 
@@ -66,9 +67,30 @@ class FrameTracker {
   // Forgets every track (a new clip).
   void Reset();
 
+  // The resume state after the last committed frame (tracker_state.h),
+  // for a stream to carry to whichever replica serves it next.
+  TrackerState Save() const;
+  // A stream resumes with `state`, a client's copy of an earlier Save
+  // (here or on another replica):
+  //  * a state this tracker wrote, not ahead of it (same lineage, at most
+  //    as many frames): kept, this tracker already continues it (the
+  //    stream came back to the same replica); returns false;
+  //  * any other valid state: the tracker takes its tracks, ids and clock,
+  //    and continues its lineage; returns true;
+  //  * an invalid one (ValidateTrackerState): INVALID_ARGUMENT, and the
+  //    tracker starts afresh (its tracks are dropped, its ids go on).
+  absl::StatusOr<bool> Resume(const TrackerState& state);
+  // New ids start at `id` or above: a client that lost its state but saw
+  // ids up to id - 1 never gets one of them again for another lane.
+  void ReserveIdsBelow(int id);
+
  private:
   mutable absl::Mutex mu_;
   SequenceTracker tracker_ ABSL_GUARDED_BY(mu_);
+  // Which tracker this is, across replicas: drawn at random when it starts,
+  // taken over from a restored state. `frames_`: frames committed in it.
+  uint64_t lineage_ ABSL_GUARDED_BY(mu_);
+  uint64_t frames_ ABSL_GUARDED_BY(mu_) = 0;
 };
 
 }  // namespace lane

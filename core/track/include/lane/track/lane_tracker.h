@@ -22,6 +22,7 @@
 
 #include "lane/detector.h"
 #include "lane/track/ground_curve.h"
+#include "lane/track/tracker_state.h"
 
 namespace lane {
 
@@ -147,7 +148,20 @@ class LaneTracker {
                                    const std::vector<MarkingType>& types = {});
   void Reset();
 
+  // The tracker's state for a resume (tracker_state.h): every track (the
+  // kMaxTracks seen most often when there are more), the next id and the
+  // clock. Lineage and frames are the caller's (FrameTracker).
+  TrackerState Snapshot() const;
+  // Takes `state`'s tracks, next id and clock. `state` must have passed
+  // ValidateTrackerState. Counts as a reset (resets()), so that the ego
+  // lane's rate starts over.
+  void Restore(const TrackerState& state);
+  // New ids start at `id` or above (ids a client saw from a state that was
+  // lost). No effect when they already do.
+  void ReserveIdsBelow(int id);
+
   const std::vector<Track>& tracks() const { return tracks_; }
+  int next_id() const { return next_id_; }
   int resets() const { return resets_; }
   const LaneTrackingOptions& options() const { return options_; }
   // The time of the last frame, seconds.

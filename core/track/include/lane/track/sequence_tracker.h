@@ -34,6 +34,11 @@ class SequenceTracker {
                                const IpmMapping* ipm = nullptr);
   void Reset();
   const LaneTracker& lane_tracker() const { return lanes_; }
+  // The lane tracker's resume state (LaneTracker::Snapshot, Restore,
+  // ReserveIdsBelow); a restore restarts the ego lane's rate.
+  TrackerState Snapshot() const { return lanes_.Snapshot(); }
+  void Restore(const TrackerState& state) { lanes_.Restore(state); }
+  void ReserveIdsBelow(int id) { lanes_.ReserveIdsBelow(id); }
 
   // What the tracker expects in the next frame, for the detector
   // (Detector::Detect's prior): each confirmed track's line in the top view
