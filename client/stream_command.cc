@@ -122,8 +122,8 @@ class OverlayWriter {
 // The streamer's frames: read from the inputs, as requests of the camera.
 // `fps`: the --fps pace, or 0.
 Streamer::Source MakeSource(FrameSource* frames, const std::string& camera_id, double fps) {
-  return [frames, camera_id, fps, first_ns = int64_t{-1}, count = int64_t{0}](
-             StreamItem* item) mutable {
+  return [frames, camera_id, fps, first_ns = int64_t{-1},
+          count = int64_t{0}](StreamItem* item) mutable {
     ClientFrame frame;
     if (!frames->Next(&frame)) return false;
     item->name = frame.name;
@@ -142,8 +142,7 @@ Streamer::Source MakeSource(FrameSource* frames, const std::string& camera_id, d
     const int64_t now_ns = absl::GetCurrentTimeNanos();
     if (first_ns < 0) first_ns = now_ns;
     request->set_capture_time_unix_ns(
-        fps > 0 ? first_ns + static_cast<int64_t>(static_cast<double>(count) * 1e9 / fps)
-                : now_ns);
+        fps > 0 ? first_ns + static_cast<int64_t>(static_cast<double>(count) * 1e9 / fps) : now_ns);
     ++count;
     SetRequestImage(frame, request.get());
     item->request = std::move(request);
@@ -371,13 +370,12 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
          absl::StrCat(stats.frames, " frames: ", sink.ok(), " ok, ", sink.failed(), " failed; ",
                       stats.connections, " connection(s), ", stats.resent, " frame(s) resent"));
     if (stats.resumes > 0 || stats.resume_states > 0) {
-      Note("stream", absl::StrCat("tracking resumed on ", stats.resumes, " reconnection(s) (",
-                                  stats.resumes_refused, " refused); ", stats.resume_states,
-                                  " resume state(s) received, ",
-                                  stats.resume_states > 0
-                                      ? stats.resume_state_bytes / stats.resume_states
-                                      : 0,
-                                  " bytes on average"));
+      Note("stream",
+           absl::StrCat(
+               "tracking resumed on ", stats.resumes, " reconnection(s) (", stats.resumes_refused,
+               " refused); ", stats.resume_states, " resume state(s) received, ",
+               stats.resume_states > 0 ? stats.resume_state_bytes / stats.resume_states : 0,
+               " bytes on average"));
     }
   }
   if (!status.ok()) return Failure("stream", std::string(status.message()));

@@ -59,5 +59,25 @@ int main(int argc, char** argv) {
   raw.mutable_session_config()->mutable_camera()->set_pitch_deg(10);
   raw.mutable_session_config()->mutable_ipm()->set_width(64);
   Write(out + "/frame_request/raw_with_config.pb", raw.SerializeAsString());
+
+  // A tracker's state with two confirmed lanes 3.6 m apart.
+  lane::v1::TrackerState state;
+  state.set_version(1);
+  state.set_lineage(0x5eed);
+  state.set_frames(40);
+  state.set_next_id(3);
+  state.set_started(true);
+  state.set_time_s(1.3);
+  for (int id = 1; id <= 2; ++id) {
+    lane::v1::TrackedLane* t = state.add_tracks();
+    t->set_id(static_cast<uint32_t>(id));
+    t->set_confirmed(true);
+    t->set_hits(40);
+    t->set_age_frames(40);
+    for (float v : {id == 1 ? -1.8f : 1.8f, 0.01f, 0.0001f, 5.0f, 30.0f}) t->add_curve(v);
+    for (float v : {0.01f, 0.0f, 0.0f, 0.0001f, 0.0f, 1e-7f}) t->add_covariance(v);
+    for (float v : {30.0f, 0.0f, 0.0f, 2.0f, 0.5f, 0.0f, 0.0f}) t->add_votes(v);
+  }
+  Write(out + "/resume_state/two_lanes.pb", state.SerializeAsString());
   return 0;
 }

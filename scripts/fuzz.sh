@@ -16,12 +16,12 @@ if ! grep -q "^LANE_FUZZ:BOOL=ON" "$build/CMakeCache.txt" 2>/dev/null; then
   CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DLANE_FUZZ=ON -DLANE_BUILD_TESTS=OFF -DLANE_BUILD_BENCH=OFF >/dev/null
 fi
-cmake --build "$build" -j"${JOBS:-$(nproc)}" --target frame_decode_fuzzer config_fuzzer \
+cmake --build "$build" -j"${JOBS:-$(nproc)}" --target frame_decode_fuzzer config_fuzzer resume_state_fuzzer \
   frame_request_fuzzer
 mkdir -p "$build/artifacts"
 total_runs=0
 status=0
-for target in frame_decode config frame_request; do
+for target in frame_decode config frame_request resume_state; do
   mkdir -p "$build/corpus/$target"
   echo "== ${target}_fuzzer: ${seconds}s"
   if ! ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \

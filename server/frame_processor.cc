@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <exception>
-#include <string>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
@@ -136,8 +136,8 @@ void ResumeTracking(const v1::FrameRequest& request, Session& session, Metrics& 
       }
     }
     if (request.min_lane_id() > 0) {
-      session.tracker().ReserveIdsBelow(static_cast<int>(
-          std::min<uint32_t>(request.min_lane_id(), lane::TrackerState::kMaxId)));
+      session.tracker().ReserveIdsBelow(
+          static_cast<int>(std::min<uint32_t>(request.min_lane_id(), lane::TrackerState::kMaxId)));
     }
   }
   metrics.CountResume(outcome);

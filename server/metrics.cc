@@ -71,13 +71,12 @@ Metrics::Metrics(prometheus::Registry& registry, const BuildInfo& build, size_t 
                             .Help("Frames detected without error in which no lane was found.")
                             .Register(registry)
                             .Add({})),
-      resume_state_bytes_(
-          prometheus::BuildHistogram()
-              .Name("lanesvc_resume_state_bytes")
-              .Help("Size of each tracker resume state sent in a response, bytes.")
-              .Register(registry)
-              .Add({}, prometheus::Histogram::BucketBoundaries{64, 128, 256, 512, 1024, 2048,
-                                                               4096})),
+      resume_state_bytes_(prometheus::BuildHistogram()
+                              .Name("lanesvc_resume_state_bytes")
+                              .Help("Size of each tracker resume state sent in a response, bytes.")
+                              .Register(registry)
+                              .Add({}, prometheus::Histogram::BucketBoundaries{64, 128, 256, 512,
+                                                                               1024, 2048, 4096})),
       grpc_(registry),
       camera_labels_(camera_labels) {
   if (camera_labels_ > 0) {
@@ -96,9 +95,10 @@ Metrics::Metrics(prometheus::Registry& registry, const BuildInfo& build, size_t 
   }
   auto& resumes = prometheus::BuildCounter()
                       .Name("lanesvc_stream_resumes_total")
-                      .Help("Streams that asked to resume tracking, by outcome: restored (the "
-                            "tracker took the client's state), kept (it already continued it), "
-                            "refused (a bad state: tracking started afresh).")
+                      .Help(
+                          "Streams that asked to resume tracking, by outcome: restored (the "
+                          "tracker took the client's state), kept (it already continued it), "
+                          "refused (a bad state: tracking started afresh).")
                       .Register(registry);
   resumes_[static_cast<int>(Resume::kRestored)] = &resumes.Add({{"outcome", "restored"}});
   resumes_[static_cast<int>(Resume::kKept)] = &resumes.Add({{"outcome", "kept"}});

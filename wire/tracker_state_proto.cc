@@ -17,9 +17,7 @@ constexpr int kVoteFields = 7;        // white, yellow, 5 types
 // (row, column) of the encoded covariance's elements.
 constexpr int kUpper[kCovarianceFields][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
 
-Eigen::Matrix3d AsFloats(const Eigen::Matrix3d& p) {
-  return p.cast<float>().cast<double>();
-}
+Eigen::Matrix3d AsFloats(const Eigen::Matrix3d& p) { return p.cast<float>().cast<double>(); }
 
 bool PositiveDefinite(const Eigen::Matrix3d& p) {
   const Eigen::Matrix3d sym = 0.5 * (p + p.transpose());
@@ -30,8 +28,7 @@ bool PositiveDefinite(const Eigen::Matrix3d& p) {
 
 // A saturating conversion: counters of a state stay in range on the wire.
 uint32_t ToU32(int64_t v) {
-  return static_cast<uint32_t>(
-      std::clamp<int64_t>(v, 0, std::numeric_limits<uint32_t>::max()));
+  return static_cast<uint32_t>(std::clamp<int64_t>(v, 0, std::numeric_limits<uint32_t>::max()));
 }
 
 }  // namespace
@@ -69,24 +66,24 @@ std::string EncodeTrackerState(const lane::TrackerState& state) {
 
 absl::StatusOr<lane::TrackerState> DecodeTrackerState(std::string_view bytes) {
   if (bytes.size() > kMaxResumeStateBytes) {
-    return absl::InvalidArgumentError(absl::StrCat("resume state: ", bytes.size(),
-                                                   " bytes, more than ", kMaxResumeStateBytes));
+    return absl::InvalidArgumentError(
+        absl::StrCat("resume state: ", bytes.size(), " bytes, more than ", kMaxResumeStateBytes));
   }
   v1::TrackerState in;
   if (!in.ParseFromArray(bytes.data(), static_cast<int>(bytes.size()))) {
     return absl::InvalidArgumentError("resume state: not a lane.v1.TrackerState");
   }
   if (static_cast<size_t>(in.tracks_size()) > lane::TrackerState::kMaxTracks) {
-    return absl::InvalidArgumentError(absl::StrCat("resume state: ", in.tracks_size(),
-                                                   " tracks, more than ",
-                                                   lane::TrackerState::kMaxTracks));
+    return absl::InvalidArgumentError(absl::StrCat(
+        "resume state: ", in.tracks_size(), " tracks, more than ", lane::TrackerState::kMaxTracks));
   }
   lane::TrackerState state;
   state.version = in.version();
   state.lineage = in.lineage();
   state.frames = in.frames();
   // Out-of-range values fail validation rather than wrap.
-  state.next_id = static_cast<int>(std::min<uint32_t>(in.next_id(), lane::TrackerState::kMaxId + 1u));
+  state.next_id =
+      static_cast<int>(std::min<uint32_t>(in.next_id(), lane::TrackerState::kMaxId + 1u));
   state.started = in.started();
   state.time_s = in.time_s();
   constexpr uint64_t kBig = uint64_t{1} << 62;

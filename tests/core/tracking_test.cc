@@ -14,6 +14,7 @@
 #include "lane/track/lane_tracker.h"
 #include "lane/track/marking_reader.h"
 #include "lane/track/sequence_tracker.h"
+#include "lane/track/tracker_state.h"
 
 namespace lane {
 namespace {
@@ -397,6 +398,116 @@ TEST(TrackingPriorTest, ATrackThatIsNotParallelToTheOthersIsNotConfirmed) {
                           f / 30.0);
   }
   EXPECT_TRUE(out[3].confirmed);
+}
+
+// --- Resume state (lane/track/tracker_state.h) ---
+
+// Three parallel lanes of a gentle bend, with noise; the middle one is
+// missed in frames 20-21.
+std::vector<Lane> BendLanes(int f, std::mt19937& rng) {
+  std::normal_distribution<double> noise(0.0, 0.05);
+  std::vector<Lane> lanes;
+  for (double c0 : {-5.4, -1.8, 1.8}) {
+    if (c0 == -1.8 && (f == 20 || f == 21)) continue;
+    lanes.push_back(GroundLane(c0 + noise(rng), 0.01, 0.001));
+  }
+  return lanes;
+}
+
+TEST(TrackerStateTest, ARestoredTrackerGoesOnExactlyAsTheOriginal) {
+  LaneTracker original;
+  std::mt19937 rng(11);
+  for (int f = 0; f < 22; ++f) original.Update(BendLanes(f, rng), f / 30.0);
+  const TrackerState state = original.Snapshot();
+  ASSERT_TRUE(ValidateTrackerState(state).ok()) << ValidateTrackerState(state).message();
+  ASSERT_EQ(state.tracks.size(), 3u);
+  LaneTracker restored;
+  restored.Restore(state);
+  EXPECT_EQ(restored.next_id(), original.next_id());
+  for (int f = 22; f < 40; ++f) {
+    const std::vector<Lane> lanes = BendLanes(f, rng);
+    const std::vector<LaneIdentity> a = original.Update(lanes, f / 30.0);
+    const std::vector<LaneIdentity> b = restored.Update(lanes, f / 30.0);
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(a[i].id, b[i].id) << "frame " << f;
+      EXPECT_EQ(a[i].confirmed, b[i].confirmed) << "frame " << f;
+      EXPECT_TRUE(b[i].confirmed) << "frame " << f;
+      EXPECT_NEAR(a[i].curve.coefficients(0), b[i].curve.coefficients(0), 1e-9);
+    }
+  }
+}
+
+TEST(TrackerStateTest, ResumeKeepsItsOwnContinuationAndRefusesBadStates) {
+  FrameTracker a{CameraModel()};
+  FrameTracker b{CameraModel()};
+  const TrackerState fresh_a = a.Save();
+  // Its own state, not ahead of it: kept.
+  absl::StatusOr<bool> kept = a.Resume(fresh_a);
+  ASSERT_TRUE(kept.ok());
+  EXPECT_FALSE(*kept);
+  // Another tracker's: taken, and then that lineage is this one's.
+  absl::StatusOr<bool> taken = b.Resume(fresh_a);
+  ASSERT_TRUE(taken.ok());
+  EXPECT_TRUE(*taken);
+  EXPECT_EQ(b.Save().lineage, fresh_a.lineage);
+
+  LaneTracker source;
+  std::mt19937 rng(3);
+  for (int f = 0; f < 6; ++f) source.Update(BendLanes(f, rng), f / 30.0);
+  const TrackerState good = source.Snapshot();
+  ASSERT_TRUE(ValidateTrackerState(good).ok());
+  const auto spoil = [&](auto&& change) {
+    TrackerState s = good;
+    change(s);
+    return ValidateTrackerState(s);
+  };
+  const std::vector<absl::Status> bad = {
+      spoil([](TrackerState& s) { s.version = 2; }),
+      spoil([](TrackerState& s) { s.next_id = 0; }),
+      spoil([](TrackerState& s) { s.time_s = std::nan(""); }),
+      spoil([](TrackerState& s) { s.tracks[1].id = s.tracks[0].id; }),
+      spoil([](TrackerState& s) { s.tracks[0].id = s.next_id; }),
+      spoil([](TrackerState& s) { s.tracks[0].hits = 0; }),
+      spoil([](TrackerState& s) { s.tracks[0].since_hit_frames = s.tracks[0].age_frames + 1; }),
+      spoil([](TrackerState& s) { s.tracks[0].curve.coefficients(1) = 20; }),
+      spoil([](TrackerState& s) { s.tracks[0].curve.y_far = s.tracks[0].curve.y_near - 1; }),
+      spoil([](TrackerState& s) { s.tracks[0].covariance(0, 0) = -1; }),
+      spoil([](TrackerState& s) { s.tracks[0].covariance(0, 1) = 5; }),
+      spoil([](TrackerState& s) { s.tracks[0].white_votes = -1; }),
+      spoil([](TrackerState& s) { s.started = false; }),
+      spoil([](TrackerState& s) { s.tracks.resize(TrackerState::kMaxTracks + 1, s.tracks[0]); }),
+  };
+  for (size_t i = 0; i < bad.size(); ++i) {
+    EXPECT_EQ(bad[i].code(), absl::StatusCode::kInvalidArgument) << "case " << i;
+  }
+  // A refused state leaves a fresh tracker whose ids go on.
+  ASSERT_TRUE(b.Resume(good).ok());
+  TrackerState broken = good;
+  broken.tracks[0].covariance(2, 2) = std::nan("");
+  EXPECT_FALSE(b.Resume(broken).ok());
+  const TrackerState after = b.Save();
+  EXPECT_TRUE(after.tracks.empty());
+  EXPECT_EQ(after.next_id, good.next_id);
+  b.ReserveIdsBelow(100);
+  EXPECT_EQ(b.Save().next_id, 100);
+}
+
+TEST(TrackerStateTest, AStateHoldsAtMostMaxTracksTheMostSeenFirst) {
+  LaneTracker tracker;
+  // Lanes 0.5 m apart are not duplicates of each other only if found in the
+  // same frame; 40 of them, each frame.
+  std::vector<Lane> lanes;
+  for (int i = 0; i < 40; ++i) lanes.push_back(GroundLane(-20.0 + 1.0 * i, 0.0, 0.0));
+  tracker.Update(lanes, 0.0);
+  std::vector<Lane> fewer(lanes.begin(), lanes.begin() + 10);
+  tracker.Update(fewer, 1 / 30.0);
+  const TrackerState state = tracker.Snapshot();
+  ASSERT_EQ(state.tracks.size(), TrackerState::kMaxTracks);
+  EXPECT_TRUE(ValidateTrackerState(state).ok());
+  int twice = 0;
+  for (const TrackSnapshot& t : state.tracks) twice += t.hits == 2;
+  EXPECT_EQ(twice, 10);
 }
 
 }  // namespace

@@ -3,8 +3,14 @@
 // and tracking follows the session's TrackingOptions.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
+#include <limits>
 #include <set>
+#include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "test_util.h"
 
@@ -137,6 +143,206 @@ TEST(TrackingServiceTest, TrackingFollowsTheSessionOptions) {
   const v1::FrameResponse again = detect("unary", 0);
   ASSERT_FALSE(again.lanes().empty());
   EXPECT_EQ(again.lanes(0).id(), 1);
+}
+
+// --- Tracking across reconnects (resume state, docs/deployment.md) ---
+
+// Frames [from, to) of one drive past kLineOffsets.
+std::vector<v1::FrameRequest> Slice(const std::string& camera, const lane::CameraModel& model,
+                                    int from, int to) {
+  std::vector<v1::FrameRequest> all = Frames(camera, model, kLineOffsets, to);
+  return {all.begin() + from, all.end()};
+}
+
+// The latest resume state of a stream's responses, and its largest lane id.
+std::string LatestState(const StreamResult& result, int* max_id) {
+  std::string state;
+  for (const v1::FrameResponse& r : result.responses) {
+    if (!r.resume_state().empty()) state = r.resume_state();
+    for (const v1::Lane& lane : r.lanes()) *max_id = std::max(*max_id, lane.id());
+  }
+  return state;
+}
+
+ServerOptions ResumeOptions() {
+  ServerOptions options = TestServer::DefaultOptions();
+  options.resume_state_every = 5;
+  return options;
+}
+
+TEST(ResumeTest, AnotherReplicaGoesOnWithTheSameIds) {
+  const lane::CameraModel model = ScaledCamera(0.5);
+  TestServer a(ResumeOptions());
+  a.CreateSession("cam", SessionConfigFor(model));
+  const StreamResult first = RunStream(a.stub(), Slice("cam", model, 0, 12));
+  ASSERT_TRUE(first.status.ok()) << first.status.error_message();
+  // The first answer and every 5th carry the state; it stays small.
+  ASSERT_EQ(first.responses.size(), 12u);
+  for (size_t i = 0; i < first.responses.size(); ++i) {
+    EXPECT_EQ(!first.responses[i].resume_state().empty(), i % 5 == 0) << "frame " << i;
+    EXPECT_LT(first.responses[i].resume_state().size(), 1000u);
+  }
+  const std::set<int> ids = StableIds(first, 2);
+  ASSERT_GE(ids.size(), 2u);
+  int max_id = 0;
+  const std::string state = LatestState(first, &max_id);
+  ASSERT_FALSE(state.empty());
+
+  // A replica that has never seen the camera: the stream's first request
+  // carries the state; the lanes keep their ids and are confirmed at once.
+  TestServer b(ResumeOptions());
+  b.CreateSession("cam", SessionConfigFor(model));
+  std::vector<v1::FrameRequest> resumed = Slice("cam", model, 12, 20);
+  resumed[0].set_resume_state(state);
+  resumed[0].set_min_lane_id(static_cast<uint32_t>(max_id) + 1);
+  const StreamResult second = RunStream(b.stub(), resumed);
+  ASSERT_TRUE(second.status.ok()) << second.status.error_message();
+  ASSERT_EQ(second.responses.size(), resumed.size());
+  EXPECT_TRUE(second.responses[0].has_resume_status());
+  EXPECT_EQ(second.responses[0].resume_status().code(), v1::FRAME_CODE_OK)
+      << second.responses[0].resume_status().message();
+  EXPECT_FALSE(second.responses[1].has_resume_status());
+  EXPECT_EQ(StableIds(second, 0), ids);
+  EXPECT_EQ(MetricValue(b.registry(), "lanesvc_stream_resumes_total", {{"outcome", "restored"}}),
+            1);
+  EXPECT_GE(MetricValue(b.registry(), "lanesvc_resume_state_bytes"), 2);
+
+  // Without the state (lost with the client), ids start above every id the
+  // client saw: none is given to another lane.
+  TestServer c(ResumeOptions());
+  c.CreateSession("cam", SessionConfigFor(model));
+  std::vector<v1::FrameRequest> fresh = Slice("cam", model, 12, 16);
+  fresh[0].set_min_lane_id(static_cast<uint32_t>(max_id) + 1);
+  const StreamResult third = RunStream(c.stub(), fresh);
+  ASSERT_TRUE(third.status.ok());
+  ASSERT_FALSE(third.responses[0].lanes().empty());
+  for (const v1::Lane& lane : third.responses[0].lanes()) {
+    EXPECT_GT(lane.id(), max_id);
+    EXPECT_FALSE(lane.confirmed());
+  }
+
+  // Back on the first replica, whose tracker is ahead of that state: it
+  // keeps its own.
+  std::vector<v1::FrameRequest> back = Slice("cam", model, 12, 14);
+  back[0].set_resume_state(state);
+  const StreamResult fourth = RunStream(a.stub(), back);
+  ASSERT_TRUE(fourth.status.ok());
+  EXPECT_EQ(fourth.responses[0].resume_status().code(), v1::FRAME_CODE_OK);
+  EXPECT_EQ(MetricValue(a.registry(), "lanesvc_stream_resumes_total", {{"outcome", "kept"}}), 1);
+  EXPECT_EQ(StableIds(fourth, 0), ids);
+}
+
+TEST(ResumeTest, BadStatesAreRefusedAndTheFramesGoOn) {
+  const lane::CameraModel model = ScaledCamera(0.5);
+  TestServer server(ResumeOptions());
+  server.CreateSession("cam", SessionConfigFor(model));
+  // A real state to spoil.
+  const StreamResult first = RunStream(server.stub(), Slice("cam", model, 0, 4));
+  ASSERT_TRUE(first.status.ok());
+  int max_id = 0;
+  v1::TrackerState good;
+  ASSERT_TRUE(good.ParseFromString(LatestState(first, &max_id)));
+  ASSERT_FALSE(good.tracks().empty());
+
+  std::vector<std::pair<std::string, std::string>> cases;  // (bytes, what the error names)
+  cases.emplace_back("\xff\xff\xff garbage", "not a lane.v1.TrackerState");
+  cases.emplace_back(std::string(5000, '\0'), "more than 4096");
+  v1::TrackerState s = good;
+  s.set_version(7);
+  cases.emplace_back(s.SerializeAsString(), "version");
+  s = good;
+  s.mutable_tracks(0)->set_curve(0, std::numeric_limits<float>::quiet_NaN());
+  cases.emplace_back(s.SerializeAsString(), "curve");
+  s = good;
+  s.mutable_tracks(0)->set_covariance(0, -1.0f);
+  cases.emplace_back(s.SerializeAsString(), "covariance");
+  s = good;
+  s.mutable_tracks(0)->set_id(s.next_id());
+  cases.emplace_back(s.SerializeAsString(), "id");
+  s = good;
+  s.mutable_tracks(0)->mutable_votes()->RemoveLast();
+  cases.emplace_back(s.SerializeAsString(), "vote values");
+  s = good;
+  for (int i = 0; i < 40; ++i) *s.add_tracks() = good.tracks(0);
+  cases.emplace_back(s.SerializeAsString(), "tracks");
+  s = good;
+  s.mutable_tracks(0)->set_since_hit_frames(s.tracks(0).age_frames() + 1);
+  cases.emplace_back(s.SerializeAsString(), "age");
+
+  uint32_t min_id = static_cast<uint32_t>(max_id) + 1;
+  for (const auto& [bytes, names] : cases) {
+    std::vector<v1::FrameRequest> requests = Slice("cam", model, 4, 7);
+    requests[0].set_resume_state(bytes);
+    requests[0].set_min_lane_id(min_id);
+    const StreamResult r = RunStream(server.stub(), requests);
+    ASSERT_TRUE(r.status.ok()) << names << ": " << r.status.error_message();
+    ASSERT_EQ(r.responses.size(), 3u) << names;
+    const v1::FrameResponse& answer = r.responses[0];
+    EXPECT_EQ(answer.status().code(), v1::FRAME_CODE_OK) << names;
+    EXPECT_EQ(answer.resume_status().code(), v1::FRAME_CODE_INVALID_ARGUMENT) << names;
+    EXPECT_NE(answer.resume_status().message().find(names), std::string::npos)
+        << names << ": " << answer.resume_status().message();
+    // A fresh tracker: new ids from min_lane_id on, unconfirmed.
+    ASSERT_FALSE(answer.lanes().empty()) << names;
+    for (const v1::Lane& lane : answer.lanes()) {
+      EXPECT_GE(lane.id(), static_cast<int>(min_id)) << names;
+      EXPECT_FALSE(lane.confirmed()) << names;
+      min_id = std::max(min_id, static_cast<uint32_t>(lane.id()) + 1);
+    }
+    for (const v1::FrameResponse& later : r.responses) {
+      for (const v1::Lane& lane : later.lanes()) {
+        min_id = std::max(min_id, static_cast<uint32_t>(lane.id()) + 1);
+      }
+    }
+  }
+  EXPECT_EQ(
+      MetricValue(server.registry(), "lanesvc_stream_resumes_total", {{"outcome", "refused"}}),
+      static_cast<double>(cases.size()));
+  // A state on a later request is ignored, with a word why.
+  std::vector<v1::FrameRequest> late = Slice("cam", model, 7, 9);
+  late[1].set_resume_state(good.SerializeAsString());
+  const StreamResult r = RunStream(server.stub(), late);
+  ASSERT_TRUE(r.status.ok());
+  EXPECT_EQ(r.responses[1].status().code(), v1::FRAME_CODE_OK);
+  EXPECT_EQ(r.responses[1].resume_status().code(), v1::FRAME_CODE_INVALID_ARGUMENT);
+}
+
+TEST(ResumeTest, AStreamOlderThanMaxConnectionAgeAnswersEverythingAndEnds) {
+  const lane::CameraModel model = ScaledCamera(0.5);
+  ServerOptions options = ResumeOptions();
+  options.max_connection_age = absl::Milliseconds(400);
+  options.max_connection_age_grace = absl::Seconds(5);
+  TestServer server(options);
+  server.CreateSession("cam", SessionConfigFor(model));
+  const std::vector<v1::FrameRequest> requests = Slice("cam", model, 0, 60);
+  grpc::ClientContext context;
+  auto stream = server.stub().StreamFrames(&context);
+  std::thread writer([&] {
+    for (const v1::FrameRequest& r : requests) {
+      if (!stream->Write(r)) return;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    stream->WritesDone();
+  });
+  std::vector<v1::FrameResponse> responses;
+  v1::FrameResponse response;
+  while (stream->Read(&response)) responses.push_back(response);
+  writer.join();
+  const grpc::Status status = stream->Finish();
+  // Ended by its age (360-400 ms: about 18-20 frames at 20 ms), not by the
+  // client.
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAVAILABLE) << status.error_message();
+  EXPECT_NE(status.error_message().find("max_connection_age"), std::string::npos);
+  ASSERT_GE(responses.size(), 5u);
+  ASSERT_LT(responses.size(), requests.size());
+  // Every frame it read was answered, in order, the last with the state.
+  for (size_t i = 0; i < responses.size(); ++i) {
+    EXPECT_EQ(responses[i].frame_id(), requests[i].frame_id());
+    EXPECT_EQ(responses[i].status().code(), v1::FRAME_CODE_OK);
+  }
+  EXPECT_FALSE(responses.back().resume_state().empty());
+  EXPECT_EQ(MetricValue(server.registry(), "lanesvc_frames_received_total"),
+            static_cast<double>(responses.size()));
 }
 
 }  // namespace

@@ -12,13 +12,13 @@ namespace {
 
 // Bounds of a plausible state. Generous: they only keep numbers that no
 // tracker writes out of the arithmetic.
-constexpr double kMaxMetres = 1000.0;     // offsets and extents
-constexpr double kMaxHeading = 5.7;       // tan(80 deg)
-constexpr double kMaxCurvature = 1.0;     // 1/m: a 1 m radius
-constexpr double kMaxVariance = 1e6;      // any covariance element
-constexpr double kMaxVotes = 1e9;         // colour and type votes
+constexpr double kMaxMetres = 1000.0;      // offsets and extents
+constexpr double kMaxHeading = 5.7;        // tan(80 deg)
+constexpr double kMaxCurvature = 1.0;      // 1/m: a 1 m radius
+constexpr double kMaxVariance = 1e6;       // any covariance element
+constexpr double kMaxVotes = 1e9;          // colour and type votes
 constexpr int64_t kMaxFrames = 1LL << 40;  // counters and ages
-constexpr double kMaxTimeS = 1e12;        // s: Unix time in 33,000 years
+constexpr double kMaxTimeS = 1e12;         // s: Unix time in 33,000 years
 
 absl::Status Bad(const std::string& field, const std::string& why) {
   return absl::InvalidArgumentError(absl::StrCat("resume state: ", field, " ", why));
@@ -52,9 +52,8 @@ absl::Status ValidateTrack(const TrackSnapshot& t, const TrackerState& state,
   if (!p.allFinite() || p.cwiseAbs().maxCoeff() > kMaxVariance || !p.isApprox(p.transpose())) {
     return Bad(name + ".covariance", "is not a finite symmetric matrix");
   }
-  const Eigen::Vector3d eigen = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
-                                    p, Eigen::EigenvaluesOnly)
-                                    .eigenvalues();
+  const Eigen::Vector3d eigen =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(p, Eigen::EigenvaluesOnly).eigenvalues();
   if (!(eigen.minCoeff() > 0)) return Bad(name + ".covariance", "is not positive definite");
   const auto vote_ok = [](double v) { return Finite(v) && v >= 0 && v <= kMaxVotes; };
   bool votes_ok = vote_ok(t.white_votes) && vote_ok(t.yellow_votes);
@@ -71,7 +70,8 @@ absl::Status ValidateTrackerState(const TrackerState& state) {
                                        " (a state of another server version)"));
   }
   if (state.next_id < 1 || state.next_id > TrackerState::kMaxId) {
-    return Bad("next_id", absl::StrCat(state.next_id, " is not in [1, ", TrackerState::kMaxId, "]"));
+    return Bad("next_id",
+               absl::StrCat(state.next_id, " is not in [1, ", TrackerState::kMaxId, "]"));
   }
   if (state.frames > static_cast<uint64_t>(kMaxFrames)) return Bad("frames", "is too large");
   if (!Finite(state.time_s) || std::abs(state.time_s) > kMaxTimeS) {
