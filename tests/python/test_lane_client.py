@@ -597,6 +597,38 @@ class ReconnectTest(unittest.TestCase):
         self.assertLessEqual(processed, 40 - 10)
         self.assertGreaterEqual(processed, 40 - 10 - 4)
 
+    def test_lane_ids_go_on_across_a_killed_server(self):
+        # A rendered drive: the restarted server (another process, as another
+        # replica would be) takes the tracker's state from the stream's first
+        # request, so the lanes keep their ids and stay confirmed.
+        drive = os.path.join(TMP, "drive")
+        subprocess.run([LANE_TOOL, "render", "--config", SYNTHETIC, "--sequence", "--count", "60",
+                        "--seed", "3", "--output", drive, "--format", "jpg"],
+                       check=True, stdout=subprocess.DEVNULL)
+        frames = []
+        # The drive's first second (its events are spread over its length: a
+        # 60-frame drive holds 4 boundaries steadily in frames 2-27).
+        for path in sorted(glob.glob(os.path.join(drive, "*.jpg")))[:27]:
+            with open(path, "rb") as f:
+                frames.append(f.read())
+        stream = self.client.stream("py-resume", frames, window=4, config=SYNTHETIC)
+        responses = []
+        for response in stream:
+            responses.append(response)
+            if len(responses) == 12:
+                self.server.kill()
+                self.server.start()  # the same port, a new process
+        self.assertEqual([r.frame_id for r in responses], list(range(27)))
+        self.assertGreaterEqual(stream.tracking.resumes, 1, stream.failures)
+        self.assertEqual(stream.tracking.resumes_refused, 0)
+        self.assertGreater(stream.tracking.resume_states, 0)
+        before = {lane.id for lane in responses[11].lanes if lane.confirmed}
+        self.assertGreaterEqual(len(before), 2)
+        for response in responses[16:]:
+            ids = {lane.id for lane in response.lanes if lane.confirmed}
+            self.assertTrue(ids, f"frame {response.frame_id}: no confirmed lane")
+            self.assertLessEqual(ids, before, f"frame {response.frame_id}: new ids {ids - before}")
+
     def test_survives_a_drained_server(self):
         stream = self.restart_mid_stream(self.server.stop, "py-drain", SYNTHETIC)
         self.assertIn("UNAVAILABLE", " ".join(stream.failures))
@@ -692,6 +724,7 @@ class AsyncClientTest(unittest.TestCase):
         self.assertEqual(ids, list(range(30)), "each frame answered once, in order")
         self.assertGreaterEqual(stream.connections, 2, stream.failures)
         self.assertIn("UNAVAILABLE", " ".join(stream.failures))
+        self.assertGreaterEqual(stream.tracking.resumes, 1)  # the state went with the new call
 
     def test_closing_the_stream_early_cancels_the_call(self):
         async def main():

@@ -33,11 +33,11 @@ import grpc
 import grpc.aio
 
 from . import _stubs
-from .client import (_CHANNEL_OPTIONS, Config, Image, bearer_metadata, channel_credentials,
-                     session_config)
+from .client import (_CHANNEL_OPTIONS, Config, Image, bearer_metadata, camera_metadata,
+                     channel_credentials, session_config)
 from .errors import LaneError, SessionNotFoundError, from_rpc_error
 from .frames import fill_image
-from .streaming import TRANSIENT, _Pending, _Reconnect, _Retry
+from .streaming import TRANSIENT, _Pending, _Reconnect, _Retry, _Tracking
 
 log = logging.getLogger("lane_client")
 
@@ -84,11 +84,12 @@ class AsyncLaneClient:
     def metadata(self) -> Tuple[Tuple[str, str], ...]:
         return self._metadata
 
-    async def _call(self, name: str, request: Any, timeout: Optional[float] = None) -> Any:
+    async def _call(self, name: str, request: Any, timeout: Optional[float] = None,
+                    camera_id: Optional[str] = None) -> Any:
         method = getattr(self._stub, name)
         try:
             return await method(request, timeout=self.timeout if timeout is None else timeout,
-                                metadata=self._metadata)
+                                metadata=camera_metadata(self._metadata, camera_id))
         except grpc.aio.AioRpcError as e:
             raise from_rpc_error(e, name) from e
 
@@ -101,11 +102,11 @@ class AsyncLaneClient:
         request = self.pb2.CreateSessionRequest(camera_id=camera_id,
                                                 config=self.session_config(config),
                                                 replace=replace)
-        return await self._call("CreateSession", request, timeout)
+        return await self._call("CreateSession", request, timeout, camera_id)
 
     async def get_session(self, camera_id: str, *, timeout: Optional[float] = None) -> Any:
         return await self._call("GetSession", self.pb2.GetSessionRequest(camera_id=camera_id),
-                                timeout)
+                                timeout, camera_id)
 
     async def list_sessions(self, *, timeout: Optional[float] = None) -> List[Any]:
         response = await self._call("ListSessions", self.pb2.ListSessionsRequest(), timeout)
@@ -113,7 +114,7 @@ class AsyncLaneClient:
 
     async def delete_session(self, camera_id: str, *, timeout: Optional[float] = None) -> None:
         await self._call("DeleteSession", self.pb2.DeleteSessionRequest(camera_id=camera_id),
-                         timeout)
+                         timeout, camera_id)
 
     async def server_info(self, *, timeout: Optional[float] = None) -> Any:
         return await self._call("GetServerInfo", self.pb2.GetServerInfoRequest(), timeout)
@@ -134,7 +135,7 @@ class AsyncLaneClient:
         if config is not None:
             request.session_config.CopyFrom(self.session_config(config))
             request.replace_session = replace
-        return await self._call("Detect", request, timeout)
+        return await self._call("Detect", request, timeout, camera_id)
 
     def stream(self, camera_id: str, frames: Frames, *, config: Optional[Config] = None,
                replace: bool = False, window: int = 8, first_frame_id: int = 0,
@@ -147,8 +148,8 @@ class AsyncLaneClient:
                                 reconnect=reconnect, give_up_after=give_up_after,
                                 stall_timeout=stall_timeout)
 
-    def _stream_call(self) -> Any:
-        return self._stub.StreamFrames(metadata=self._metadata)
+    def _stream_call(self, camera_id: str) -> Any:
+        return self._stub.StreamFrames(metadata=camera_metadata(self._metadata, camera_id))
 
 
 class AsyncFrameStream:
@@ -194,6 +195,7 @@ class AsyncFrameStream:
         self.connections = 0
         self.resent = 0
         self.failures: List[str] = []
+        self.tracking = _Tracking(camera_id)
         self.session: Any = None
         self._gen: Optional[AsyncIterator[Any]] = None
 
@@ -246,6 +248,7 @@ class AsyncFrameStream:
     async def _write(self, call: Any) -> None:
         """The requests of one call: the pending frames not yet written on it,
         then new frames while the window has room; half-closes at the end."""
+        first = True
         while True:
             while self._sent < len(self._pending):
                 item = self._pending[self._sent]
@@ -254,7 +257,9 @@ class AsyncFrameStream:
                 if item.attempts > 1:
                     self.resent += 1
                 item.sent_at = time.monotonic()
-                await call.write(item.request)
+                await call.write(self.tracking.first_request(item.request) if first
+                                 else item.request)
+                first = False
             if self._source_done:
                 await call.done_writing()
                 return
@@ -307,7 +312,7 @@ class AsyncFrameStream:
         self._sent = 0
         self._stalled = False
         self.connections += 1
-        call = self._client._stream_call()
+        call = self._client._stream_call(self.camera_id)
         writer = asyncio.ensure_future(self._write(call))
         read: Optional["asyncio.Future[Any]"] = None
         limit = self._stall_timeout
@@ -329,6 +334,7 @@ class AsyncFrameStream:
                 if response is grpc.aio.EOF:
                     return
                 self._take(response)
+                self.tracking.remember(response)
                 self.frames += 1
                 self._progress = True
                 yield response

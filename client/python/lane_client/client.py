@@ -73,6 +73,16 @@ def channel_credentials(ca: Any, cert: Any, key: Any, server_name: Optional[str]
         certificate_chain=_read_pem(cert, "certificate file"))
 
 
+# The header that names a call's camera, for a proxy's affinity (deploy/nginx).
+CAMERA_ID_HEADER = "x-camera-id"
+
+
+def camera_metadata(metadata: Tuple[Tuple[str, str], ...],
+                    camera_id: Optional[str]) -> Tuple[Tuple[str, str], ...]:
+    """`metadata` plus the camera id header, when the call has a camera."""
+    return metadata + ((CAMERA_ID_HEADER, camera_id),) if camera_id else metadata
+
+
 def bearer_metadata(token: Optional[str]) -> Tuple[Tuple[str, str], ...]:
     """The metadata for `token` (None: $LANE_TOKEN, as lane-client; "": none)."""
     if token is None:
@@ -154,11 +164,11 @@ class LaneClient:
         """The metadata sent with every call (the Bearer token), as gRPC wants it."""
         return self._metadata
 
-    def _call(self, name, request, timeout=None):
+    def _call(self, name, request, timeout=None, camera_id=None):
         method = getattr(self._stub, name)
         try:
             return method(request, timeout=self.timeout if timeout is None else timeout,
-                          metadata=self._metadata)
+                          metadata=camera_metadata(self._metadata, camera_id))
         except grpc.RpcError as e:
             raise from_rpc_error(e, name) from e
 
@@ -182,11 +192,12 @@ class LaneClient:
         request = self.pb2.CreateSessionRequest(camera_id=camera_id,
                                                 config=self.session_config(config),
                                                 replace=replace)
-        return self._call("CreateSession", request, timeout)
+        return self._call("CreateSession", request, timeout, camera_id)
 
     def get_session(self, camera_id: str, *, timeout: Optional[float] = None) -> Any:
         """The Session of a camera; SessionNotFoundError when there is none."""
-        return self._call("GetSession", self.pb2.GetSessionRequest(camera_id=camera_id), timeout)
+        return self._call("GetSession", self.pb2.GetSessionRequest(camera_id=camera_id), timeout,
+                          camera_id)
 
     def list_sessions(self, *, timeout: Optional[float] = None) -> List[Any]:
         """All sessions, sorted by camera id (a list of Session)."""
@@ -194,7 +205,8 @@ class LaneClient:
 
     def delete_session(self, camera_id: str, *, timeout: Optional[float] = None) -> None:
         """Deletes a camera's session; SessionNotFoundError when there is none."""
-        self._call("DeleteSession", self.pb2.DeleteSessionRequest(camera_id=camera_id), timeout)
+        self._call("DeleteSession", self.pb2.DeleteSessionRequest(camera_id=camera_id), timeout,
+                   camera_id)
 
     def server_info(self, *, timeout: Optional[float] = None) -> Any:
         """ServerInfo: version, build, formats, limits and detector defaults."""
@@ -227,7 +239,7 @@ class LaneClient:
         if config is not None:
             request.session_config.CopyFrom(self.session_config(config))
             request.replace_session = replace
-        return self._call("Detect", request, timeout)
+        return self._call("Detect", request, timeout, camera_id)
 
     def stream(self, camera_id: str, frames: Iterable[Any], *, config: Optional[Config] = None,
                replace: bool = False, window: int = 8, first_frame_id: int = 0,
@@ -249,7 +261,9 @@ class LaneClient:
             server restarted or draining; a broken connection; a stall; the
             session gone), wait (0.1 s doubling to 2 s, +-20 %), reconnect,
             and resend every frame not yet answered. Every frame is answered
-            exactly once, in order. Gives up with StreamError when no frame has
+            exactly once, in order. Tracking goes on across the reconnection:
+            the new call carries the server's latest resume state, so lane
+            ids continue on whichever replica answers. Gives up with StreamError when no frame has
             been answered for give_up_after seconds.
         stall_timeout: a call with frames in flight that gets no response
             for this long is cancelled and retried (None: never).
@@ -265,5 +279,6 @@ class LaneClient:
                            stall_timeout=stall_timeout)
 
     # used by FrameStream
-    def _stream_call(self, requests):
-        return self._stub.StreamFrames(requests, metadata=self._metadata)
+    def _stream_call(self, requests, camera_id):
+        return self._stub.StreamFrames(requests,
+                                       metadata=camera_metadata(self._metadata, camera_id))

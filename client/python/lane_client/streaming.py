@@ -18,6 +18,12 @@ How it works (the same contract as lane-client's Streamer, client/streamer.h):
     session), on which every pending frame is written again. A response is
     never asked for again once received, so each frame is answered exactly
     once; frames are taken from the source once.
+  * Tracking survives the reconnection (docs/deployment.md): the stream
+    keeps the latest resume state the server sent and the largest lane id
+    it has seen (_Tracking), and the first request of every later call
+    carries both, so that whichever replica takes the camera goes on with
+    the same lane ids. Every call names its camera in the `x-camera-id`
+    header, which a proxy hashes to keep a camera on one replica.
 """
 
 import collections
@@ -95,6 +101,50 @@ class _Reconnect:
         return wait
 
 
+class _Tracking:
+    """What a stream keeps for its next call, the same for FrameStream and
+    aio.AsyncFrameStream: the latest resume state and the largest lane id.
+
+    Counters: resumes (calls opened with them), resumes_refused (the server
+    refused the state and started tracking afresh, with ids above the
+    largest seen), resume_states and resume_state_bytes (received)."""
+
+    def __init__(self, camera_id):
+        self._camera_id = camera_id
+        self.state = b""
+        self.max_lane_id = 0
+        self.resumes = 0
+        self.resumes_refused = 0
+        self.resume_states = 0
+        self.resume_state_bytes = 0
+
+    def remember(self, response):
+        if response.HasField("resume_status") and response.resume_status.code != 0:
+            self.resumes_refused += 1
+            log.warning("lane_client: camera '%s': the server did not resume tracking (%s); "
+                        "lane ids go on from the largest seen", self._camera_id,
+                        response.resume_status.message)
+        if response.resume_state:
+            self.state = response.resume_state
+            self.resume_states += 1
+            self.resume_state_bytes += len(response.resume_state)
+        for lane in response.lanes:
+            if lane.id > self.max_lane_id:
+                self.max_lane_id = lane.id
+
+    def first_request(self, request):
+        """The first request of a call: a copy with the resume state and the
+        lowest new lane id, or `request` itself before anything was seen."""
+        if not self.state and not self.max_lane_id:
+            return request
+        resumed = type(request)()
+        resumed.CopyFrom(request)
+        resumed.resume_state = self.state
+        resumed.min_lane_id = self.max_lane_id + 1
+        self.resumes += 1
+        return resumed
+
+
 class _Retry(Exception):
     """A call or session step failed in a way that may be retried."""
 
@@ -112,6 +162,8 @@ class FrameStream:
       connections  StreamFrames calls opened
       resent       writes of a frame after its first
       failures     why each failed call or session step was retried (strings)
+      tracking     resume counters across reconnections (resumes,
+                   resumes_refused, resume_states, resume_state_bytes)
     """
 
     def __init__(self, client, camera_id, frames, *, config=None, replace=False, window=8,
@@ -147,6 +199,7 @@ class FrameStream:
         self.connections = 0
         self.resent = 0
         self.failures = []
+        self.tracking = _Tracking(camera_id)
         self.session = None          # the Session of the last CreateSession/GetSession
         self._gen = self._run()
 
@@ -190,6 +243,7 @@ class FrameStream:
     def _requests(self, attempt):
         """The requests of call `attempt` (run by gRPC on its own thread)."""
         cond = self._cond
+        first = True
         while True:
             pull = False
             with cond:
@@ -212,7 +266,13 @@ class FrameStream:
                         break
                     cond.wait()
             if not pull:
-                yield item.request
+                if first:
+                    first = False
+                    with cond:
+                        request = self.tracking.first_request(item.request)
+                    yield request
+                else:
+                    yield item.request
                 continue
             # Read the source outside the lock: a camera may take its time.
             entry, done, error = None, False, None
@@ -298,7 +358,7 @@ class FrameStream:
             self._stalled = False
             cond.notify_all()
         self.connections += 1
-        call = self._client._stream_call(self._requests(attempt))
+        call = self._client._stream_call(self._requests(attempt), self.camera_id)
         watchdog = None
         if self._stall_timeout:
             watchdog = threading.Thread(target=self._watch, args=(attempt, call),
@@ -317,6 +377,8 @@ class FrameStream:
                     with cond:
                         self._waiting_since = None
                 self._take(response)
+                with cond:
+                    self.tracking.remember(response)
                 self.frames += 1
                 self._progress = True
                 yield response
