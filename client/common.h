@@ -17,6 +17,11 @@
 
 namespace lane_client {
 
+// The metadata header that names a call's camera: a proxy hashes it to keep
+// each camera on one replica (deploy/nginx). Set on every call that concerns
+// one camera (its streams and its session calls).
+inline constexpr char kCameraIdHeader[] = "x-camera-id";
+
 // Exit codes (cli/command_line.h has 0, 1 and 2).
 inline constexpr int kExitOk = lane_tools::kExitOk;
 inline constexpr int kExitFailure = lane_tools::kExitFailure;  // run-time error

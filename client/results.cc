@@ -49,7 +49,7 @@ std::string FrameCodeName(v1::FrameCode code) {
 }
 
 std::string ResponseJsonLine(const std::string& frame_name, const v1::FrameResponse& response,
-                             double latency_ms, int attempts) {
+                             double latency_ms, int attempts, uint64_t connection) {
   Json out = Json::object();
   out["schema"] = kStreamResultsSchema;
   out["frame"] = frame_name;
@@ -94,6 +94,7 @@ std::string ResponseJsonLine(const std::string& frame_name, const v1::FrameRespo
   out["timing_ms"] = std::move(timing);
   out["latency_ms"] = Round(latency_ms, 1e3);
   out["attempts"] = attempts;
+  if (connection > 0) out["connection"] = connection;
   return Dump(out);
 }
 

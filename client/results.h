@@ -19,9 +19,10 @@ std::string FrameCodeName(lane::v1::FrameCode code);
 
 // One line (without the newline) for a frame the server answered.
 // `latency_ms`: from the client's last send of the frame to its response;
-// `attempts`: how many times it was sent.
+// `attempts`: how many times it was sent; `connection`: which of the
+// stream's calls answered it (1, 2, ...; 0 = not written).
 std::string ResponseJsonLine(const std::string& frame_name, const lane::v1::FrameResponse& response,
-                             double latency_ms, int attempts);
+                             double latency_ms, int attempts, uint64_t connection = 0);
 
 // One line for a frame that could not be read here and was not sent:
 // status "CLIENT_ERROR".

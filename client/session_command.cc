@@ -99,6 +99,9 @@ int RunSession(const CLI::App& app, const SessionFlags& flags) {
     const auto stub = v1::LaneService::NewStub(MakeChannel(target));
     grpc::ClientContext context;
     SetDeadline(&context, setup->timeout);
+    // For a proxy's camera affinity (deploy/nginx): the replica that holds
+    // the camera's streams answers its session calls.
+    if (!flags.camera.empty()) context.AddMetadata(kCameraIdHeader, flags.camera);
     std::string json;
     const grpc::Status status =
         CallSession(flags, config ? &*config : nullptr, *stub, &context, &json);

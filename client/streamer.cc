@@ -200,6 +200,7 @@ grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* 
     if (!protocol_error.empty()) break;
     Remember(response);
     for (size_t i = 0; i < ready.size(); ++i) {
+      ready[i]->connection = stats_.connections;
       const StreamItem& item = *ready[i];
       if (i + 1 < ready.size()) {
         sink(item, nullptr, 0.0);

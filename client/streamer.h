@@ -49,6 +49,8 @@ struct StreamItem {
   std::string local_error;
   // Sends so far, and when the last one started.
   int attempts = 0;
+  // The call (1, 2, ...: StreamerStats::connections) that answered it.
+  uint64_t connection = 0;
   std::chrono::steady_clock::time_point last_sent{};
 };
 
@@ -77,8 +79,6 @@ struct StreamerOptions {
   bool resume_tracking = true;
 };
 
-// The metadata header that names a call's camera, for a proxy's affinity.
-inline constexpr char kCameraIdHeader[] = "x-camera-id";
 
 struct StreamerStats {
   uint64_t frames = 0;                // frames handed to the sink
