@@ -237,8 +237,8 @@ class StreamSink {
       Note("stream", absl::StrCat(item.name, ": ", item.local_error));
       out_ << ClientErrorJsonLine(item.name, camera_id_, item.frame_id, item.local_error) << '\n';
     } else {
-      out_ << ResponseJsonLine(item.name, *response, latency_ms, item.attempts,
-                               item.connection) << '\n';
+      out_ << ResponseJsonLine(item.name, *response, latency_ms, item.attempts, item.connection)
+           << '\n';
       if (response->status().code() == v1::FRAME_CODE_OK) {
         ++ok_;
         if (overlays_ != nullptr) {

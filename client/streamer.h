@@ -79,7 +79,6 @@ struct StreamerOptions {
   bool resume_tracking = true;
 };
 
-
 struct StreamerStats {
   uint64_t frames = 0;                // frames handed to the sink
   uint64_t connections = 0;           // StreamFrames calls opened

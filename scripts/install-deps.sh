@@ -28,6 +28,7 @@ PACKAGES=(
   python3-grpcio python3-protobuf python3-numpy   # client/python: the Python client and tests/python (numpy: array frames; cv2 stays optional)
   python3-setuptools python3-venv python3-pip     # pip install ./client/python (tests/python/install_test.sh)
   lintian                # the .deb's check (scripts/package-test.sh)
+  nginx                  # deploy/nginx: the camera-affinity proxy (tests/deploy, deploy/proxy-cluster.sh)
 )
 
 missing=()
