@@ -184,7 +184,13 @@ std::shared_ptr<grpc::Channel> MakeChannel(const std::string& target, int connec
   args.SetMaxReceiveMessageSize(64 * 1024 * 1024);
   args.SetMaxSendMessageSize(-1);
   args.SetInt(GRPC_ARG_INITIAL_RECONNECT_BACKOFF_MS, 100);
-  args.SetInt(GRPC_ARG_MIN_RECONNECT_BACKOFF_MS, 100);
+  // Despite its name, gRPC core takes this as the shortest deadline of one
+  // connection attempt (TCP, TLS and the HTTP/2 settings): at 100 ms an
+  // attempt on a busy machine, or to a proxy that is reloading, timed out
+  // again and again ("tcp handshaker shutdown") and a stream stalled for a
+  // minute behind nginx -s reload. The waits between attempts are the
+  // initial and maximum backoffs.
+  args.SetInt(GRPC_ARG_MIN_RECONNECT_BACKOFF_MS, 2000);
   args.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, 2000);
   // The server accepts pings every 10 s at most (--keepalive_min_client_interval).
   args.SetInt(GRPC_ARG_KEEPALIVE_TIME_MS, 20000);

@@ -10,14 +10,13 @@ the entry point; docs/deployment.md quotes its figures).
     the proxy by `lane-client stream` at the camera's rate, with tracking.
   * Under that load: the replica holding the most cameras is stopped with
     SIGTERM (it drains) and restarted; later the one then holding the most
-    is killed with SIGKILL and restarted; later a new replica starts in the
-    proxy's spare slot. (The proxy lists one slot more than there are
-    replicas, as a StatefulSet's nginx lists its pods up to the scale-out
-    limit: nginx skips a slot that refuses connections, its cameras on
-    their next replica of the ring, and gives them back once it answers. A
-    reload with a new server list works too, but in this test's runs a
-    client's open HTTP/2 channel to nginx at times failed to reconnect after
-    the reload, so the test does not depend on one.)
+    is killed with SIGKILL and restarted; later a new replica starts and is
+    added to the proxy's list (nginx -s reload: nginx's old worker sends
+    GOAWAY, the clients reconnect to the new one). With --spare-slot the
+    proxy lists the fourth replica from the start instead, as a
+    StatefulSet's nginx can list its pods up to the scale-out limit: nginx
+    skips a slot that refuses connections (its cameras on their next
+    replica of the ring) and gives them back once it answers.
   * Placement is measured with PROBE extra camera ids (CreateSession through
     the proxy, before and after the new replica): how many move.
 
@@ -66,6 +65,9 @@ def parse_args():
     p.add_argument("--resume-state-every", type=int, default=15,
                    help="lane-server --resume_state_every (default 15; 0 shows what the "
                    "resume state is worth: the id check then fails)")
+    p.add_argument("--spare-slot", action="store_true",
+                   help="list the added replica in the proxy from the start instead of "
+                   "reloading nginx with it")
     p.add_argument("--probe", type=int, default=200,
                    help="camera ids whose placement is measured (default 200)")
     p.add_argument("--out", default=os.environ.get("OUT", "out/proxy-cluster"),
@@ -143,6 +145,10 @@ class Proxy:
                 .replace("@SERVERS@", servers).replace("@PREFIX@", self.dir))
         with open(self.conf, "w") as f:
             f.write(text)
+
+    def reload(self, nginx):
+        subprocess.run([nginx, "-t", "-q", "-c", self.conf, "-p", self.dir], check=True)
+        self.proc.send_signal(signal.SIGHUP)
 
     def start(self, nginx):
         subprocess.run([nginx, "-t", "-q", "-c", self.conf, "-p", self.dir], check=True)
@@ -316,7 +322,7 @@ def main():
     try:
         for r in live:
             r.start()
-        proxy.write(replicas)  # with the spare slot, down for now
+        proxy.write(replicas if args.spare_slot else live)  # a spare slot is down for now
         proxy.start(nginx)
         for r in live:
             if not wait_healthy(bins["client"], r.address):
@@ -379,11 +385,17 @@ def main():
         replicas[b].start()
         at(0.6)
         new = replicas[args.replicas]
-        log("starting replica %d in the proxy's spare slot" % new.index)
         new.start()
         wait_healthy(bins["client"], new.address)
         live = replicas[:args.replicas + 1]
-        time.sleep(2.5)  # the slot's fail_timeout: nginx tries it again
+        if args.spare_slot:
+            log("replica %d started in the proxy's spare slot" % new.index)
+            time.sleep(2.5)  # the slot's fail_timeout: nginx tries it again
+        else:
+            log("adding replica %d to the proxy (nginx -s reload)" % new.index)
+            proxy.write(live)
+            proxy.reload(nginx)
+            time.sleep(0.5)
         after = probe_placement(bins["client"], proxy.target, live, probes)
         moved = sum(1 for cam in probes if cam in before and after.get(cam) != before[cam])
         to_new = sum(1 for cam in probes if after.get(cam) == new.index)

@@ -17,7 +17,9 @@ from .streaming import FrameStream
 # every 10 s).
 _CHANNEL_OPTIONS = [
     ("grpc.initial_reconnect_backoff_ms", 100),
-    ("grpc.min_reconnect_backoff_ms", 100),
+    # gRPC core's shortest connection-attempt deadline, despite the name (as
+    # lane-client, client/common.cc: 100 ms timed out behind a busy proxy).
+    ("grpc.min_reconnect_backoff_ms", 2000),
     ("grpc.max_reconnect_backoff_ms", 2000),
     ("grpc.keepalive_time_ms", 20000),
     ("grpc.keepalive_timeout_ms", 10000),
