@@ -44,7 +44,7 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from local_cluster import REPO, binaries, free_ports, parse_metrics  # noqa: E402
+from local_cluster import REPO, binaries, free_ports, parse_metrics, wait_healthy  # noqa: E402
 
 CONFIG = os.path.join(REPO, "configs", "synthetic.json")
 
@@ -157,16 +157,6 @@ class Proxy:
     @property
     def target(self):
         return "127.0.0.1:%d" % self.port
-
-
-def wait_healthy(client, target, timeout=20):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if subprocess.run([client, "health", "--target", target, "--timeout", "1s"],
-                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL).returncode == 0:
-            return True
-        time.sleep(0.2)
-    return False
 
 
 def render(lane, out, cameras, frames):
@@ -325,10 +315,10 @@ def main():
         proxy.write(replicas if args.spare_slot else live)  # a spare slot is down for now
         proxy.start(nginx)
         for r in live:
-            if not wait_healthy(bins["client"], r.address):
+            if not wait_healthy(bins["client"], [r.address], 20):
                 log("replica %d did not start" % r.index)
                 return 1
-        if not wait_healthy(bins["client"], proxy.target):
+        if not wait_healthy(bins["client"], [proxy.target], 20):
             log("the proxy did not pass health checks")
             return 1
 
@@ -386,7 +376,7 @@ def main():
         at(0.6)
         new = replicas[args.replicas]
         new.start()
-        wait_healthy(bins["client"], new.address)
+        wait_healthy(bins["client"], [new.address], 20)
         live = replicas[:args.replicas + 1]
         if args.spare_slot:
             log("replica %d started in the proxy's spare slot" % new.index)
