@@ -160,10 +160,13 @@ with tempfile.TemporaryDirectory() as tmp:
         return sorted(pts, key=lambda q: q[1])
 
     def x_at(pts, y):
+        # Callers ask inside the polyline's row span; clamp so that a row
+        # equal to an end point up to rounding still finds its segment.
+        y = min(max(y, pts[0][1]), pts[-1][1])
         for (x0, y0), (x1, y1) in zip(pts, pts[1:]):
             if y0 <= y <= y1:
                 return x0 if y1 == y0 else x0 + (x1 - x0) * (y - y0) / (y1 - y0)
-        return None
+        return pts[-1][0]
 
     def same_lane(a, b):
         pa, pb = polyline(a), polyline(b)
