@@ -340,6 +340,9 @@ TEST(ConfigTest, ShippedConfigsParse) {
   expected.detector.postprocess.extend_max_row = 479;
   EXPECT_EQ(ConfigToJson(*synthetic), ConfigToJson(expected));
   EXPECT_FALSE(caltech->detector.postprocess.extend_to_max_row);
+  // Caltech labels painted lines only (no road edges): its convention.
+  EXPECT_FALSE(caltech->detector.road_model.search_outer);
+  EXPECT_TRUE(culane->detector.road_model.search_outer);
 
   // Whatever else ships in configs/ must parse too.
   int count = 0;

@@ -103,6 +103,44 @@ TEST(RoadModelTest, AGapMustMatchTheLaneWidthTheFrameShows) {
   EXPECT_NEAR(LateralProfile::FromGround(hidden[0].ground)->XAt(10), 4.6, 0.02);
 }
 
+TEST(RoadModelTest, GuessesTheOuterBoundariesOneLaneWidthOutside) {
+  // Found: -1.5, 1.5, 4.5 (3.0 m lanes, parallel, heading 0.02): the
+  // guesses run at -4.5 and 7.5, parallel to the outermost ones.
+  const std::vector<Bezier> found = {Boundary(-1.5, 0.02), Boundary(1.5, 0.02),
+                                     Boundary(4.5, 0.02)};
+  const std::vector<Bezier> guesses = OuterBoundaryGuesses(found, RoadModelOptions{});
+  ASSERT_EQ(guesses.size(), 2u);
+  for (double y : {5.0, 30.0}) {
+    EXPECT_NEAR(LateralProfile::FromGround(guesses[0])->XAt(y), -4.5 + 0.02 * y, 0.02);
+    EXPECT_NEAR(LateralProfile::FromGround(guesses[1])->XAt(y), 7.5 + 0.02 * y, 0.02);
+  }
+  // One boundary alone: the middle of the plausible widths (2.6..4.3 m).
+  const std::vector<Bezier> one = OuterBoundaryGuesses({Boundary(1.0)}, RoadModelOptions{});
+  ASSERT_EQ(one.size(), 2u);
+  EXPECT_NEAR(LateralProfile::FromGround(one[0])->XAt(10), 1.0 - 3.45, 0.02);
+  EXPECT_NEAR(LateralProfile::FromGround(one[1])->XAt(10), 1.0 + 3.45, 0.02);
+  EXPECT_TRUE(OuterBoundaryGuesses({}, RoadModelOptions{}).empty());
+}
+
+TEST(RoadModelTest, ALineFoundInASearchWindowMustFitTheRoad) {
+  const RoadModelOptions o;
+  const std::vector<Bezier> found = {Boundary(-1.75), Boundary(5.25)};
+  // Parallel, a lane width from a found boundary: fits.
+  EXPECT_TRUE(FitsRoadModel(Boundary(1.75), found, 0, 50, o));
+  // Closer than (1 - width_tolerance) lane widths to a found one: a second
+  // edge of the same marking or a vehicle's edge.
+  EXPECT_FALSE(FitsRoadModel(Boundary(-0.2), found, 0, 50, o));
+  // Not parallel to any found boundary (converging by 0.1 m per metre).
+  EXPECT_FALSE(FitsRoadModel(Boundary(1.75, 0.1), found, 0, 50, o));
+  // Wider than a lane from both: nothing supports it.
+  EXPECT_FALSE(FitsRoadModel(Boundary(12.0), found, 0, 50, o));
+  // Judged inside the top view's rows only: a line that bends away (0.4 m
+  // off by 15 m, 3.2 m by 40 m) fits a view that ends at 15 m.
+  const Bezier bends = Boundary(1.75, 0, 1.0 / 250, 3, 40);
+  EXPECT_FALSE(FitsRoadModel(bends, found, 0, 50, o));
+  EXPECT_TRUE(FitsRoadModel(bends, found, 0, 15, o));
+}
+
 TEST(RoadModelTest, OptionsAreValidated) {
   RoadModelOptions o;
   EXPECT_TRUE(o.Validate().ok());
@@ -110,6 +148,17 @@ TEST(RoadModelTest, OptionsAreValidated) {
   EXPECT_FALSE(o.Validate().ok());
   o = RoadModelOptions{};
   o.max_gap_change_m = 0;
+  EXPECT_FALSE(o.Validate().ok());
+  o = RoadModelOptions{};
+  o.search_half_width_m = 0;
+  EXPECT_FALSE(o.Validate().ok());
+  o.search_half_width_m = o.min_lane_width_m;  // windows of neighbours would overlap
+  EXPECT_FALSE(o.Validate().ok());
+  o = RoadModelOptions{};
+  o.search_quantile = 1.0;
+  EXPECT_FALSE(o.Validate().ok());
+  o = RoadModelOptions{};
+  o.search_min_fraction = -0.1;
   EXPECT_FALSE(o.Validate().ok());
 }
 

@@ -425,6 +425,79 @@ void Detector::AddInferredLanes(std::vector<Lane>& lanes) const {
             [](const Lane& a, const Lane& b) { return a.ground[3].x() < b.ground[3].x(); });
 }
 
+DetectionPrior Detector::HiddenBoundaryWindows(const std::vector<Lane>& lanes) const {
+  DetectionPrior windows;
+  if (options_.mode != Mode::kAll || !options_.road_model.search_hidden || lanes.empty()) {
+    return windows;
+  }
+  std::vector<Bezier> ground;
+  ground.reserve(lanes.size());
+  for (const Lane& lane : lanes) ground.push_back(Bezier{lane.ground});
+  RoadModelOptions model = options_.road_model;
+  model.infer_hidden = true;  // where to search, whether or not inferred lanes are reported
+  std::vector<Bezier> places;
+  for (const InferredBoundary& h : InferHiddenBoundaries(ground, model)) places.push_back(h.ground);
+  if (model.search_outer) {
+    for (const Bezier& b : OuterBoundaryGuesses(ground, model)) places.push_back(b);
+  }
+  for (const Bezier& place : places) {
+    const std::optional<LateralProfile> profile = LateralProfile::FromGround(place);
+    if (!profile) continue;
+    const double y0 = std::max(profile->y_near(), ipm_.y_min());
+    const double y1 = std::min(profile->y_far(), ipm_.y_max());
+    if (y1 - y0 < 1.0) continue;
+    const Eigen::Vector2d a = ipm_.GroundToIpm({profile->XAt(y0), y0});
+    const Eigen::Vector2d b = ipm_.GroundToIpm({profile->XAt(y1), y1});
+    if (!a.allFinite() || !b.allFinite() || std::abs(a.y() - b.y()) < 1.0) continue;
+    const std::optional<IpmLine> line = MakeIpmLine(a, b - a, ipm_.height());
+    if (!line) continue;
+    DetectionPrior::Window w;
+    w.line = *line;
+    w.half_width_m = options_.road_model.search_half_width_m;
+    windows.windows.push_back(w);
+  }
+  return windows;
+}
+
+cv::Mat Detector::ThresholdInWindows(const cv::Mat& filtered, const DetectionPrior& windows,
+                                     float frame_threshold) const {
+  cv::Mat out = cv::Mat::zeros(filtered.size(), CV_32F);
+  const cv::Mat& valid = ipm_.valid_mask();
+  const double mpp_x = ipm_.metres_per_px_x();
+  std::vector<float> values;
+  for (const DetectionPrior::Window& w : windows.windows) {
+    const double half_px = w.half_width_m / mpp_x;
+    auto span = [&](int r) {
+      const double x = w.line.XAt(r);
+      return std::pair<int, int>{std::max(0, static_cast<int>(std::ceil(x - half_px))),
+                                 std::min(filtered.cols - 1, static_cast<int>(x + half_px))};
+    };
+    values.clear();
+    for (int r = 0; r < filtered.rows; ++r) {
+      const auto [c0, c1] = span(r);
+      const float* f = filtered.ptr<float>(r);
+      const uchar* v = valid.ptr<uchar>(r);
+      for (int c = c0; c <= c1; ++c) {
+        if (v[c] != 0) values.push_back(f[c]);
+      }
+    }
+    if (values.size() < 16) continue;
+    const float local =
+        std::max(Quantile(values, options_.road_model.search_quantile),
+                 static_cast<float>(options_.road_model.search_min_fraction * frame_threshold));
+    for (int r = 0; r < filtered.rows; ++r) {
+      const auto [c0, c1] = span(r);
+      const float* f = filtered.ptr<float>(r);
+      const uchar* v = valid.ptr<uchar>(r);
+      float* o = out.ptr<float>(r);
+      for (int c = c0; c <= c1; ++c) {
+        if (v[c] != 0 && f[c] > local && f[c] > 0) o[c] = f[c];
+      }
+    }
+  }
+  return out;
+}
+
 absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
                                            const DetectionPrior* prior) const {
   if (absl::Status s = CheckFrame(frame); !s.ok()) return s;
@@ -467,14 +540,42 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
   }
   lap(time.lines_ms);
   // 6. RANSAC splines around each line.
-  const std::vector<SplineCandidate> candidates =
-      FitSplines(thresholded, lines, spline_half_px, rng);
+  std::vector<SplineCandidate> candidates = FitSplines(thresholded, lines, spline_half_px, rng);
   lap(time.splines_ms);
   // 7. Post-processing in the top view and the image; 8. the three frames.
   const PostprocessFrame images{ipm_, top_view, filtered, channel, frame};
   det.lanes =
       ToLanes(PostprocessCandidates(candidates, images, opt.postprocess, opt.filter.marking_width_m,
                                     opt.spline_ransac.merge_distance_px));
+  // 7b. Where the road model puts a boundary the first pass missed: search
+  // its window again, and post-process everything once more if it holds a
+  // line.
+  if (const DetectionPrior hidden = HiddenBoundaryWindows(det.lanes); !hidden.windows.empty()) {
+    const cv::Mat local = ThresholdInWindows(filtered, hidden, threshold);
+    std::vector<double> more_half_px;
+    const std::vector<IpmLine> more = FindPriorLines(local, hidden, lines, &more_half_px, rng);
+    if (!more.empty()) {
+      const std::vector<SplineCandidate> extra = FitSplines(local, more, more_half_px, rng);
+      const std::vector<Lane> seen =
+          ToLanes(PostprocessCandidates(extra, images, opt.postprocess, opt.filter.marking_width_m,
+                                        opt.spline_ransac.merge_distance_px));
+      std::vector<Bezier> found;
+      for (const Lane& lane : det.lanes) found.push_back(Bezier{lane.ground});
+      const size_t first = det.lanes.size();
+      for (const Lane& lane : seen) {
+        if (!FitsRoadModel(Bezier{lane.ground}, found, ipm_.y_min(), ipm_.y_max(),
+                           opt.road_model)) {
+          continue;
+        }
+        det.lanes.push_back(lane);
+        found.push_back(Bezier{lane.ground});
+      }
+      if (det.lanes.size() > first) {
+        std::sort(det.lanes.begin(), det.lanes.end(),
+                  [](const Lane& a, const Lane& b) { return a.ground[3].x() < b.ground[3].x(); });
+      }
+    }
+  }
   AddInferredLanes(det.lanes);
   lap(time.postprocess_ms);
   time.total_ms = MsSince(t_start);

@@ -11,6 +11,14 @@ absl::Status RoadModelOptions::Validate() const {
   if (!(min_lane_width_m > 0) || !(max_lane_width_m > min_lane_width_m)) {
     return absl::InvalidArgumentError("road_model: need 0 < min_lane_width_m < max_lane_width_m");
   }
+  if (!(search_half_width_m > 0) || !(search_half_width_m < min_lane_width_m / 2)) {
+    return absl::InvalidArgumentError(
+        "road_model: need 0 < search_half_width_m < min_lane_width_m / 2");
+  }
+  if (!(search_quantile > 0 && search_quantile < 1) || !(search_min_fraction >= 0)) {
+    return absl::InvalidArgumentError(
+        "road_model: need 0 < search_quantile < 1 and search_min_fraction >= 0");
+  }
   if (!(width_tolerance > 0) || !(max_gap_change_m > 0) || !(min_overlap_m > 0)) {
     return absl::InvalidArgumentError(
         "road_model: width_tolerance, max_gap_change_m and min_overlap_m must be positive");
@@ -28,6 +36,24 @@ std::optional<LateralProfile> LateralProfile::FromGround(const Bezier& ground, i
     p.y_.push_back(q.y());
     p.x_.push_back(q.x());
   }
+  return p;
+}
+
+std::optional<LateralProfile> LateralProfile::Clipped(double y_min, double y_max) const {
+  const double lo = std::max(y_min, y_.front());
+  const double hi = std::min(y_max, y_.back());
+  if (!(hi > lo)) return std::nullopt;
+  LateralProfile p;
+  p.y_.push_back(lo);
+  p.x_.push_back(XAt(lo));
+  for (size_t i = 0; i < y_.size(); ++i) {
+    if (y_[i] > lo && y_[i] < hi) {
+      p.y_.push_back(y_[i]);
+      p.x_.push_back(x_[i]);
+    }
+  }
+  p.y_.push_back(hi);
+  p.x_.push_back(XAt(hi));
   return p;
 }
 
@@ -127,6 +153,59 @@ std::vector<InferredBoundary> InferHiddenBoundaries(const std::vector<Bezier>& g
     inferred.push_back({*fit, static_cast<int>(i), static_cast<int>(i + 1)});
   }
   return inferred;
+}
+
+std::vector<Bezier> OuterBoundaryGuesses(const std::vector<Bezier>& ground,
+                                         const RoadModelOptions& options) {
+  std::vector<Bezier> guesses;
+  if (ground.empty()) return guesses;
+  std::vector<std::optional<LateralProfile>> profiles;
+  profiles.reserve(ground.size());
+  for (const Bezier& g : ground) profiles.push_back(LateralProfile::FromGround(g));
+  std::vector<double> widths;
+  for (size_t i = 0; i + 1 < ground.size(); ++i) {
+    if (!profiles[i] || !profiles[i + 1]) continue;
+    const std::optional<Gap> g = MeasureGap(*profiles[i], *profiles[i + 1], options.min_overlap_m);
+    if (!g || g->change_m > options.max_gap_change_m) continue;
+    if (g->median_m >= options.min_lane_width_m && g->median_m <= options.max_lane_width_m) {
+      widths.push_back(g->median_m);
+    }
+  }
+  // Without a lane measured in this frame, the middle of the plausible range.
+  const double width =
+      widths.empty() ? 0.5 * (options.min_lane_width_m + options.max_lane_width_m) : Median(widths);
+  for (const auto& [index, side] :
+       {std::pair<size_t, double>{0, -1.0}, std::pair<size_t, double>{ground.size() - 1, 1.0}}) {
+    if (!profiles[index]) continue;
+    std::array<Eigen::Vector2d, 4> p = ground[index].p;
+    for (Eigen::Vector2d& q : p) q.x() += side * width;
+    guesses.push_back(Bezier{p});
+  }
+  return guesses;
+}
+
+bool FitsRoadModel(const Bezier& lane, const std::vector<Bezier>& found, double y_min, double y_max,
+                   const RoadModelOptions& options) {
+  std::optional<LateralProfile> p = LateralProfile::FromGround(lane);
+  if (!p) return false;
+  p = p->Clipped(y_min, y_max);
+  if (!p) return false;
+  bool neighbour = false;
+  for (const Bezier& f : found) {
+    std::optional<LateralProfile> q = LateralProfile::FromGround(f);
+    if (q) q = q->Clipped(y_min, y_max);
+    if (!q) continue;
+    const double y = 0.5 * (std::max(p->y_near(), q->y_near()) + std::min(p->y_far(), q->y_far()));
+    const bool left_of = p->XAt(y) < q->XAt(y);
+    const std::optional<Gap> g = left_of ? MeasureGap(*p, *q, options.min_overlap_m)
+                                         : MeasureGap(*q, *p, options.min_overlap_m);
+    if (!g) continue;
+    if (g->median_m < (1 - options.width_tolerance) * options.min_lane_width_m) return false;
+    if (g->median_m <= options.max_lane_width_m && g->change_m <= options.max_gap_change_m) {
+      neighbour = true;
+    }
+  }
+  return neighbour;
 }
 
 }  // namespace lane

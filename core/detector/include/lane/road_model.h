@@ -29,6 +29,25 @@ struct RoadModelOptions {
   // -> 0.482 (docs/accuracy-log.md entry 41). A camera or session that wants
   // them switches them on.
   bool infer_hidden = false;
+  // Search where the road model puts a boundary that the first pass did not
+  // find: the line and spline RANSAC run again inside a window of
+  // +- search_half_width_m around it, and what survives the post-processing
+  // is reported as seen (not inferred). A faint or worn line between two
+  // found ones is often below the frame's threshold only because the
+  // Hough's column sums are dominated by the strong lines.
+  bool search_hidden = true;
+  // Search also one lane width outside the outermost boundaries found: an
+  // unpainted road edge or a faint outer line. CULane labels road edges;
+  // Caltech Lanes labels painted lines only, and on its urban streets this
+  // search finds the curbs (configs/caltech.json turns it off as that
+  // dataset's labelling convention).
+  bool search_outer = true;
+  double search_half_width_m = 0.6;
+  // Inside a window, pixels above the window's own quantile of the filtered
+  // response count, if they also reach this fraction of the frame's
+  // threshold.
+  double search_quantile = 0.9;
+  double search_min_fraction = 0.3;
   // A plausible lane width, metres (urban lanes are 2.75-3.75 m; highway up
   // to 4.2 m with worn markings read at their inner edge).
   double min_lane_width_m = 2.6;
@@ -56,6 +75,8 @@ class LateralProfile {
 
   double y_near() const { return y_.front(); }
   double y_far() const { return y_.back(); }
+  // The part within y_min..y_max; none when it does not reach in.
+  std::optional<LateralProfile> Clipped(double y_min, double y_max) const;
   // x at y, y clamped into [y_near, y_far].
   double XAt(double y) const;
 
@@ -76,6 +97,19 @@ struct InferredBoundary {
 // `ground`: the found boundaries' ground Beziers, sorted left to right.
 std::vector<InferredBoundary> InferHiddenBoundaries(const std::vector<Bezier>& ground,
                                                     const RoadModelOptions& options);
+
+// Where a boundary beyond the outermost found ones would run: one lane
+// width (the frame's, or the middle of the plausible range) outside the
+// leftmost and the rightmost, as a place to search, not as a boundary.
+std::vector<Bezier> OuterBoundaryGuesses(const std::vector<Bezier>& ground,
+                                         const RoadModelOptions& options);
+
+// A boundary found by searching the places above belongs to the road model
+// when it runs parallel to a found boundary a plausible lane width away
+// (the gap varies by at most max_gap_change_m over min_overlap_m or more)
+// and is no closer than (1 - width_tolerance) lane widths to any other.
+bool FitsRoadModel(const Bezier& lane, const std::vector<Bezier>& found, double y_min, double y_max,
+                   const RoadModelOptions& options);
 
 }  // namespace lane
 

@@ -167,6 +167,11 @@ LANE_FIELDS(TwoLaneOptions) {
 
 LANE_FIELDS(RoadModelOptions) {
   v.Field("infer_hidden", s.infer_hidden);
+  v.Field("search_hidden", s.search_hidden);
+  v.Field("search_outer", s.search_outer);
+  v.Field("search_half_width_m", s.search_half_width_m);
+  v.Field("search_quantile", s.search_quantile);
+  v.Field("search_min_fraction", s.search_min_fraction);
   v.Field("min_lane_width_m", s.min_lane_width_m);
   v.Field("max_lane_width_m", s.max_lane_width_m);
   v.Field("width_tolerance", s.width_tolerance);
