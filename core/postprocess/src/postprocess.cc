@@ -250,10 +250,18 @@ bool PostprocessInImage(SplineCandidate& c, const PostprocessFrame& f, const Pos
     if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
   }
   if (pp.extend_in_image && pp.extend_geometric) {
-    c.image = TopDown(ExtendInImage(
-        c.image, f.channel, cam,
-        ImageExtendOptionsFrom(pp, scale, rows.min_row, rows.max_row, marking_width_m)));
-    if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
+    const ImageExtendOptions eo =
+        ImageExtendOptionsFrom(pp, scale, rows.min_row, rows.max_row, marking_width_m);
+    c.image = TopDown(ExtendInImage(c.image, f.channel, cam, eo));
+    // A spline that bent off its marking (a short or wiggly fit, a
+    // localisation pulled aside) extends into a shape that fails the
+    // checks; the line it was fitted around then goes in its place, and is
+    // extended in turn (it ran the whole top view, so its extension is
+    // steadier).
+    if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) {
+      c.image = TopDown(ExtendInImage(fallback, f.channel, cam, eo));
+      if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
+    }
   } else if (pp.extend_in_image && contrast > 0) {
     ExtendOptions eo;
     eo.step_px = pp.extend_step_px * scale;
