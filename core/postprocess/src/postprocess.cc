@@ -257,10 +257,17 @@ bool PostprocessInImage(SplineCandidate& c, const PostprocessFrame& f, const Pos
     // localisation pulled aside) extends into a shape that fails the
     // checks; the line it was fitted around then goes in its place, and is
     // extended in turn (it ran the whole top view, so its extension is
-    // steadier).
+    // steadier). When the walks along the line stray too (onto a vehicle,
+    // far away), the line is only carried on straight down (with
+    // extend_to_max_row), which needs no evidence beyond its own.
     if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) {
       c.image = TopDown(ExtendInImage(fallback, f.channel, cam, eo));
-      if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
+      if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) {
+        ImageExtendOptions straight = eo;
+        straight.max_steps = 0;
+        c.image = TopDown(ExtendInImage(fallback, f.channel, cam, straight));
+        if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
+      }
     }
   } else if (pp.extend_in_image && contrast > 0) {
     ExtendOptions eo;
