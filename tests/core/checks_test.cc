@@ -112,6 +112,32 @@ TEST(ImageExtensionTest, FollowsTheMarkingThroughAGapAndStopsAtTheEnd) {
   EXPECT_GT(stopped.y(), 12.0);
 }
 
+// Without walks (max_steps 0: post-processing's last fallback, when the
+// walks strayed), extend_to_max_row carries the spline straight on down to
+// the bottom row along its own ground line, and nothing is added upwards.
+TEST(ImageExtensionTest, CarriesTheLineStraightDownWithoutWalking) {
+  const CameraModel cam;
+  const cv::Mat frame = RoadFrame(cam);
+  const ChannelView red(frame, 2);
+  ImageExtendOptions o;
+  o.min_row = 0;
+  o.max_row = 470;
+  o.marking_width_m = 0.12;
+  o.max_steps = 0;
+  o.extrapolate_down = true;
+  const Bezier start = ImageSpline(cam, 1.8, 18, 12);
+  const Bezier out = ExtendInImage(start, red, cam, o);
+  EXPECT_NEAR(std::max(out.p[0].y(), out.p[3].y()), 470.0, 1.0);
+  EXPECT_NEAR(std::min(out.p[0].y(), out.p[3].y()), std::min(start.p[0].y(), start.p[3].y()), 1.0);
+  for (double t : {0.0, 0.5, 1.0}) {
+    EXPECT_NEAR(cam.ImageToGround(out.Eval(t)).x(), 1.8, 0.05) << t;
+  }
+  // Without extend_to_max_row nothing changes.
+  o.extrapolate_down = false;
+  const Bezier same = ExtendInImage(start, red, cam, o);
+  EXPECT_NEAR((same.p[3] - start.p[3]).norm() + (same.p[0] - start.p[0]).norm(), 0.0, 1e-6);
+}
+
 TEST(ImageExtensionTest, LocalisationMovesASplineOntoTheMarking) {
   const CameraModel cam;
   const cv::Mat frame = RoadFrame(cam);
