@@ -138,6 +138,41 @@ TEST(ImageExtensionTest, CarriesTheLineStraightDownWithoutWalking) {
   EXPECT_NEAR((same.p[3] - start.p[3]).norm() + (same.p[0] - start.p[0]).norm(), 0.0, 1e-6);
 }
 
+// A double line (two 0.1 m lines 0.12 m apart, centred at x = 1.8 m, from
+// 3 to 30 m): far away its lines blur into one, near the camera they
+// resolve. Walking down from the far part, profiles smoothed as
+// localisation's (down_sigma_m 0.1) keep the walk on the pair's centre,
+// where such a boundary is labelled, down to the near end; with the narrow
+// smoothing alone the walk moves onto one of the lines, half the pair's
+// width aside (on cordova1's double yellow line the step aside was too
+// sharp for the direction checks, and the walk stopped there).
+TEST(ImageExtensionTest, WalksDownADoubleLineOnItsCentre) {
+  const CameraModel cam;
+  cv::Mat frame(cam.image_height, cam.image_width, CV_8UC3, cv::Scalar(90, 90, 90));
+  for (double y = 3; y < 30; y += 0.05) {
+    for (const double x : {1.69, 1.91}) {
+      const Eigen::Vector2d a = cam.GroundToImage({x - 0.05, y});
+      const Eigen::Vector2d b = cam.GroundToImage({x + 0.05, y});
+      cv::line(frame, cv::Point2d(a.x(), a.y()), cv::Point2d(b.x(), b.y()),
+               cv::Scalar(230, 230, 230), 2);
+    }
+  }
+  const ChannelView red(frame, 2);
+  ImageExtendOptions o;
+  o.min_row = 0;
+  o.max_row = 479;
+  o.marking_width_m = 0.1;
+  const Bezier start = ImageSpline(cam, 1.8, 20, 14);
+  o.down_sigma_m = 0.1;
+  const Bezier merged = ExtendInImage(start, red, cam, o);
+  const Eigen::Vector2d near = cam.ImageToGround(merged.p[3]);
+  EXPECT_LT(near.y(), 4.0) << "the walk should reach the pair's near end";
+  EXPECT_NEAR(near.x(), 1.8, 0.06);
+  o.down_sigma_m = 0;
+  const Eigen::Vector2d narrow = cam.ImageToGround(ExtendInImage(start, red, cam, o).p[3]);
+  EXPECT_GT(std::abs(narrow.x() - 1.8), 0.08) << "narrow smoothing: y " << narrow.y();
+}
+
 TEST(ImageExtensionTest, LocalisationMovesASplineOntoTheMarking) {
   const CameraModel cam;
   const cv::Mat frame = RoadFrame(cam);

@@ -46,21 +46,30 @@ std::optional<Bar> StrongestBar(const std::vector<double>& s, int half, int side
   return best;
 }
 
-// The strongest bar of the smoothed profile across `p` (normal `n`).
+// The strongest bar of the smoothed profile across `p` (normal `n`), smoothed
+// with `sigma_m` on the road when that is positive and its profile stays in
+// the image, else with the options' sigma (at most half a marking).
 std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
                            const Eigen::Vector2d& p, const Eigen::Vector2d& n,
-                           const ImageExtendOptions& o) {
+                           const ImageExtendOptions& o, double sigma_m = 0) {
   const double ppm = PixelsPerMetreAcross(camera, p);
   if (!(ppm > 0)) return std::nullopt;
   const double width_px = o.marking_width_m * ppm;
-  const double sigma = QuantizedSigma(std::max(0.7, std::min(o.sigma_px, 0.5 * width_px)));
-  const double side = std::max(width_px, 2.5 * sigma);
   const double half = std::clamp(o.search_m * ppm, o.min_search_px, o.max_search_px);
-  const int h = static_cast<int>(std::lround(half + side + 3 * sigma));
   thread_local std::vector<float> raw;
   thread_local std::vector<double> smooth;
-  raw.resize(2 * h + 1);
-  if (!image.SampleAlong(p, n, h, raw.data())) return std::nullopt;  // it leaves the image
+  double sigma = 0, side = 0;
+  bool inside = false;
+  for (const double s : {sigma_m > 0 ? std::max(0.7, sigma_m * ppm) : 0.0,
+                         std::max(0.7, std::min(o.sigma_px, 0.5 * width_px))}) {
+    if (s <= 0 || inside) continue;
+    sigma = QuantizedSigma(s);
+    side = std::max(width_px, 2.5 * sigma);
+    const int h = static_cast<int>(std::lround(half + side + 3 * sigma));
+    raw.resize(2 * h + 1);
+    inside = image.SampleAlong(p, n, h, raw.data());
+  }
+  if (!inside) return std::nullopt;  // it leaves the image
   SmoothProfile(raw, sigma, smooth);
   return StrongestBar(smooth, static_cast<int>(std::lround(half)),
                       static_cast<int>(std::lround(side)));
@@ -171,6 +180,8 @@ ImageExtendOptions ImageExtendOptionsFrom(const PostprocessOptions& pp, double s
   o.min_row = min_row;
   o.max_row = max_row;
   o.extrapolate_down = pp.extend_to_max_row;
+  // A double line's lines merge as in localisation (localize_sigma_m).
+  o.down_sigma_m = pp.localize_sigma_m;
   return o;
 }
 
@@ -309,7 +320,8 @@ Bezier ExtendInImage(const Bezier& spline, const ChannelView& image, const Camer
       if (!InImage(guess, image) || guess.y() < options.min_row || guess.y() > max_row) break;
       const Eigen::Vector2d g0 = camera.ImageToGround(cur), g1 = camera.ImageToGround(guess);
       const double step_m = (g0.allFinite() && g1.allFinite()) ? (g1 - g0).norm() : 1e9;
-      const auto bar = FindBar(image, camera, guess, Normal(dir), options);
+      const auto bar = FindBar(image, camera, guess, Normal(dir), options,
+                               dir.y() > 0 ? options.down_sigma_m : 0.0);
       bool supported = bar && bar->contrast >= min_contrast;
       Eigen::Vector2d q = guess;
       if (supported) {

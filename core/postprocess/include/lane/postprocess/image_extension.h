@@ -44,6 +44,13 @@ struct ImageExtendOptions {
   // to max_row (or the image's bottom row, whichever is higher).
   bool extrapolate_down = false;
   int max_steps = 80;
+  // Walking down (towards the camera), profiles are smoothed with this sigma
+  // on the road (metres; 0 = off), as localisation's are: near the camera
+  // the two lines of a double line resolve, and the walk would jump to one
+  // of them (half the pair's width aside: a turn the direction checks
+  // refuse), where the boundary is labelled at their centre. Where the wider
+  // profile would leave the image, the narrow one is used.
+  double down_sigma_m = 0;
 };
 
 // Localisation in the image (paper section II-E.1) with the camera's
