@@ -425,9 +425,10 @@ void Detector::AddInferredLanes(std::vector<Lane>& lanes) const {
             [](const Lane& a, const Lane& b) { return a.ground[3].x() < b.ground[3].x(); });
 }
 
-DetectionPrior Detector::HiddenBoundaryWindows(const std::vector<Lane>& lanes) const {
+DetectionPrior Detector::RoadModelWindows(const std::vector<Lane>& lanes) const {
   DetectionPrior windows;
-  if (options_.mode != Mode::kAll || !options_.road_model.search_hidden || lanes.empty()) {
+  const RoadModelOptions& rm = options_.road_model;
+  if (options_.mode != Mode::kAll || (!rm.search_hidden && !rm.search_outer) || lanes.empty()) {
     return windows;
   }
   std::vector<Bezier> ground;
@@ -436,7 +437,11 @@ DetectionPrior Detector::HiddenBoundaryWindows(const std::vector<Lane>& lanes) c
   RoadModelOptions model = options_.road_model;
   model.infer_hidden = true;  // where to search, whether or not inferred lanes are reported
   std::vector<Bezier> places;
-  for (const InferredBoundary& h : InferHiddenBoundaries(ground, model)) places.push_back(h.ground);
+  if (model.search_hidden) {
+    for (const InferredBoundary& h : InferHiddenBoundaries(ground, model)) {
+      places.push_back(h.ground);
+    }
+  }
   if (model.search_outer) {
     for (const Bezier& b : OuterBoundaryGuesses(ground, model)) places.push_back(b);
   }
@@ -550,7 +555,7 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
   // 7b. Where the road model puts a boundary the first pass missed: search
   // its window again, and post-process everything once more if it holds a
   // line.
-  if (const DetectionPrior hidden = HiddenBoundaryWindows(det.lanes); !hidden.windows.empty()) {
+  if (const DetectionPrior hidden = RoadModelWindows(det.lanes); !hidden.windows.empty()) {
     const cv::Mat local = ThresholdInWindows(filtered, hidden, threshold);
     std::vector<double> more_half_px;
     const std::vector<IpmLine> more = FindPriorLines(local, hidden, lines, &more_half_px, rng);

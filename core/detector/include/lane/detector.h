@@ -236,9 +236,11 @@ class Detector {
   // All-lanes mode: the road model's hidden boundaries (lane/road_model.h),
   // added to `lanes` (sorted left to right) with `inferred` set.
   void AddInferredLanes(std::vector<Lane>& lanes) const;
-  // All-lanes mode: windows (DetectionPrior form) around the road model's
-  // hidden boundaries between `lanes`, for a second search.
-  DetectionPrior HiddenBoundaryWindows(const std::vector<Lane>& lanes) const;
+  // All-lanes mode: windows (DetectionPrior form) for a second search, around
+  // where the road model puts a boundary that `lanes` lack: half-way across
+  // a two-lane gap (search_hidden) and one lane width outside the outermost
+  // (search_outer).
+  DetectionPrior RoadModelWindows(const std::vector<Lane>& lanes) const;
   // `filtered` thresholded inside each window at the window's own quantile
   // (and zero outside): a faint line between strong ones stands out there.
   cv::Mat ThresholdInWindows(const cv::Mat& filtered, const DetectionPrior& windows,
