@@ -18,6 +18,12 @@ double MsSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
+// Lanes left to right by their near end on the ground.
+void SortLeftToRight(std::vector<Lane>& lanes) {
+  std::sort(lanes.begin(), lanes.end(),
+            [](const Lane& a, const Lane& b) { return a.ground[3].x() < b.ground[3].x(); });
+}
+
 }  // namespace
 
 const char* ModeName(Mode mode) { return mode == Mode::kTwo ? "two" : "all"; }
@@ -391,8 +397,7 @@ std::vector<Lane> Detector::ToLanes(const std::vector<SplineCandidate>& done) co
     lane.score = c.score;
     lanes.push_back(lane);
   }
-  std::sort(lanes.begin(), lanes.end(),
-            [](const Lane& a, const Lane& b) { return a.ground[3].x() < b.ground[3].x(); });
+  SortLeftToRight(lanes);
   return lanes;
 }
 
@@ -421,20 +426,19 @@ void Detector::AddInferredLanes(std::vector<Lane>& lanes) const {
     lane.inferred = true;
     lanes.push_back(lane);
   }
-  std::sort(lanes.begin(), lanes.end(),
-            [](const Lane& a, const Lane& b) { return a.ground[3].x() < b.ground[3].x(); });
+  SortLeftToRight(lanes);
 }
 
 DetectionPrior Detector::RoadModelWindows(const std::vector<Lane>& lanes) const {
   DetectionPrior windows;
-  const RoadModelOptions& rm = options_.road_model;
-  if (options_.mode != Mode::kAll || (!rm.search_hidden && !rm.search_outer) || lanes.empty()) {
+  RoadModelOptions model = options_.road_model;
+  if (options_.mode != Mode::kAll || (!model.search_hidden && !model.search_outer) ||
+      lanes.empty()) {
     return windows;
   }
   std::vector<Bezier> ground;
   ground.reserve(lanes.size());
   for (const Lane& lane : lanes) ground.push_back(Bezier{lane.ground});
-  RoadModelOptions model = options_.road_model;
   model.infer_hidden = true;  // where to search, whether or not inferred lanes are reported
   std::vector<Bezier> places;
   if (model.search_hidden) {
@@ -458,7 +462,7 @@ DetectionPrior Detector::RoadModelWindows(const std::vector<Lane>& lanes) const 
     if (!line) continue;
     DetectionPrior::Window w;
     w.line = *line;
-    w.half_width_m = options_.road_model.search_half_width_m;
+    w.half_width_m = model.search_half_width_m;
     windows.windows.push_back(w);
   }
   return windows;
@@ -545,7 +549,8 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
   }
   lap(time.lines_ms);
   // 6. RANSAC splines around each line.
-  std::vector<SplineCandidate> candidates = FitSplines(thresholded, lines, spline_half_px, rng);
+  const std::vector<SplineCandidate> candidates =
+      FitSplines(thresholded, lines, spline_half_px, rng);
   lap(time.splines_ms);
   // 7. Post-processing in the top view and the image; 8. the three frames.
   const PostprocessFrame images{ipm_, top_view, filtered, channel, frame};
@@ -576,8 +581,7 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
         found.push_back(Bezier{lane.ground});
       }
       if (det.lanes.size() > first) {
-        std::sort(det.lanes.begin(), det.lanes.end(),
-                  [](const Lane& a, const Lane& b) { return a.ground[3].x() < b.ground[3].x(); });
+        SortLeftToRight(det.lanes);
       }
     }
   }

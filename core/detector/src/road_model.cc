@@ -94,32 +94,46 @@ std::optional<Gap> MeasureGap(const LateralProfile& left, const LateralProfile& 
   return g;
 }
 
+// The found boundaries' lateral profiles, the adjacent pairs that stay
+// parallel (gap change within max_gap_change_m), and the frame's lane width:
+// the median gap of those pairs one plausible lane apart (0 when none is).
+struct RoadGaps {
+  std::vector<std::optional<LateralProfile>> profiles;
+  std::vector<std::pair<size_t, Gap>> gaps;
+  double frame_width_m = 0;
+};
+
+RoadGaps MeasureRoad(const std::vector<Bezier>& ground, const RoadModelOptions& options) {
+  RoadGaps road;
+  road.profiles.reserve(ground.size());
+  for (const Bezier& g : ground) road.profiles.push_back(LateralProfile::FromGround(g));
+  std::vector<double> widths;
+  for (size_t i = 0; i + 1 < ground.size(); ++i) {
+    const auto& left = road.profiles[i];
+    const auto& right = road.profiles[i + 1];
+    if (!left || !right) continue;
+    const std::optional<Gap> g = MeasureGap(*left, *right, options.min_overlap_m);
+    if (!g || g->change_m > options.max_gap_change_m) continue;
+    road.gaps.emplace_back(i, *g);
+    if (g->median_m >= options.min_lane_width_m && g->median_m <= options.max_lane_width_m) {
+      widths.push_back(g->median_m);
+    }
+  }
+  road.frame_width_m = widths.empty() ? 0.0 : Median(widths);
+  return road;
+}
+
 }  // namespace
 
 std::vector<InferredBoundary> InferHiddenBoundaries(const std::vector<Bezier>& ground,
                                                     const RoadModelOptions& options) {
   std::vector<InferredBoundary> inferred;
   if (!options.infer_hidden || ground.size() < 2) return inferred;
-  std::vector<std::optional<LateralProfile>> profiles;
-  profiles.reserve(ground.size());
-  for (const Bezier& g : ground) profiles.push_back(LateralProfile::FromGround(g));
+  const RoadGaps road = MeasureRoad(ground, options);
+  const auto& profiles = road.profiles;
+  const double frame_width = road.frame_width_m;
 
-  // Adjacent pairs that stay parallel, and the frame's lane width from those
-  // one lane apart.
-  std::vector<std::pair<size_t, Gap>> gaps;
-  std::vector<double> widths;
-  for (size_t i = 0; i + 1 < ground.size(); ++i) {
-    if (!profiles[i] || !profiles[i + 1]) continue;
-    const std::optional<Gap> g = MeasureGap(*profiles[i], *profiles[i + 1], options.min_overlap_m);
-    if (!g || g->change_m > options.max_gap_change_m) continue;
-    gaps.emplace_back(i, *g);
-    if (g->median_m >= options.min_lane_width_m && g->median_m <= options.max_lane_width_m) {
-      widths.push_back(g->median_m);
-    }
-  }
-  const double frame_width = widths.empty() ? 0.0 : Median(widths);
-
-  for (const auto& [i, g] : gaps) {
+  for (const auto& [i, g] : road.gaps) {
     const double half = 0.5 * g.median_m;
     if (half < options.min_lane_width_m || half > options.max_lane_width_m) continue;
     if (frame_width > 0 && std::abs(half - frame_width) > options.width_tolerance * frame_width) {
@@ -159,24 +173,14 @@ std::vector<Bezier> OuterBoundaryGuesses(const std::vector<Bezier>& ground,
                                          const RoadModelOptions& options) {
   std::vector<Bezier> guesses;
   if (ground.empty()) return guesses;
-  std::vector<std::optional<LateralProfile>> profiles;
-  profiles.reserve(ground.size());
-  for (const Bezier& g : ground) profiles.push_back(LateralProfile::FromGround(g));
-  std::vector<double> widths;
-  for (size_t i = 0; i + 1 < ground.size(); ++i) {
-    if (!profiles[i] || !profiles[i + 1]) continue;
-    const std::optional<Gap> g = MeasureGap(*profiles[i], *profiles[i + 1], options.min_overlap_m);
-    if (!g || g->change_m > options.max_gap_change_m) continue;
-    if (g->median_m >= options.min_lane_width_m && g->median_m <= options.max_lane_width_m) {
-      widths.push_back(g->median_m);
-    }
-  }
+  const RoadGaps road = MeasureRoad(ground, options);
   // Without a lane measured in this frame, the middle of the plausible range.
-  const double width =
-      widths.empty() ? 0.5 * (options.min_lane_width_m + options.max_lane_width_m) : Median(widths);
+  const double width = road.frame_width_m > 0
+                           ? road.frame_width_m
+                           : 0.5 * (options.min_lane_width_m + options.max_lane_width_m);
   for (const auto& [index, side] :
        {std::pair<size_t, double>{0, -1.0}, std::pair<size_t, double>{ground.size() - 1, 1.0}}) {
-    if (!profiles[index]) continue;
+    if (!road.profiles[index]) continue;
     std::array<Eigen::Vector2d, 4> p = ground[index].p;
     for (Eigen::Vector2d& q : p) q.x() += side * width;
     guesses.push_back(Bezier{p});

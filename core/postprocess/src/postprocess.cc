@@ -252,21 +252,26 @@ bool PostprocessInImage(SplineCandidate& c, const PostprocessFrame& f, const Pos
   if (pp.extend_in_image && pp.extend_geometric) {
     const ImageExtendOptions eo =
         ImageExtendOptionsFrom(pp, scale, rows.min_row, rows.max_row, marking_width_m);
-    c.image = TopDown(ExtendInImage(c.image, f.channel, cam, eo));
-    // A spline that bent off its marking (a short or wiggly fit, a
-    // localisation pulled aside) extends into a shape that fails the
-    // checks; the line it was fitted around then goes in its place, and is
-    // extended in turn (it ran the whole top view, so its extension is
-    // steadier). When the walks along the line stray too (onto a vehicle,
-    // far away), the line is only carried on straight down (with
-    // extend_to_max_row), which needs no evidence beyond its own.
-    if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) {
-      c.image = TopDown(ExtendInImage(fallback, f.channel, cam, eo));
-      if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) {
-        ImageExtendOptions straight = eo;
-        straight.max_steps = 0;
-        c.image = TopDown(ExtendInImage(fallback, f.channel, cam, straight));
-        if (!PassesShapeChecks(c.image, min_len, pp.min_straightness)) c.image = fallback;
+    ImageExtendOptions straight = eo;
+    straight.max_steps = 0;
+    // The first extension whose shape passes the checks, else the line. A
+    // spline that bent off its marking (a short or wiggly fit, a
+    // localisation pulled aside) extends into a shape that fails them; the
+    // line it was fitted around then goes in its place, and is extended in
+    // turn (it ran the whole top view, so its extension is steadier). When
+    // the walks along the line stray too (onto a vehicle, far away), the
+    // line is only carried on straight down (with extend_to_max_row), which
+    // needs no evidence beyond its own.
+    const Bezier spline = c.image;
+    c.image = fallback;
+    for (const auto& [from, options] :
+         {std::pair<const Bezier&, const ImageExtendOptions&>{spline, eo},
+          {fallback, eo},
+          {fallback, straight}}) {
+      const Bezier extended = TopDown(ExtendInImage(from, f.channel, cam, options));
+      if (PassesShapeChecks(extended, min_len, pp.min_straightness)) {
+        c.image = extended;
+        break;
       }
     }
   } else if (pp.extend_in_image && contrast > 0) {
