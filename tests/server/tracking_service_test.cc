@@ -330,9 +330,19 @@ TEST(ResumeTest, AStreamOlderThanMaxConnectionAgeAnswersEverythingAndEnds) {
   writer.join();
   const grpc::Status status = stream->Finish();
   // Ended by its age (360-400 ms: about 18-20 frames at 20 ms), not by the
-  // client.
+  // client. The server's status names the reason, unless the transport
+  // reports first: the connection got its GOAWAY at about the same age, and
+  // gRPC closes it as soon as its last stream ends, while this client is
+  // still writing, so the client's next write may fail ("Broken pipe",
+  // "Socket closed") before it reads the trailers. Both are UNAVAILABLE and
+  // mean the same to a client: reconnect. (Seen 2 in 60 runs under ASan.)
   EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAVAILABLE) << status.error_message();
-  EXPECT_NE(status.error_message().find("max_connection_age"), std::string::npos);
+  const std::string& why = status.error_message();
+  const bool by_age = why.find("max_connection_age") != std::string::npos;
+  const bool by_transport = why.find("Broken pipe") != std::string::npos ||
+                            why.find("Socket closed") != std::string::npos ||
+                            why.find("Connection reset") != std::string::npos;
+  EXPECT_TRUE(by_age || by_transport) << why;
   ASSERT_GE(responses.size(), 5u);
   ASSERT_LT(responses.size(), requests.size());
   // Every frame it read was answered, in order, the last with the state.
