@@ -13,6 +13,7 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <chrono>
 #include <fstream>
 #include <iterator>
 #include <map>
@@ -337,6 +338,109 @@ void BM_TrackClip(benchmark::State& state) {
   state.SetLabel(set->name);
 }
 BENCHMARK(BM_TrackClip)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+// ---- Tracked against untracked, frame by frame (issue 36) -------------------------
+//
+// A camera's frames in order: all 250 of cordova1 (configs/caltech.json;
+// Arg 0, when ../shared/data is present) or the rendered 300-frame drive of
+// the drive test (seed 7, configs/caltech.json; Arg 1). Each iteration runs
+// the sequence untracked (Detector::Detect) and tracked (FrameTracker::
+// Process from a fresh tracker), and the counters are per-frame medians over
+// all iterations: untracked_ms and tracked_ms (the detection's total, as
+// lane detect reports it), ratio (their ratio), process_ms (the tracked
+// frame whole: detection, marking colour and type, tracker), and the share
+// of the tracked frames' lanes that were refitted (refit_share) and of the
+// refits tried that failed and were searched (refit_failed_share). Arg 1 is
+// LaneTrackingOptions::refit_frames: the default, or 0 (no refits: every
+// tracked frame searched, the path before issue 36).
+struct Sequence {
+  std::string name;
+  std::unique_ptr<Detector> detector;
+  std::vector<cv::Mat> frames;
+  std::vector<double> times_s;
+};
+
+Sequence* LoadSequence(int which) {
+  auto config = lane::LoadConfigFile(std::string(LANE_SOURCE_DIR) + "/configs/caltech.json");
+  if (!config.ok()) return nullptr;
+  auto det = Detector::Create(config->camera, config->ipm, config->detector);
+  if (!det.ok()) return nullptr;
+  auto* seq = new Sequence;
+  seq->detector = std::make_unique<Detector>(*std::move(det));
+  if (which == 0) {
+    const std::string dir = SharedDataDir("caltech-cordova1");
+    if (dir.empty()) return nullptr;
+    seq->name = "caltech-cordova1, 250 frames in order";
+    for (const std::string& f : FilesWithExtension(dir, ".png")) {
+      cv::Mat img = cv::imread(f);
+      if (img.empty()) continue;
+      seq->times_s.push_back(static_cast<double>(seq->frames.size()) / 15.0);
+      seq->frames.push_back(img);
+    }
+  } else {
+    seq->name = "rendered drive, 300 frames (seed 7)";
+    const lane::SyntheticDriveOptions options;
+    for (int i = 0; i < options.count; ++i) {
+      auto f = lane::RenderSyntheticDriveFrame(config->camera, options, 7, i);
+      if (!f.ok()) return nullptr;
+      seq->frames.push_back(f->bgr);
+      seq->times_s.push_back(f->time_s);
+    }
+  }
+  return seq->frames.empty() ? nullptr : seq;
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+void BM_TrackedVsUntracked(benchmark::State& state) {
+  static Sequence* cordova = LoadSequence(0);
+  static Sequence* drive = LoadSequence(1);
+  Sequence* seq = state.range(0) == 0 ? cordova : drive;
+  if (seq == nullptr) {
+    state.SkipWithError("caltech-cordova1 not present (../shared/data)");
+    return;
+  }
+  std::vector<double> untracked, tracked, process;
+  double refit = 0, lanes = 0, failed = 0;
+  for (auto _ : state) {
+    for (const cv::Mat& f : seq->frames) {
+      auto d = seq->detector->Detect(f);
+      untracked.push_back(d->timings.total_ms);
+    }
+    lane::LaneTrackingOptions tracking;
+    tracking.refit_frames = static_cast<int>(state.range(1));
+    lane::FrameTracker tracker(seq->detector->ipm().camera(), tracking);
+    for (size_t i = 0; i < seq->frames.size(); ++i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      auto d = tracker.Process(*seq->detector, seq->frames[i], seq->times_s[i]);
+      process.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      tracked.push_back(d->timings.total_ms);
+      refit += d->refit_lanes;
+      failed += d->refit_failed;
+      for (const lane::Lane& lane : d->lanes) lanes += lane.predicted ? 0 : 1;
+    }
+  }
+  const double u = Median(untracked), t = Median(tracked);
+  state.counters["untracked_ms"] = u;
+  state.counters["tracked_ms"] = t;
+  state.counters["ratio"] = t / u;
+  state.counters["process_ms"] = Median(process);
+  state.counters["refit_share"] = lanes > 0 ? refit / lanes : 0;
+  state.counters["refit_failed_share"] = refit + failed > 0 ? failed / (refit + failed) : 0;
+  state.SetLabel(seq->name);
+}
+BENCHMARK(BM_TrackedVsUntracked)
+    ->Args({0, lane::LaneTrackingOptions{}.refit_frames})
+    ->Args({0, 0})
+    ->Args({1, lane::LaneTrackingOptions{}.refit_frames})
+    ->Args({1, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);
 
 // Decode + detect of the clips' frames as JPEGs (driver161's own files,
 // cordova1's PNGs encoded at q90), the whole frame (range(1) = 0, DecodeImage:

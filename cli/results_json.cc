@@ -47,6 +47,7 @@ void AddLaneTrackingFields(const lane::Lane& lane, Json& l) {
   l["predicted"] = lane.predicted;
   l["color"] = lane::MarkingColorName(lane.color);
   l["type"] = lane::MarkingTypeName(lane.type);
+  l["refit"] = lane.refit;
 }
 
 Json EgoJson(const std::optional<lane::EgoLane>& ego) {
@@ -87,6 +88,7 @@ std::string DetectionJsonLine(const std::string& frame, int width, int height, l
   timing["ipm"] = Round(t.ipm_ms, 1e3);
   timing["filter"] = Round(t.filter_ms, 1e3);
   timing["threshold"] = Round(t.threshold_ms, 1e3);
+  timing["refit"] = Round(t.refit_ms, 1e3);
   timing["lines"] = Round(t.lines_ms, 1e3);
   timing["splines"] = Round(t.splines_ms, 1e3);
   timing["postprocess"] = Round(t.postprocess_ms, 1e3);

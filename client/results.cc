@@ -87,6 +87,7 @@ std::string ResponseJsonLine(const std::string& frame_name, const v1::FrameRespo
   timing["ipm"] = Round(t.ipm_ms(), 1e3);
   timing["filter"] = Round(t.filter_ms(), 1e3);
   timing["threshold"] = Round(t.threshold_ms(), 1e3);
+  timing["refit"] = Round(t.refit_ms(), 1e3);
   timing["lines"] = Round(t.lines_ms(), 1e3);
   timing["splines"] = Round(t.splines_ms(), 1e3);
   timing["postprocess"] = Round(t.postprocess_ms(), 1e3);
@@ -125,6 +126,7 @@ lane::Detection DetectionFromResponse(const v1::FrameResponse& response) {
   detection.timings.ipm_ms = t.ipm_ms();
   detection.timings.filter_ms = t.filter_ms();
   detection.timings.threshold_ms = t.threshold_ms();
+  detection.timings.refit_ms = t.refit_ms();
   detection.timings.lines_ms = t.lines_ms();
   detection.timings.splines_ms = t.splines_ms();
   detection.timings.postprocess_ms = t.postprocess_ms();

@@ -82,6 +82,7 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, Session& session,
         wire::TimingsToProto(detected->timings, timings);
         metrics.ObserveDetectorStages(detected->timings);
         metrics.ObserveLanes(detected->lanes.size());
+        metrics.CountLanePaths(*detected);
         session.frames_processed.fetch_add(1, std::memory_order_relaxed);
         *detection = *std::move(detected);
       } else {

@@ -12,6 +12,8 @@ const char* StageLabel(Stage stage) {
       return "filter";
     case Stage::kThreshold:
       return "threshold";
+    case Stage::kRefit:
+      return "refit";
     case Stage::kLines:
       return "lines";
     case Stage::kSplines:
@@ -103,6 +105,16 @@ Metrics::Metrics(prometheus::Registry& registry, const BuildInfo& build, size_t 
   resumes_[static_cast<int>(Resume::kRestored)] = &resumes.Add({{"outcome", "restored"}});
   resumes_[static_cast<int>(Resume::kKept)] = &resumes.Add({{"outcome", "kept"}});
   resumes_[static_cast<int>(Resume::kRefused)] = &resumes.Add({{"outcome", "refused"}});
+  auto& paths = prometheus::BuildCounter()
+                    .Name("lanesvc_lanes_found_total")
+                    .Help(
+                        "Lanes found, by path: search (the detector's pipeline) or refit (a "
+                        "tracked lane refitted in its predicted window); refit_failed: "
+                        "refits tried that fell back to the search.")
+                    .Register(registry);
+  lanes_searched_ = &paths.Add({{"path", "search"}});
+  lanes_refit_ = &paths.Add({{"path", "refit"}});
+  refits_failed_ = &paths.Add({{"path", "refit_failed"}});
   auto& stages = prometheus::BuildHistogram()
                      .Name("lanesvc_stage_duration_seconds")
                      .Help("Time spent in each stage of a frame: decode, then the detector's.")
@@ -133,9 +145,21 @@ void Metrics::ObserveDetectorStages(const lane::StageTimings& t) {
   ObserveStage(Stage::kIpm, t.ipm_ms * 1e-3);
   ObserveStage(Stage::kFilter, t.filter_ms * 1e-3);
   ObserveStage(Stage::kThreshold, t.threshold_ms * 1e-3);
+  if (t.refit_ms > 0) ObserveStage(Stage::kRefit, t.refit_ms * 1e-3);
   ObserveStage(Stage::kLines, t.lines_ms * 1e-3);
   ObserveStage(Stage::kSplines, t.splines_ms * 1e-3);
   ObserveStage(Stage::kPostprocess, t.postprocess_ms * 1e-3);
+}
+
+void Metrics::CountLanePaths(const lane::Detection& detection) {
+  double refit = 0, searched = 0;
+  for (const lane::Lane& lane : detection.lanes) {
+    if (lane.predicted || lane.inferred) continue;
+    (lane.refit ? refit : searched) += 1;
+  }
+  lanes_searched_->Increment(searched);
+  lanes_refit_->Increment(refit);
+  refits_failed_->Increment(detection.refit_failed);
 }
 
 Metrics::CameraSeries& Metrics::CameraSeriesFor(const std::string& camera_id) {

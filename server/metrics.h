@@ -35,8 +35,8 @@ struct BuildInfo {
 };
 
 // The stages of lanesvc_stage_duration_seconds{stage}.
-enum class Stage { kDecode, kIpm, kFilter, kThreshold, kLines, kSplines, kPostprocess };
-inline constexpr int kNumStages = 7;
+enum class Stage { kDecode, kIpm, kFilter, kThreshold, kRefit, kLines, kSplines, kPostprocess };
+inline constexpr int kNumStages = 8;
 const char* StageLabel(Stage stage);
 
 class Metrics {
@@ -89,6 +89,11 @@ class Metrics {
     lanes_per_frame_.Observe(static_cast<double>(lanes));
     if (lanes == 0) zero_lane_frames_.Increment();
   }
+  // lanesvc_lanes_found_total: the lanes a frame's detection found, by
+  // path: search (the paper's pipeline) or refit (a tracked lane refitted in
+  // its window, docs/tracking.md); refit_failed counts the refits tried
+  // that fell back to the search.
+  void CountLanePaths(const lane::Detection& detection);
   // lanesvc_resume_state_bytes: each resume state sent (what tracking
   // across replicas costs on the wire).
   void ObserveResumeStateBytes(size_t bytes) {
@@ -112,6 +117,9 @@ class Metrics {
   prometheus::Counter& zero_lane_frames_;
   prometheus::Histogram& resume_state_bytes_;
   std::array<prometheus::Counter*, 3> resumes_{};
+  prometheus::Counter* lanes_searched_ = nullptr;
+  prometheus::Counter* lanes_refit_ = nullptr;
+  prometheus::Counter* refits_failed_ = nullptr;
   GrpcMetrics grpc_;
   struct CameraSeries {
     std::array<prometheus::Counter*, 4> frames{};

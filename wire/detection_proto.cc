@@ -53,6 +53,7 @@ void IdentityToProto(const lane::Lane& lane, v1::Lane* l) {
   l->set_type(static_cast<v1::MarkingType>(static_cast<int>(lane.type)));
   l->set_predicted(lane.predicted);
   l->set_inferred(lane.inferred);
+  l->set_refit(lane.refit);
 }
 
 void LaneToProto(const lane::Lane& lane, v1::Lane* l) {
@@ -101,6 +102,7 @@ std::vector<lane::Lane> LanesFromProto(const v1::FrameResponse& response) {
     lane.confirmed = l.confirmed();
     lane.predicted = l.predicted();
     lane.inferred = l.inferred();
+    lane.refit = l.refit();
     lane.color = ColorFromProto(l.color());
     lane.type = l.type() >= v1::MARKING_TYPE_UNKNOWN && l.type() <= v1::MARKING_TYPE_ROAD_EDGE
                     ? static_cast<lane::MarkingType>(static_cast<int>(l.type()))
@@ -131,6 +133,7 @@ void TimingsToProto(const lane::StageTimings& timings, v1::StageTimings* out) {
   out->set_ipm_ms(timings.ipm_ms);
   out->set_filter_ms(timings.filter_ms);
   out->set_threshold_ms(timings.threshold_ms);
+  out->set_refit_ms(timings.refit_ms);
   out->set_lines_ms(timings.lines_ms);
   out->set_splines_ms(timings.splines_ms);
   out->set_postprocess_ms(timings.postprocess_ms);

@@ -400,6 +400,154 @@ TEST(TrackingPriorTest, ATrackThatIsNotParallelToTheOthersIsNotConfirmed) {
   EXPECT_TRUE(out[3].confirmed);
 }
 
+// --- Refitted lanes (DetectionPrior::refit, issue 36) ---
+
+// A window with the tracked curve of `lane` (its ground Bezier's fit),
+// shifted `shift_m` sideways, which may be refitted.
+DetectionPrior::Window RefitWindowAt(const Lane& lane, const IpmMapping& ipm, double shift_m) {
+  std::optional<GroundCurve> curve = FitGroundCurve(lane);
+  EXPECT_TRUE(curve.has_value());
+  curve->coefficients(0) += shift_m;
+  DetectionPrior::Window w;
+  const Eigen::Vector2d a = ipm.GroundToIpm({curve->X(ipm.y_min()), ipm.y_min()});
+  const Eigen::Vector2d b = ipm.GroundToIpm({curve->X(ipm.y_max()), ipm.y_max()});
+  w.line = *MakeIpmLine(a, b - a, ipm.height());
+  w.half_width_m = 0.4;
+  w.curve = DetectionPrior::Curve{curve->coefficients, curve->y_near, curve->y_far};
+  w.refit = true;
+  return w;
+}
+
+double GroundXAt(const Lane& lane, double y) {
+  const std::optional<GroundCurve> curve = FitGroundCurve(lane);
+  return curve ? curve->X(y) : std::nan("");
+}
+
+// The ground x at `y` of the frame's true boundary nearest `x` there.
+double NearestTrueX(const SyntheticFrame& frame, const CameraModel& camera, double y, double x) {
+  double nearest = std::nan("");
+  for (const SyntheticBoundary& b : frame.boundaries) {
+    const std::optional<Bezier> ground = MapSpline(
+        Bezier{b.image}, 41, [&](const Eigen::Vector2d& p) { return camera.ImageToGround(p); });
+    if (!ground) continue;
+    Lane lane;
+    lane.ground = ground->p;
+    const double bx = GroundXAt(lane, y);
+    if (std::isnan(nearest) || std::abs(bx - x) < std::abs(nearest - x)) nearest = bx;
+  }
+  return nearest;
+}
+
+TEST(TrackingRefitTest, TrackedLanesAreRefittedAndAWrongWindowIsSearched) {
+  absl::StatusOr<Config> config = LoadConfigFile(LANE_SOURCE_DIR "/configs/caltech.json");
+  ASSERT_TRUE(config.ok()) << config.status();
+  const SyntheticDriveOptions drive;
+  absl::StatusOr<SyntheticFrame> frame = RenderSyntheticDriveFrame(config->camera, drive, 7, 0);
+  ASSERT_TRUE(frame.ok()) << frame.status();
+  absl::StatusOr<Detector> detector =
+      Detector::Create(config->camera, config->ipm, config->detector);
+  ASSERT_TRUE(detector.ok()) << detector.status();
+  const IpmMapping& ipm = detector->ipm();
+  absl::StatusOr<Detection> searched = detector->Detect(frame->bgr);
+  ASSERT_TRUE(searched.ok());
+  const size_t n = searched->lanes.size();
+  ASSERT_GE(n, 3u);
+  const double y_mid = 0.5 * (ipm.y_min() + ipm.y_max());
+
+  // Every lane's window, 0.15 m off its lane (the tracker's prediction is
+  // never exact): each lane is refitted onto its marking, none searched
+  // again.
+  DetectionPrior prior;
+  prior.refit = true;
+  for (const Lane& lane : searched->lanes) prior.windows.push_back(RefitWindowAt(lane, ipm, 0.15));
+  absl::StatusOr<Detection> refitted = detector->Detect(frame->bgr, &prior);
+  ASSERT_TRUE(refitted.ok());
+  EXPECT_EQ(refitted->refit_lanes, static_cast<int>(n));
+  EXPECT_EQ(refitted->refit_failed, 0);
+  ASSERT_EQ(refitted->lanes.size(), n);
+  // On the painted line: within 8 cm of the true boundary at mid view, and
+  // nearly as close as the search's lane (or closer: the third boundary's
+  // search is 18 cm off, its refit 2 cm).
+  for (size_t i = 0; i < n; ++i) {
+    EXPECT_TRUE(refitted->lanes[i].refit) << i;
+    const double refit_x = GroundXAt(refitted->lanes[i], y_mid);
+    const double truth = NearestTrueX(*frame, config->camera, y_mid, refit_x);
+    EXPECT_NEAR(refit_x, truth, 0.08) << "lane " << i;
+    EXPECT_LE(std::abs(refit_x - truth),
+              std::abs(GroundXAt(searched->lanes[i], y_mid) - truth) + 0.03)
+        << "lane " << i;
+  }
+  EXPECT_GT(refitted->timings.refit_ms, 0.0);
+
+  // The first window 1.8 m off, on bare asphalt: its refit fails, and its
+  // lane is found by the search instead, once.
+  DetectionPrior wrong = prior;
+  wrong.windows[0] = RefitWindowAt(searched->lanes[0], ipm, 1.8);
+  absl::StatusOr<Detection> mixed = detector->Detect(frame->bgr, &wrong);
+  ASSERT_TRUE(mixed.ok());
+  EXPECT_EQ(mixed->refit_lanes, static_cast<int>(n) - 1);
+  EXPECT_EQ(mixed->refit_failed, 1);
+  ASSERT_EQ(mixed->lanes.size(), n);
+  EXPECT_FALSE(mixed->lanes[0].refit);
+  EXPECT_NEAR(GroundXAt(mixed->lanes[0], y_mid), GroundXAt(searched->lanes[0], y_mid), 0.15);
+
+  // Without `refit` the windows are only searched.
+  prior.refit = false;
+  absl::StatusOr<Detection> plain = detector->Detect(frame->bgr, &prior);
+  ASSERT_TRUE(plain.ok());
+  EXPECT_EQ(plain->refit_lanes, 0);
+  EXPECT_EQ(plain->lanes.size(), n);
+  for (const Lane& lane : plain->lanes) EXPECT_FALSE(lane.refit);
+}
+
+// A FrameTracker refits its confirmed lanes for at most refit_frames frames
+// in a row, searches the frame after, and after a reset; the ids hold.
+TEST(TrackingRefitTest, AFrameTrackerRefitsBetweenFullSearches) {
+  absl::StatusOr<Config> config = LoadConfigFile(LANE_SOURCE_DIR "/configs/caltech.json");
+  ASSERT_TRUE(config.ok()) << config.status();
+  absl::StatusOr<Detector> detector =
+      Detector::Create(config->camera, config->ipm, config->detector);
+  ASSERT_TRUE(detector.ok()) << detector.status();
+  const SyntheticDriveOptions drive;
+  for (const int refit_frames : {0, 2}) {
+    LaneTrackingOptions options;
+    options.refit_frames = refit_frames;
+    FrameTracker tracker(config->camera, options);
+    int in_row = 0, frames_with_refits = 0;
+    std::vector<int> ids_before;
+    for (int i = 0; i < 24; ++i) {
+      if (i == 16) tracker.Reset();
+      absl::StatusOr<SyntheticFrame> frame = RenderSyntheticDriveFrame(config->camera, drive, 7, i);
+      ASSERT_TRUE(frame.ok());
+      absl::StatusOr<Detection> d = tracker.Process(*detector, frame->bgr, frame->time_s);
+      ASSERT_TRUE(d.ok());
+      int refit = 0;
+      for (const Lane& lane : d->lanes) refit += lane.refit;
+      EXPECT_EQ(refit, d->refit_lanes) << "frame " << i;
+      if (i == 0 || i == 16) {
+        EXPECT_EQ(d->refit_lanes, 0) << "frame " << i;
+      }
+      in_row = d->refit_lanes > 0 ? in_row + 1 : 0;
+      frames_with_refits += d->refit_lanes > 0;
+      EXPECT_LE(in_row, refit_frames) << "frame " << i;
+      // Frames 8-15 hold the same confirmed ids, refitted or searched.
+      std::vector<int> ids;
+      for (const Lane& lane : d->lanes) {
+        if (lane.confirmed) ids.push_back(lane.id);
+      }
+      if (i == 8) ids_before = ids;
+      if (i > 8 && i < 16) {
+        EXPECT_EQ(ids, ids_before) << "frame " << i;
+      }
+    }
+    if (refit_frames == 0) {
+      EXPECT_EQ(frames_with_refits, 0);
+    } else {
+      EXPECT_GE(frames_with_refits, 8);  // of 24 frames, the first 3 to confirm
+    }
+  }
+}
+
 // --- Resume state (lane/track/tracker_state.h) ---
 
 // Three parallel lanes of a gentle bend, with noise; the middle one is

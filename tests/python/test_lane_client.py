@@ -165,9 +165,11 @@ def ground_offsets(response):
     return [round(lane.ground.control_points[0].x, 1) for lane in response.lanes]
 
 
-def scores_of(response):
-    """The detected lanes' scores, left to right (without predicted lanes)."""
-    return [round(lane.score, 6) for lane in response.lanes if not lane.predicted]
+def lateral_positions(response):
+    """The detected lanes' mean lateral offsets on the ground (the mean x of
+    their control points, metres), left to right, without predicted lanes."""
+    return sorted(sum(p.x for p in lane.ground.control_points) / 4
+                  for lane in response.lanes if not lane.predicted)
 
 
 def lanes_of(response):
@@ -392,12 +394,17 @@ class ClientTest(unittest.TestCase):
         self.assertEqual([r.frame_id for r in responses], list(range(len(frames))))
         for response in responses:
             self.assert_lanes(response)
-        # The same frame gives the same detections whenever it is sent: the
-        # same lanes with the same scores. (Their control points may differ:
-        # a stream is tracked, and a confirmed lane is drawn from its track's
-        # filtered curve, which the frames in between moved.)
-        self.assertEqual(scores_of(responses[0]), scores_of(responses[5]))
-        self.assertTrue(scores_of(responses[0]))
+        # The same frame gives the same lanes whenever it is sent: as many,
+        # in the same places. (Not the same control points or scores: a
+        # stream is tracked, a confirmed lane is drawn from its track's
+        # filtered curve, which the frames in between moved, and it may be
+        # refitted in its window instead of searched for, docs/tracking.md.)
+        first, again = lateral_positions(responses[0]), lateral_positions(responses[5])
+        self.assertTrue(first)
+        self.assertEqual(len(first), len(again))
+        for a, b in zip(first, again):
+            self.assertLess(abs(a - b), 0.35)
+        self.assertTrue(any(lane.refit for r in responses for lane in r.lanes))
         self.assertEqual((stream.frames, stream.connections, stream.resent), (len(frames), 1, 0))
 
     def test_stream_frame_ids_and_arrays(self):

@@ -28,7 +28,7 @@ TEST(MetricsTest, FamiliesOnTheInjectedRegistry) {
   }
   // Every stage and result exists from the start (at 0).
   for (const char* stage :
-       {"decode", "ipm", "filter", "threshold", "lines", "splines", "postprocess"}) {
+       {"decode", "ipm", "filter", "threshold", "refit", "lines", "splines", "postprocess"}) {
     bool found = false;
     for (const prometheus::MetricFamily& f : registry.Collect()) {
       if (f.name != "lanesvc_stage_duration_seconds") continue;

@@ -279,12 +279,23 @@ double Detector::CameraColumn() const {
 }
 
 std::vector<IpmLine> Detector::FindLines(const cv::Mat& thresholded, std::mt19937_64& rng,
-                                         std::vector<ColumnPeak>* peaks) const {
+                                         std::vector<ColumnPeak>* peaks,
+                                         const std::vector<ColumnSpan>& skip) const {
   const DetectorOptions& opt = options_;
   const double mpp_x = ipm_.metres_per_px_x();
   *peaks = FindColumnPeaks(ColumnProfile(thresholded, opt.hough.smooth_sigma_px),
                            opt.hough.min_peak, opt.hough.group_distance_m / mpp_x);
   if (opt.mode == Mode::kTwo) *peaks = SelectEgoPair(*peaks, CameraColumn(), mpp_x, opt.two_lanes);
+  // After the grouping and the ego pair, as without `skip`: only the peaks
+  // of lanes found otherwise go.
+  peaks->erase(std::remove_if(peaks->begin(), peaks->end(),
+                              [&](const ColumnPeak& p) {
+                                return std::any_of(skip.begin(), skip.end(),
+                                                   [&](const ColumnSpan& s) {
+                                                     return std::abs(p.x - s.centre) <= s.half;
+                                                   });
+                              }),
+               peaks->end());
   std::vector<IpmLine> lines;
   for (const auto& peak : *peaks) {
     if (auto line =
@@ -507,6 +518,157 @@ cv::Mat Detector::ThresholdInWindows(const cv::Mat& filtered, const DetectionPri
   return out;
 }
 
+namespace {
+
+// Detector::Refit's limits. What a refit must show before it replaces the
+// search: support in at least this share of the window's rows (a dashed
+// line's dashes cover a quarter of its length, and the view can fall on a
+// gap but for one dash) and over at least this many metres along the
+// road; and points that lie on one line, within this share of a marking's
+// width (RMS) of the refitted curve.
+constexpr double kRefitMinRowShare = 0.15;
+constexpr double kRefitMinSupportM = 1.5;
+constexpr double kRefitMaxRmsMarkings = 0.75;
+// A turn (heading change) is fitted only when the support spans at least
+// this share of the rows; otherwise only a shift.
+constexpr double kRefitMinSpanForTurn = 0.4;
+
+// One row's response in a refit window: the column offset from the
+// prediction (px) and its weight.
+struct RefitPoint {
+  double row = 0;
+  double dx = 0;
+  double weight = 0;
+};
+
+// Weighted least squares dx = a + b (row - mean row) over `points` (b = 0
+// without `turn`), each point's weight times `keep`. Returns {a, b, mean}.
+std::array<double, 3> FitShift(const std::vector<RefitPoint>& points, const std::vector<char>& keep,
+                               bool turn) {
+  double w = 0, wr = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!keep[i]) continue;
+    w += points[i].weight;
+    wr += points[i].weight * points[i].row;
+  }
+  const double mean = wr / w;
+  double wx = 0, wrr = 0, wrx = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!keep[i]) continue;
+    const double r = points[i].row - mean;
+    wx += points[i].weight * points[i].dx;
+    wrr += points[i].weight * r * r;
+    wrx += points[i].weight * r * points[i].dx;
+  }
+  const double b = turn && wrr > 1e-9 ? wrx / wrr : 0.0;
+  return {wx / w, b, mean};
+}
+
+}  // namespace
+
+std::optional<Lane> Detector::RefitWindow(const cv::Mat& thresholded,
+                                          const DetectionPrior::Window& w) const {
+  if (!w.curve) return std::nullopt;
+  const DetectionPrior::Curve& curve = *w.curve;
+  const double mpp_x = ipm_.metres_per_px_x();
+  const double mpp_y = ipm_.metres_per_px_y();
+  const double max_rms_px = kRefitMaxRmsMarkings * options_.filter.marking_width_m / mpp_x;
+  auto row_of = [&](double y) { return (ipm_.y_max() - y) / mpp_y - 0.5; };
+  const double y0 = std::max(curve.y_near, ipm_.y_min());
+  const double y1 = std::min(curve.y_far, ipm_.y_max());
+  const int r0 = std::max(0, static_cast<int>(std::ceil(row_of(y1))));
+  const int r1 = std::min(thresholded.rows - 1, static_cast<int>(std::floor(row_of(y0))));
+  const int rows = r1 - r0 + 1;
+  if (rows <= 0) return std::nullopt;
+  const double half_px =
+      std::clamp(w.half_width_m, 0.05, options_.line_ransac.window_half_width_m) / mpp_x;
+  std::vector<RefitPoint> points;
+  for (int r = r0; r <= r1; ++r) {
+    const double y = ipm_.y_max() - (r + 0.5) * mpp_y;
+    const double xp = (curve.X(y) - ipm_.x_min()) / mpp_x - 0.5;
+    const int c0 = std::max(0, static_cast<int>(std::ceil(xp - half_px)));
+    const int c1 = std::min(thresholded.cols - 1, static_cast<int>(std::floor(xp + half_px)));
+    const float* v = thresholded.ptr<float>(r);
+    int best = -1;
+    for (int c = c0; c <= c1; ++c) {
+      if (v[c] > 0 && (best < 0 || v[c] > v[best])) best = c;
+    }
+    if (best < 0) continue;
+    // The marking's centre: the response's centroid around its peak.
+    double sw = 0, swx = 0;
+    for (int c = std::max(c0, best - 2); c <= std::min(c1, best + 2); ++c) {
+      if (v[c] <= 0) continue;
+      sw += v[c];
+      swx += v[c] * c;
+    }
+    points.push_back({static_cast<double>(r), swx / sw - xp, static_cast<double>(v[best])});
+  }
+  auto supported = [&](size_t n) {
+    return static_cast<double>(n) >= kRefitMinRowShare * rows &&
+           static_cast<double>(n) * mpp_y >= kRefitMinSupportM;
+  };
+  if (!supported(points.size())) return std::nullopt;
+  const bool turn = points.back().row - points.front().row >= kRefitMinSpanForTurn * (rows - 1);
+  std::vector<char> keep(points.size(), 1);
+  std::array<double, 3> fit = FitShift(points, keep, turn);
+  auto rms = [&]() {
+    double sw = 0, swe = 0;
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (!keep[i]) continue;
+      const double e = points[i].dx - fit[0] - fit[1] * (points[i].row - fit[2]);
+      sw += points[i].weight;
+      swe += points[i].weight * e * e;
+    }
+    return std::sqrt(swe / sw);
+  };
+  // Once more without the points farther than two RMS (at least a marking's
+  // width) from the first fit: a stray blob in the window.
+  const double cut = std::max(2.0 * rms(), max_rms_px / kRefitMaxRmsMarkings);
+  size_t kept = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const double e = points[i].dx - fit[0] - fit[1] * (points[i].row - fit[2]);
+    keep[i] = std::abs(e) <= cut;
+    kept += keep[i];
+  }
+  if (!supported(kept)) return std::nullopt;
+  fit = FitShift(points, keep, turn);
+  if (rms() > max_rms_px) return std::nullopt;
+
+  // dx (px) is linear in the row and the row in y: a shift and a turn of
+  // the curve on the ground.
+  DetectionPrior::Curve refit = curve;
+  refit.coefficients(0) += mpp_x * (fit[0] + fit[1] * (row_of(0.0) - fit[2]));
+  refit.coefficients(1) += -mpp_x * fit[1] / mpp_y;
+  // Drawn over the tracked extent, far end first as the search's lanes.
+  constexpr int kSamples = 12;
+  const CameraModel& camera = ipm_.camera();
+  const double horizon = camera.HorizonRow();
+  std::vector<Eigen::Vector2d> ground, image, top;
+  for (int i = 0; i < kSamples; ++i) {
+    const double y = refit.y_far + (refit.y_near - refit.y_far) * i / (kSamples - 1);
+    const Eigen::Vector2d g(refit.X(y), y);
+    const Eigen::Vector2d p = camera.GroundToImage(g);
+    if (!p.allFinite() || p.y() <= horizon) continue;
+    ground.push_back(g);
+    image.push_back(p);
+    top.push_back(ipm_.GroundToIpm(g));
+  }
+  if (ground.size() < 4) return std::nullopt;
+  const auto g = FitBezier(ground);
+  const auto m = FitBezier(image);
+  const auto tv = FitBezier(top);
+  if (!g || !m || !tv) return std::nullopt;
+  Lane lane;
+  lane.ground = g->p;
+  lane.image = m->p;
+  lane.ipm = tv->p;
+  lane.refit = true;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (keep[i]) lane.score += points[i].weight;
+  }
+  return lane;
+}
+
 absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
                                            const DetectionPrior* prior) const {
   if (absl::Status s = CheckFrame(frame); !s.ok()) return s;
@@ -536,9 +698,41 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
   float threshold = 0;
   const cv::Mat thresholded = Threshold(filtered, &threshold);
   lap(time.threshold_ms);
+  // 3b. Tracked frames (prior->refit): each confirmed lane seen last frame
+  // refitted in its window, which the search then does not see; the other
+  // windows are searched below.
+  std::vector<Lane> refitted;
+  std::vector<double> refitted_half_m;       // their windows' half widths
+  std::vector<ColumnSpan> refitted_columns;  // the Hough's peaks there are theirs
+  DetectionPrior rest;
+  if (prior != nullptr && prior->refit) {
+    const double mpp_x = ipm_.metres_per_px_x();
+    for (const DetectionPrior::Window& w : prior->windows) {
+      std::optional<Lane> lane = w.refit ? RefitWindow(thresholded, w) : std::nullopt;
+      if (!lane) {
+        det.refit_failed += w.refit && w.curve.has_value();
+        rest.windows.push_back(w);
+        continue;
+      }
+      const double half_m = std::clamp(w.half_width_m, 0.05, opt.line_ransac.window_half_width_m);
+      refitted.push_back(*lane);
+      refitted_half_m.push_back(half_m);
+      // The column a column sum puts the lane at: its mean over the rows.
+      double sum = 0;
+      for (int r = 0; r < thresholded.rows; ++r) {
+        const double y = ipm_.y_max() - (r + 0.5) * ipm_.metres_per_px_y();
+        sum += (w.curve->X(y) - ipm_.x_min()) / mpp_x - 0.5;
+      }
+      refitted_columns.push_back(
+          {sum / thresholded.rows, (half_m + opt.filter.marking_width_m) / mpp_x});
+    }
+    prior = &rest;
+    det.refit_lanes = static_cast<int>(refitted.size());
+    lap(time.refit_ms);
+  }
   // 4-5. Column-sum Hough (2-lanes: the ego pair), then RANSAC lines.
   std::vector<ColumnPeak> peaks;
-  std::vector<IpmLine> lines = FindLines(thresholded, rng, &peaks);
+  std::vector<IpmLine> lines = FindLines(thresholded, rng, &peaks, refitted_columns);
   // 4b. A tracker's predicted lanes that the Hough missed: their windows.
   const double spline_window_px = opt.spline_ransac.window_half_width_m / ipm_.metres_per_px_x();
   std::vector<double> spline_half_px(lines.size(), spline_window_px);
@@ -557,6 +751,24 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
   det.lanes =
       ToLanes(PostprocessCandidates(candidates, images, opt.postprocess, opt.filter.marking_width_m,
                                     opt.spline_ransac.merge_distance_px));
+  if (!refitted.empty()) {
+    // What the search found along a refitted lane (its extension beyond the
+    // masked window) is that lane again.
+    det.lanes.erase(std::remove_if(det.lanes.begin(), det.lanes.end(),
+                                   [&](const Lane& lane) {
+                                     for (size_t i = 0; i < refitted.size(); ++i) {
+                                       if (MeanNearestDistanceBelow(Bezier{lane.ground},
+                                                                    Bezier{refitted[i].ground},
+                                                                    refitted_half_m[i])) {
+                                         return true;
+                                       }
+                                     }
+                                     return false;
+                                   }),
+                    det.lanes.end());
+    det.lanes.insert(det.lanes.end(), refitted.begin(), refitted.end());
+    SortLeftToRight(det.lanes);
+  }
   // 7b. Where the road model puts a boundary the first pass missed: search
   // its window again, and post-process everything once more if it holds a
   // line.

@@ -16,7 +16,9 @@ FrameTracker::FrameTracker(const CameraModel& camera, LaneTrackingOptions lanes,
 
 DetectionPrior FrameTracker::Prior(const Detector& detector) const {
   absl::MutexLock lock(&mu_);
-  return tracker_.Prior(detector.ipm());
+  DetectionPrior prior = tracker_.Prior(detector.ipm());
+  prior.refit = refits_in_row_ < tracker_.lane_tracker().options().refit_frames;
+  return prior;
 }
 
 absl::StatusOr<Detection> FrameTracker::Measure(const Detector& detector,
@@ -38,6 +40,7 @@ void FrameTracker::Commit(const Detector& detector, Detection& detection,
   absl::MutexLock lock(&mu_);
   detection.ego = tracker_.Track(detection.lanes, time_s, &detector.ipm());
   ++frames_;
+  refits_in_row_ = detection.refit_lanes > 0 ? refits_in_row_ + 1 : 0;
 }
 
 absl::StatusOr<Detection> FrameTracker::Process(const Detector& detector, const cv::Mat& frame,
@@ -50,6 +53,7 @@ absl::StatusOr<Detection> FrameTracker::Process(const Detector& detector, const 
 void FrameTracker::Reset() {
   absl::MutexLock lock(&mu_);
   tracker_.Reset();
+  refits_in_row_ = kSearchNext;
 }
 
 TrackerState FrameTracker::Save() const {
@@ -68,6 +72,7 @@ absl::StatusOr<bool> FrameTracker::Resume(const TrackerState& state) {
   }
   if (state.lineage == lineage_ && state.frames <= frames_) return false;
   tracker_.Restore(state);
+  refits_in_row_ = kSearchNext;
   lineage_ = state.lineage;
   frames_ = state.frames;
   return true;

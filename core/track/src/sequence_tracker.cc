@@ -175,6 +175,9 @@ DetectionPrior SequenceTracker::Prior(const IpmMapping& ipm) const {
     const double var =
         j.dot(track.covariance * j) + o.offset_noise * o.offset_noise * dt * (1 + track.misses);
     w.half_width_m = 0.3 + 2.5 * std::sqrt(std::max(0.0, var));
+    w.curve =
+        DetectionPrior::Curve{track.curve.coefficients, track.curve.y_near, track.curve.y_far};
+    w.refit = track.misses == 0;
     prior.windows.push_back(w);
   }
   return prior;

@@ -95,6 +95,9 @@ struct Lane {
   // half-way between two found boundaries two lane widths apart, where a
   // vehicle hides it. Its score is the weaker neighbour's.
   bool inferred = false;
+  // With tracking: refitted in its tracked window (DetectionPrior::refit),
+  // not found by the search.
+  bool refit = false;
   MarkingColor color = MarkingColor::kUnknown;
   MarkingType type = MarkingType::kUnknown;
 };
@@ -124,6 +127,7 @@ struct StageTimings {
   double ipm_ms = 0;
   double filter_ms = 0;
   double threshold_ms = 0;
+  double refit_ms = 0;  // tracked lanes refitted in their windows (step 3b)
   double lines_ms = 0;  // column-sum Hough and RANSAC lines
   double splines_ms = 0;
   double postprocess_ms = 0;
@@ -146,6 +150,11 @@ struct Detection {
   std::optional<EgoLane> ego;
   StageTimings timings;
   std::optional<Intermediates> debug;
+  // With a prior that allows refits: how many of `lanes` were refitted in
+  // their tracked windows, and how many such windows failed to refit and
+  // were searched instead (Detect's step 3b).
+  int refit_lanes = 0;
+  int refit_failed = 0;
 };
 
 // What the detector reads of a frame: rows [top, bottom) (every column) and
@@ -174,12 +183,32 @@ struct FrameNeeds {
 // found again. The window still needs evidence: the line and spline RANSAC
 // and the post-processing checks decide on it as on any other candidate,
 // and nothing is added where the window is empty.
+//
+// With `refit` set, a window whose `refit` is set (a confirmed lane seen in
+// the last frame) is not searched: its lane is refitted to this frame's
+// response near its predicted curve (a shift and a turn, by weighted least
+// squares over each row's localised peak), and the window is masked out of
+// the search for the other lanes. A window that does not refit (too little
+// support, or points off one curve) is searched as without `refit`.
 struct DetectionPrior {
+  // A tracked lane's predicted curve on the ground: x(y) = c0 + c1 y +
+  // c2 y^2 / 2 (metres; x right, y ahead) over [y_near, y_far].
+  struct Curve {
+    Eigen::Vector3d coefficients = Eigen::Vector3d::Zero();
+    double y_near = 0;
+    double y_far = 0;
+    double X(double y) const {
+      return coefficients(0) + coefficients(1) * y + 0.5 * coefficients(2) * y * y;
+    }
+  };
   struct Window {
     IpmLine line;  // top on row 0, bottom on the last row of the top view
     double half_width_m = 0.5;
+    std::optional<Curve> curve;  // the tracked curve, for a refit
+    bool refit = false;          // may be refitted (with DetectionPrior::refit)
   };
   std::vector<Window> windows;
+  bool refit = false;
 };
 
 // Immutable after Create; Detect is const and safe to call from many threads.
@@ -217,8 +246,16 @@ class Detector {
   cv::Mat TopView(const ChannelView& channel, cv::Mat* void_mask) const;
   cv::Mat Filter(const cv::Mat& top_view, const cv::Mat& void_mask) const;
   cv::Mat Threshold(const cv::Mat& filtered, float* threshold) const;
+  // Top-view columns centre +- half (px).
+  struct ColumnSpan {
+    double centre = 0;
+    double half = 0;
+  };
+  // `skip`: the column peaks inside these spans are not searched (the
+  // refitted lanes').
   std::vector<IpmLine> FindLines(const cv::Mat& thresholded, std::mt19937_64& rng,
-                                 std::vector<ColumnPeak>* peaks) const;
+                                 std::vector<ColumnPeak>* peaks,
+                                 const std::vector<ColumnSpan>& skip) const;
   // Lines in the prior's windows that `lines` does not already hold; the
   // half width (px) of the spline window around each is appended to
   // `half_widths_px`: its prior window, at most the usual spline window.
@@ -245,6 +282,9 @@ class Detector {
   // (and zero outside): a faint line between strong ones stands out there.
   cv::Mat ThresholdInWindows(const cv::Mat& filtered, const DetectionPrior& windows,
                              float frame_threshold) const;
+  // Step 3b: the lane of a refit window (DetectionPrior), or none.
+  std::optional<Lane> RefitWindow(const cv::Mat& thresholded,
+                                  const DetectionPrior::Window& window) const;
   // The camera's column in the top view (x = 0 at its near edge).
   double CameraColumn() const;
 

@@ -91,6 +91,11 @@ class FrameTracker {
   // taken over from a restored state. `frames_`: frames committed in it.
   uint64_t lineage_ ABSL_GUARDED_BY(mu_);
   uint64_t frames_ ABSL_GUARDED_BY(mu_) = 0;
+  // Frames committed in a row with refitted lanes (LaneTrackingOptions::
+  // refit_frames); starts at the limit, so that the first frame after a
+  // reset or a resume is searched in full.
+  static constexpr int kSearchNext = 1 << 20;
+  int refits_in_row_ ABSL_GUARDED_BY(mu_) = kSearchNext;
 };
 
 }  // namespace lane

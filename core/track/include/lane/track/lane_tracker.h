@@ -99,6 +99,12 @@ struct LaneTrackingOptions {
   // nor searched for: the verge or a curb seen at a slant, a car's side.
   // Degrees; 0 turns the check off.
   double parallel_max_deg = 4.0;
+  // Tracked frames' shortcut (DetectionPrior::refit, docs/tracking.md): a
+  // confirmed lane seen in the last frame is refitted in its window instead
+  // of searched for, in at most this many frames in a row; then a frame is
+  // searched in full, which also re-checks the lanes and renews their
+  // extents. 0: every frame is searched.
+  int refit_frames = 5;
 };
 
 struct Track {
