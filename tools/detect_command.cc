@@ -169,6 +169,11 @@ class DetectRun {
          << '\n';
     out_.flush();
     total_lanes_ += static_cast<long>(detection->lanes.size());
+    for (const lane::Lane& lane : detection->lanes) {
+      if (lane.predicted || lane.inferred) continue;
+      ++(lane.refit ? refit_lanes_ : searched_lanes_);
+    }
+    refits_failed_ += detection->refit_failed;
     total_ms_.push_back(detection->timings.total_ms);
     const std::string details = absl::StrFormat("detect %.2f ms, decode %.2f ms",
                                                 detection->timings.total_ms, frame.decode_ms);
@@ -213,6 +218,15 @@ class DetectRun {
                    "lane detect: %d frames, %d failed, %.2f lanes/frame, median total %.2f ms\n",
                    frames_, failures_, ok_frames > 0 ? double(total_lanes_) / ok_frames : 0.0,
                    Median(total_ms_));
+      if (tracker_) {
+        // What tracking saved (docs/tracking.md, "Refitted lanes").
+        const long found = refit_lanes_ + searched_lanes_;
+        std::fprintf(stderr,
+                     "lane detect: tracked lanes: %ld refitted in their windows (%.1f %%), %ld "
+                     "searched; %ld refits fell back to the search\n",
+                     refit_lanes_, found > 0 ? 100.0 * double(refit_lanes_) / double(found) : 0.0,
+                     searched_lanes_, refits_failed_);
+      }
     }
     if (frames_ == 0) return Failure("detect", "the inputs contain no frames");
     return failures_ > 0 || overlay_failed_ ? kExitFailure : kExitOk;
@@ -250,6 +264,9 @@ class DetectRun {
   int failures_ = 0;
   bool overlay_failed_ = false;
   long total_lanes_ = 0;
+  long refit_lanes_ = 0;  // tracked: lanes refitted, and found by the search
+  long searched_lanes_ = 0;
+  long refits_failed_ = 0;
   std::vector<double> total_ms_;
   std::set<std::string> used_stems_;
   std::optional<lane::FrameTracker> tracker_;

@@ -187,8 +187,16 @@ function(drive_rows text column out)
   endforeach()
   set(${out} "${kept}" PARENT_SCOPE)
 endfunction()
-run(0 drive_detect detect --config "${CONFIG}" --track -q --output "${OUT}/drive.jsonl"
+run(0 drive_detect detect --config "${CONFIG}" --track --no-progress --output "${OUT}/drive.jsonl"
     "${OUT}/drive")
+# The summary says how many tracked lanes were refitted rather than searched
+# (docs/tracking.md), and the results mark them.
+string(REGEX MATCH "tracked lanes: ([0-9]+) refitted" _ "${drive_detect_err}")
+if(NOT CMAKE_MATCH_1 OR CMAKE_MATCH_1 EQUAL 0)
+  message(FATAL_ERROR "lane detect --track: no lane refitted on the drive:\n${drive_detect_err}")
+endif()
+file(READ "${OUT}/drive.jsonl" drive_jsonl)
+expect_contains("${drive_jsonl}" "\"refit\":true" "lane detect --track's results")
 run(0 drive_results eval --drive --results "${OUT}/drive.jsonl" "${OUT}/drive")
 expect_contains("${drive_results_out}" "results (confirmed lanes)" "lane eval --drive --results")
 drive_rows("${drive_out}" tracked config_rows)
