@@ -564,6 +564,64 @@ std::array<double, 3> FitShift(const std::vector<RefitPoint>& points, const std:
   return {wx / w, b, mean};
 }
 
+// Each top-view row r0..r1's strongest response within half_px of
+// `curve`, localised (the response's centroid over 5 columns around its
+// peak), as its offset from the curve.
+std::vector<RefitPoint> PeaksAlong(const cv::Mat& thresholded, const IpmMapping& ipm,
+                                   const DetectionPrior::Curve& curve, double half_px, int r0,
+                                   int r1) {
+  std::vector<RefitPoint> points;
+  for (int r = r0; r <= r1; ++r) {
+    const double y = ipm.y_max() - (r + 0.5) * ipm.metres_per_px_y();
+    const double xp = (curve.X(y) - ipm.x_min()) / ipm.metres_per_px_x() - 0.5;
+    const int c0 = std::max(0, static_cast<int>(std::ceil(xp - half_px)));
+    const int c1 = std::min(thresholded.cols - 1, static_cast<int>(std::floor(xp + half_px)));
+    const float* v = thresholded.ptr<float>(r);
+    int best = -1;
+    for (int c = c0; c <= c1; ++c) {
+      if (v[c] > 0 && (best < 0 || v[c] > v[best])) best = c;
+    }
+    if (best < 0) continue;
+    double sw = 0, swx = 0;
+    for (int c = std::max(c0, best - 2); c <= std::min(c1, best + 2); ++c) {
+      if (v[c] <= 0) continue;
+      sw += v[c];
+      swx += v[c] * c;
+    }
+    points.push_back({static_cast<double>(r), swx / sw - xp, static_cast<double>(v[best])});
+  }
+  return points;
+}
+
+// A lane drawn along `curve` over its extent (where it is below the
+// horizon), far end first as the search's lanes; none when too little of it
+// projects into the image.
+std::optional<Lane> LaneOfCurve(const DetectionPrior::Curve& curve, const IpmMapping& ipm) {
+  constexpr int kSamples = 12;
+  const CameraModel& camera = ipm.camera();
+  const double horizon = camera.HorizonRow();
+  std::vector<Eigen::Vector2d> ground, image, top;
+  for (int i = 0; i < kSamples; ++i) {
+    const double y = curve.y_far + (curve.y_near - curve.y_far) * i / (kSamples - 1);
+    const Eigen::Vector2d g(curve.X(y), y);
+    const Eigen::Vector2d p = camera.GroundToImage(g);
+    if (!p.allFinite() || p.y() <= horizon) continue;
+    ground.push_back(g);
+    image.push_back(p);
+    top.push_back(ipm.GroundToIpm(g));
+  }
+  if (ground.size() < 4) return std::nullopt;
+  const auto g = FitBezier(ground);
+  const auto m = FitBezier(image);
+  const auto t = FitBezier(top);
+  if (!g || !m || !t) return std::nullopt;
+  Lane lane;
+  lane.ground = g->p;
+  lane.image = m->p;
+  lane.ipm = t->p;
+  return lane;
+}
+
 }  // namespace
 
 std::optional<Lane> Detector::RefitWindow(const cv::Mat& thresholded,
@@ -582,27 +640,7 @@ std::optional<Lane> Detector::RefitWindow(const cv::Mat& thresholded,
   if (rows <= 0) return std::nullopt;
   const double half_px =
       std::clamp(w.half_width_m, 0.05, options_.line_ransac.window_half_width_m) / mpp_x;
-  std::vector<RefitPoint> points;
-  for (int r = r0; r <= r1; ++r) {
-    const double y = ipm_.y_max() - (r + 0.5) * mpp_y;
-    const double xp = (curve.X(y) - ipm_.x_min()) / mpp_x - 0.5;
-    const int c0 = std::max(0, static_cast<int>(std::ceil(xp - half_px)));
-    const int c1 = std::min(thresholded.cols - 1, static_cast<int>(std::floor(xp + half_px)));
-    const float* v = thresholded.ptr<float>(r);
-    int best = -1;
-    for (int c = c0; c <= c1; ++c) {
-      if (v[c] > 0 && (best < 0 || v[c] > v[best])) best = c;
-    }
-    if (best < 0) continue;
-    // The marking's centre: the response's centroid around its peak.
-    double sw = 0, swx = 0;
-    for (int c = std::max(c0, best - 2); c <= std::min(c1, best + 2); ++c) {
-      if (v[c] <= 0) continue;
-      sw += v[c];
-      swx += v[c] * c;
-    }
-    points.push_back({static_cast<double>(r), swx / sw - xp, static_cast<double>(v[best])});
-  }
+  const std::vector<RefitPoint> points = PeaksAlong(thresholded, ipm_, curve, half_px, r0, r1);
   auto supported = [&](size_t n) {
     return static_cast<double>(n) >= kRefitMinRowShare * rows &&
            static_cast<double>(n) * mpp_y >= kRefitMinSupportM;
@@ -639,34 +677,85 @@ std::optional<Lane> Detector::RefitWindow(const cv::Mat& thresholded,
   DetectionPrior::Curve refit = curve;
   refit.coefficients(0) += mpp_x * (fit[0] + fit[1] * (row_of(0.0) - fit[2]));
   refit.coefficients(1) += -mpp_x * fit[1] / mpp_y;
-  // Drawn over the tracked extent, far end first as the search's lanes.
-  constexpr int kSamples = 12;
-  const CameraModel& camera = ipm_.camera();
-  const double horizon = camera.HorizonRow();
-  std::vector<Eigen::Vector2d> ground, image, top;
-  for (int i = 0; i < kSamples; ++i) {
-    const double y = refit.y_far + (refit.y_near - refit.y_far) * i / (kSamples - 1);
-    const Eigen::Vector2d g(refit.X(y), y);
-    const Eigen::Vector2d p = camera.GroundToImage(g);
-    if (!p.allFinite() || p.y() <= horizon) continue;
-    ground.push_back(g);
-    image.push_back(p);
-    top.push_back(ipm_.GroundToIpm(g));
-  }
-  if (ground.size() < 4) return std::nullopt;
-  const auto g = FitBezier(ground);
-  const auto m = FitBezier(image);
-  const auto tv = FitBezier(top);
-  if (!g || !m || !tv) return std::nullopt;
-  Lane lane;
-  lane.ground = g->p;
-  lane.image = m->p;
-  lane.ipm = tv->p;
-  lane.refit = true;
+  std::optional<Lane> lane = LaneOfCurve(refit, ipm_);
+  if (!lane) return std::nullopt;
+  lane->refit = true;
   for (size_t i = 0; i < points.size(); ++i) {
-    if (keep[i]) lane.score += points[i].weight;
+    if (keep[i]) lane->score += points[i].weight;
   }
   return lane;
+}
+
+Detector::Refitted Detector::RefitTracked(const cv::Mat& thresholded,
+                                          const DetectionPrior& prior) const {
+  const DetectorOptions& opt = options_;
+  const double mpp_x = ipm_.metres_per_px_x();
+  Refitted out;
+  for (const DetectionPrior::Window& w : prior.windows) {
+    std::optional<Lane> lane = w.refit ? RefitWindow(thresholded, w) : std::nullopt;
+    if (!lane) {
+      out.failed += w.refit && w.curve.has_value();
+      out.rest.windows.push_back(w);
+      continue;
+    }
+    const double half_m = std::clamp(w.half_width_m, 0.05, opt.line_ransac.window_half_width_m);
+    out.lanes.push_back(*lane);
+    out.half_widths_m.push_back(half_m);
+    // The column a column sum puts the lane at: its mean over the rows.
+    double sum = 0;
+    for (int r = 0; r < thresholded.rows; ++r) {
+      const double y = ipm_.y_max() - (r + 0.5) * ipm_.metres_per_px_y();
+      sum += (w.curve->X(y) - ipm_.x_min()) / mpp_x - 0.5;
+    }
+    out.columns.push_back({sum / thresholded.rows, (half_m + opt.filter.marking_width_m) / mpp_x});
+  }
+  return out;
+}
+
+void Detector::JoinRefitted(const Refitted& refitted, std::vector<Lane>& lanes) const {
+  // What the search found along a refitted lane (beyond its window, or by
+  // its extension in the image) is that lane again.
+  auto duplicate = [&](const Lane& lane) {
+    for (size_t i = 0; i < refitted.lanes.size(); ++i) {
+      if (MeanNearestDistanceBelow(Bezier{lane.ground}, Bezier{refitted.lanes[i].ground},
+                                   refitted.half_widths_m[i])) {
+        return true;
+      }
+    }
+    return false;
+  };
+  lanes.erase(std::remove_if(lanes.begin(), lanes.end(), duplicate), lanes.end());
+  lanes.insert(lanes.end(), refitted.lanes.begin(), refitted.lanes.end());
+  SortLeftToRight(lanes);
+}
+
+void Detector::SearchRoadModelWindows(const cv::Mat& filtered, float threshold,
+                                      const std::vector<IpmLine>& lines,
+                                      const PostprocessFrame& images, std::mt19937_64& rng,
+                                      std::vector<Lane>& lanes) const {
+  const DetectorOptions& opt = options_;
+  const DetectionPrior hidden = RoadModelWindows(lanes);
+  if (hidden.windows.empty()) return;
+  const cv::Mat local = ThresholdInWindows(filtered, hidden, threshold);
+  std::vector<double> more_half_px;
+  const std::vector<IpmLine> more = FindPriorLines(local, hidden, lines, &more_half_px, rng);
+  if (more.empty()) return;
+  const std::vector<SplineCandidate> extra = FitSplines(local, more, more_half_px, rng);
+  const std::vector<Lane> seen =
+      ToLanes(PostprocessCandidates(extra, images, opt.postprocess, opt.filter.marking_width_m,
+                                    opt.spline_ransac.merge_distance_px));
+  // What survives the same post-processing is kept where it fits the road.
+  std::vector<Bezier> found;
+  for (const Lane& lane : lanes) found.push_back(Bezier{lane.ground});
+  const size_t first = lanes.size();
+  for (const Lane& lane : seen) {
+    if (!FitsRoadModel(Bezier{lane.ground}, found, ipm_.y_min(), ipm_.y_max(), opt.road_model)) {
+      continue;
+    }
+    lanes.push_back(lane);
+    found.push_back(Bezier{lane.ground});
+  }
+  if (lanes.size() > first) SortLeftToRight(lanes);
 }
 
 absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
@@ -699,40 +788,19 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
   const cv::Mat thresholded = Threshold(filtered, &threshold);
   lap(time.threshold_ms);
   // 3b. Tracked frames (prior->refit): each confirmed lane seen last frame
-  // refitted in its window, which the search then does not see; the other
+  // refitted in its window, which the search then leaves alone; the other
   // windows are searched below.
-  std::vector<Lane> refitted;
-  std::vector<double> refitted_half_m;       // their windows' half widths
-  std::vector<ColumnSpan> refitted_columns;  // the Hough's peaks there are theirs
-  DetectionPrior rest;
+  Refitted refitted;
   if (prior != nullptr && prior->refit) {
-    const double mpp_x = ipm_.metres_per_px_x();
-    for (const DetectionPrior::Window& w : prior->windows) {
-      std::optional<Lane> lane = w.refit ? RefitWindow(thresholded, w) : std::nullopt;
-      if (!lane) {
-        det.refit_failed += w.refit && w.curve.has_value();
-        rest.windows.push_back(w);
-        continue;
-      }
-      const double half_m = std::clamp(w.half_width_m, 0.05, opt.line_ransac.window_half_width_m);
-      refitted.push_back(*lane);
-      refitted_half_m.push_back(half_m);
-      // The column a column sum puts the lane at: its mean over the rows.
-      double sum = 0;
-      for (int r = 0; r < thresholded.rows; ++r) {
-        const double y = ipm_.y_max() - (r + 0.5) * ipm_.metres_per_px_y();
-        sum += (w.curve->X(y) - ipm_.x_min()) / mpp_x - 0.5;
-      }
-      refitted_columns.push_back(
-          {sum / thresholded.rows, (half_m + opt.filter.marking_width_m) / mpp_x});
-    }
-    prior = &rest;
-    det.refit_lanes = static_cast<int>(refitted.size());
+    refitted = RefitTracked(thresholded, *prior);
+    prior = &refitted.rest;
+    det.refit_lanes = static_cast<int>(refitted.lanes.size());
+    det.refit_failed = refitted.failed;
     lap(time.refit_ms);
   }
   // 4-5. Column-sum Hough (2-lanes: the ego pair), then RANSAC lines.
   std::vector<ColumnPeak> peaks;
-  std::vector<IpmLine> lines = FindLines(thresholded, rng, &peaks, refitted_columns);
+  std::vector<IpmLine> lines = FindLines(thresholded, rng, &peaks, refitted.columns);
   // 4b. A tracker's predicted lanes that the Hough missed: their windows.
   const double spline_window_px = opt.spline_ransac.window_half_width_m / ipm_.metres_per_px_x();
   std::vector<double> spline_half_px(lines.size(), spline_window_px);
@@ -751,52 +819,10 @@ absl::StatusOr<Detection> Detector::Detect(const cv::Mat& frame,
   det.lanes =
       ToLanes(PostprocessCandidates(candidates, images, opt.postprocess, opt.filter.marking_width_m,
                                     opt.spline_ransac.merge_distance_px));
-  if (!refitted.empty()) {
-    // What the search found along a refitted lane (its extension beyond the
-    // masked window) is that lane again.
-    det.lanes.erase(std::remove_if(det.lanes.begin(), det.lanes.end(),
-                                   [&](const Lane& lane) {
-                                     for (size_t i = 0; i < refitted.size(); ++i) {
-                                       if (MeanNearestDistanceBelow(Bezier{lane.ground},
-                                                                    Bezier{refitted[i].ground},
-                                                                    refitted_half_m[i])) {
-                                         return true;
-                                       }
-                                     }
-                                     return false;
-                                   }),
-                    det.lanes.end());
-    det.lanes.insert(det.lanes.end(), refitted.begin(), refitted.end());
-    SortLeftToRight(det.lanes);
-  }
+  if (!refitted.lanes.empty()) JoinRefitted(refitted, det.lanes);
   // 7b. Where the road model puts a boundary the first pass missed: search
-  // its window again, and post-process everything once more if it holds a
-  // line.
-  if (const DetectionPrior hidden = RoadModelWindows(det.lanes); !hidden.windows.empty()) {
-    const cv::Mat local = ThresholdInWindows(filtered, hidden, threshold);
-    std::vector<double> more_half_px;
-    const std::vector<IpmLine> more = FindPriorLines(local, hidden, lines, &more_half_px, rng);
-    if (!more.empty()) {
-      const std::vector<SplineCandidate> extra = FitSplines(local, more, more_half_px, rng);
-      const std::vector<Lane> seen =
-          ToLanes(PostprocessCandidates(extra, images, opt.postprocess, opt.filter.marking_width_m,
-                                        opt.spline_ransac.merge_distance_px));
-      std::vector<Bezier> found;
-      for (const Lane& lane : det.lanes) found.push_back(Bezier{lane.ground});
-      const size_t first = det.lanes.size();
-      for (const Lane& lane : seen) {
-        if (!FitsRoadModel(Bezier{lane.ground}, found, ipm_.y_min(), ipm_.y_max(),
-                           opt.road_model)) {
-          continue;
-        }
-        det.lanes.push_back(lane);
-        found.push_back(Bezier{lane.ground});
-      }
-      if (det.lanes.size() > first) {
-        SortLeftToRight(det.lanes);
-      }
-    }
-  }
+  // its window again.
+  SearchRoadModelWindows(filtered, threshold, lines, images, rng, det.lanes);
   AddInferredLanes(det.lanes);
   lap(time.postprocess_ms);
   time.total_ms = MsSince(t_start);

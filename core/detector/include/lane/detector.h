@@ -285,6 +285,24 @@ class Detector {
   // Step 3b: the lane of a refit window (DetectionPrior), or none.
   std::optional<Lane> RefitWindow(const cv::Mat& thresholded,
                                   const DetectionPrior::Window& window) const;
+  // Step 3b for all of `prior`'s windows.
+  struct Refitted {
+    std::vector<Lane> lanes;
+    std::vector<double> half_widths_m;  // each lane's window
+    std::vector<ColumnSpan> columns;    // where the Hough's peaks are theirs
+    DetectionPrior rest;                // the windows left to search
+    int failed = 0;                     // refits tried that failed
+  };
+  Refitted RefitTracked(const cv::Mat& thresholded, const DetectionPrior& prior) const;
+  // The search's `lanes` without those along a refitted lane, and the
+  // refitted lanes, sorted left to right.
+  void JoinRefitted(const Refitted& refitted, std::vector<Lane>& lanes) const;
+  // Step 7b: where the road model puts a boundary that `lanes` lack, line
+  // and spline RANSAC again inside the window, thresholded at the window's
+  // own quantile; what passes post-processing and fits the road is added.
+  void SearchRoadModelWindows(const cv::Mat& filtered, float threshold,
+                              const std::vector<IpmLine>& lines, const PostprocessFrame& images,
+                              std::mt19937_64& rng, std::vector<Lane>& lanes) const;
   // The camera's column in the top view (x = 0 at its near edge).
   double CameraColumn() const;
 
