@@ -413,7 +413,7 @@ DetectionPrior::Window RefitWindowAt(const Lane& lane, const IpmMapping& ipm, do
   const Eigen::Vector2d b = ipm.GroundToIpm({curve->X(ipm.y_max()), ipm.y_max()});
   w.line = *MakeIpmLine(a, b - a, ipm.height());
   w.half_width_m = 0.4;
-  w.curve = DetectionPrior::Curve{curve->coefficients, curve->y_near, curve->y_far};
+  w.curve = *curve;
   w.refit = true;
   return w;
 }

@@ -26,6 +26,35 @@ void SortLeftToRight(std::vector<Lane>& lanes) {
 
 }  // namespace
 
+std::optional<Lane> LaneAlongCurve(const GroundCurve& curve, const IpmMapping& ipm,
+                                   bool near_first) {
+  constexpr int kSamples = 12;
+  const CameraModel& camera = ipm.camera();
+  const double horizon = camera.HorizonRow();
+  const double y_from = near_first ? curve.y_near : curve.y_far;
+  const double y_to = near_first ? curve.y_far : curve.y_near;
+  std::vector<Eigen::Vector2d> ground, image, top;
+  for (int i = 0; i < kSamples; ++i) {
+    const double y = y_from + (y_to - y_from) * i / (kSamples - 1);
+    const Eigen::Vector2d g(curve.X(y), y);
+    const Eigen::Vector2d p = camera.GroundToImage(g);
+    if (!p.allFinite() || p.y() <= horizon) continue;
+    ground.push_back(g);
+    image.push_back(p);
+    top.push_back(ipm.GroundToIpm(g));
+  }
+  if (ground.size() < 4) return std::nullopt;
+  const auto g = FitBezier(ground);
+  const auto m = FitBezier(image);
+  const auto t = FitBezier(top);
+  if (!g || !m || !t) return std::nullopt;
+  Lane lane;
+  lane.ground = g->p;
+  lane.image = m->p;
+  lane.ipm = t->p;
+  return lane;
+}
+
 const char* ModeName(Mode mode) { return mode == Mode::kTwo ? "two" : "all"; }
 
 std::optional<Mode> ParseMode(const std::string& name) {
@@ -568,8 +597,7 @@ std::array<double, 3> FitShift(const std::vector<RefitPoint>& points, const std:
 // `curve`, localised (the response's centroid over 5 columns around its
 // peak), as its offset from the curve.
 std::vector<RefitPoint> PeaksAlong(const cv::Mat& thresholded, const IpmMapping& ipm,
-                                   const DetectionPrior::Curve& curve, double half_px, int r0,
-                                   int r1) {
+                                   const GroundCurve& curve, double half_px, int r0, int r1) {
   std::vector<RefitPoint> points;
   for (int r = r0; r <= r1; ++r) {
     const double y = ipm.y_max() - (r + 0.5) * ipm.metres_per_px_y();
@@ -593,41 +621,12 @@ std::vector<RefitPoint> PeaksAlong(const cv::Mat& thresholded, const IpmMapping&
   return points;
 }
 
-// A lane drawn along `curve` over its extent (where it is below the
-// horizon), far end first as the search's lanes; none when too little of it
-// projects into the image.
-std::optional<Lane> LaneOfCurve(const DetectionPrior::Curve& curve, const IpmMapping& ipm) {
-  constexpr int kSamples = 12;
-  const CameraModel& camera = ipm.camera();
-  const double horizon = camera.HorizonRow();
-  std::vector<Eigen::Vector2d> ground, image, top;
-  for (int i = 0; i < kSamples; ++i) {
-    const double y = curve.y_far + (curve.y_near - curve.y_far) * i / (kSamples - 1);
-    const Eigen::Vector2d g(curve.X(y), y);
-    const Eigen::Vector2d p = camera.GroundToImage(g);
-    if (!p.allFinite() || p.y() <= horizon) continue;
-    ground.push_back(g);
-    image.push_back(p);
-    top.push_back(ipm.GroundToIpm(g));
-  }
-  if (ground.size() < 4) return std::nullopt;
-  const auto g = FitBezier(ground);
-  const auto m = FitBezier(image);
-  const auto t = FitBezier(top);
-  if (!g || !m || !t) return std::nullopt;
-  Lane lane;
-  lane.ground = g->p;
-  lane.image = m->p;
-  lane.ipm = t->p;
-  return lane;
-}
-
 }  // namespace
 
 std::optional<Lane> Detector::RefitWindow(const cv::Mat& thresholded,
                                           const DetectionPrior::Window& w) const {
   if (!w.curve) return std::nullopt;
-  const DetectionPrior::Curve& curve = *w.curve;
+  const GroundCurve& curve = *w.curve;
   const double mpp_x = ipm_.metres_per_px_x();
   const double mpp_y = ipm_.metres_per_px_y();
   const double max_rms_px = kRefitMaxRmsMarkings * options_.filter.marking_width_m / mpp_x;
@@ -674,10 +673,10 @@ std::optional<Lane> Detector::RefitWindow(const cv::Mat& thresholded,
 
   // dx (px) is linear in the row and the row in y: a shift and a turn of
   // the curve on the ground.
-  DetectionPrior::Curve refit = curve;
+  GroundCurve refit = curve;
   refit.coefficients(0) += mpp_x * (fit[0] + fit[1] * (row_of(0.0) - fit[2]));
   refit.coefficients(1) += -mpp_x * fit[1] / mpp_y;
-  std::optional<Lane> lane = LaneOfCurve(refit, ipm_);
+  std::optional<Lane> lane = LaneAlongCurve(refit, ipm_, /*near_first=*/false);
   if (!lane) return std::nullopt;
   lane->refit = true;
   for (size_t i = 0; i < points.size(); ++i) {

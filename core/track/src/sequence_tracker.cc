@@ -7,33 +7,11 @@
 namespace lane {
 namespace {
 
-// A lane drawn from a track's curve over its last extent: ground, image and
-// top-view Beziers (none when it does not project into the image).
-std::optional<Lane> LaneFromCurve(const GroundCurve& curve, const CameraModel& camera,
-                                  const IpmMapping& ipm) {
-  constexpr int kSamples = 12;
-  std::vector<Eigen::Vector2d> ground, image, top;
-  const double horizon = camera.HorizonRow();
-  for (int i = 0; i < kSamples; ++i) {
-    const double y = curve.y_near + (curve.y_far - curve.y_near) * i / (kSamples - 1);
-    const Eigen::Vector2d g(curve.X(y), y);
-    const Eigen::Vector2d p = camera.GroundToImage(g);
-    if (!p.allFinite() || p.y() <= horizon) continue;
-    ground.push_back(g);
-    image.push_back(p);
-    top.push_back(ipm.GroundToIpm(g));
-  }
-  if (ground.size() < 4) return std::nullopt;
-  // Image order as the detector's: from the bottom of the frame up.
-  const auto g = FitBezier(ground);
-  const auto m = FitBezier(image);
-  const auto t = FitBezier(top);
-  if (!g || !m || !t) return std::nullopt;
-  Lane lane;
-  lane.ground = g->p;
-  lane.image = m->p;
-  lane.ipm = t->p;
-  lane.predicted = true;
+// A lane drawn from a track's curve over its last extent, near end first
+// (none when it does not project into the image).
+std::optional<Lane> LaneFromCurve(const GroundCurve& curve, const IpmMapping& ipm) {
+  std::optional<Lane> lane = LaneAlongCurve(curve, ipm, /*near_first=*/true);
+  if (lane) lane->predicted = true;
   return lane;
 }
 
@@ -67,7 +45,7 @@ void SequenceTracker::DrawFiltered(std::vector<Lane>& lanes, const std::vector<L
                                    const IpmMapping& ipm) const {
   for (size_t i = 0; i < lanes.size() && lanes_.options().report_filtered; ++i) {
     if (!ids[i].confirmed) continue;
-    const std::optional<Lane> filtered = LaneFromCurve(ids[i].curve, camera_, ipm);
+    const std::optional<Lane> filtered = LaneFromCurve(ids[i].curve, ipm);
     if (!filtered) continue;
     lanes[i].image = filtered->image;
     lanes[i].ground = filtered->ground;
@@ -98,7 +76,7 @@ void SequenceTracker::AddCoasting(std::vector<Lane>& lanes, std::vector<LaneIden
       found = !(coexisted && distance >= o.duplicate_m);
     }
     if (found) continue;
-    std::optional<Lane> lane = LaneFromCurve(track.curve, camera_, ipm);
+    std::optional<Lane> lane = LaneFromCurve(track.curve, ipm);
     if (!lane) continue;
     const LaneIdentity identity = IdentityOf(track);
     lane->id = identity.id;
@@ -175,8 +153,7 @@ DetectionPrior SequenceTracker::Prior(const IpmMapping& ipm) const {
     const double var =
         j.dot(track.covariance * j) + o.offset_noise * o.offset_noise * dt * (1 + track.misses);
     w.half_width_m = 0.3 + 2.5 * std::sqrt(std::max(0.0, var));
-    w.curve =
-        DetectionPrior::Curve{track.curve.coefficients, track.curve.y_near, track.curve.y_far};
+    w.curve = track.curve;
     w.refit = track.misses == 0;
     prior.windows.push_back(w);
   }

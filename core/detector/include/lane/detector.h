@@ -17,6 +17,7 @@
 #include "absl/status/statusor.h"
 #include "lane/geometry/bezier.h"
 #include "lane/geometry/camera.h"
+#include "lane/geometry/ground_curve.h"
 #include "lane/geometry/ipm.h"
 #include "lane/postprocess/postprocess.h"
 #include "lane/road_model.h"
@@ -157,6 +158,13 @@ struct Detection {
   int refit_failed = 0;
 };
 
+// A lane drawn along `curve` over its extent, where it lies below the
+// horizon: its ground, image and top-view Beziers fitted to 12 points of
+// it, near end first or far end first (the detector's own lanes run far to
+// near); none when fewer than 4 of them project into the image.
+std::optional<Lane> LaneAlongCurve(const GroundCurve& curve, const IpmMapping& ipm,
+                                   bool near_first);
+
 // What the detector reads of a frame: rows [top, bottom) (every column) and
 // which pixels. The detector never reads outside these rows, so a decoder
 // that produces only them (lane/decode's DecodeImageRegion) gives exactly the
@@ -191,21 +199,11 @@ struct FrameNeeds {
 // the search for the other lanes. A window that does not refit (too little
 // support, or points off one curve) is searched as without `refit`.
 struct DetectionPrior {
-  // A tracked lane's predicted curve on the ground: x(y) = c0 + c1 y +
-  // c2 y^2 / 2 (metres; x right, y ahead) over [y_near, y_far].
-  struct Curve {
-    Eigen::Vector3d coefficients = Eigen::Vector3d::Zero();
-    double y_near = 0;
-    double y_far = 0;
-    double X(double y) const {
-      return coefficients(0) + coefficients(1) * y + 0.5 * coefficients(2) * y * y;
-    }
-  };
   struct Window {
     IpmLine line;  // top on row 0, bottom on the last row of the top view
     double half_width_m = 0.5;
-    std::optional<Curve> curve;  // the tracked curve, for a refit
-    bool refit = false;          // may be refitted (with DetectionPrior::refit)
+    std::optional<GroundCurve> curve;  // the tracked curve, for a refit
+    bool refit = false;                // may be refitted (with DetectionPrior::refit)
   };
   std::vector<Window> windows;
   bool refit = false;

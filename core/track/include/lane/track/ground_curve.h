@@ -1,5 +1,5 @@
-// A lane on the ground as the tracker holds it: x(y) = offset + heading y +
-// curvature y^2 / 2 (metres; x right, y ahead) over its extent in y.
+// The tracker's lanes on the ground (lane/geometry/ground_curve.h): fitted
+// to a lane, compared and drawn.
 #ifndef LANE_TRACK_GROUND_CURVE_H_
 #define LANE_TRACK_GROUND_CURVE_H_
 
@@ -7,19 +7,9 @@
 #include <optional>
 
 #include "lane/detector.h"
+#include "lane/geometry/ground_curve.h"
 
 namespace lane {
-
-// x(y) = offset + heading * y + curvature * y^2 / 2 over [y_near, y_far].
-struct GroundCurve {
-  Eigen::Vector3d coefficients = Eigen::Vector3d::Zero();  // offset, heading, curvature
-  double y_near = 0;
-  double y_far = 0;
-
-  double X(double y) const {
-    return coefficients(0) + coefficients(1) * y + 0.5 * coefficients(2) * y * y;
-  }
-};
 
 // Least-squares fit of a lane's ground Bezier (sampled); none when the lane
 // does not advance along the road.
