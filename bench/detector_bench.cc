@@ -422,7 +422,8 @@ void BM_TrackedVsUntracked(benchmark::State& state) {
       tracked.push_back(d->timings.total_ms);
       refit += d->refit_lanes;
       failed += d->refit_failed;
-      for (const lane::Lane& lane : d->lanes) lanes += lane.predicted ? 0 : 1;
+      // Lanes found, refitted or searched (as lane detect --track counts).
+      for (const lane::Lane& lane : d->lanes) lanes += lane.predicted || lane.inferred ? 0 : 1;
     }
   }
   const double u = Median(untracked), t = Median(tracked);

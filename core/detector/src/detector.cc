@@ -303,6 +303,10 @@ cv::Mat Detector::Threshold(const cv::Mat& filtered, float* threshold) const {
   return thresholded;
 }
 
+double Detector::WindowHalfWidthM(const DetectionPrior::Window& w) const {
+  return std::clamp(w.half_width_m, 0.05, options_.line_ransac.window_half_width_m);
+}
+
 double Detector::CameraColumn() const {
   return ipm_.GroundToIpm(Eigen::Vector2d(0, ipm_.y_min())).x();
 }
@@ -379,8 +383,7 @@ std::vector<IpmLine> Detector::FindPriorLines(const cv::Mat& thresholded,
   }
   std::vector<IpmLine> added;
   for (const DetectionPrior::Window* w : todo) {
-    const double half_px =
-        std::clamp(w->half_width_m, 0.05, opt.line_ransac.window_half_width_m) / mpp_x;
+    const double half_px = WindowHalfWidthM(*w) / mpp_x;
     if (found_near(w->line, half_px, lines) || found_near(w->line, half_px, added)) continue;
     if (auto line = FitLineAlong(thresholded, w->line, half_px, opt.line_ransac, rng)) {
       added.push_back(*line);
@@ -600,8 +603,8 @@ std::vector<RefitPoint> PeaksAlong(const cv::Mat& thresholded, const IpmMapping&
                                    const GroundCurve& curve, double half_px, int r0, int r1) {
   std::vector<RefitPoint> points;
   for (int r = r0; r <= r1; ++r) {
-    const double y = ipm.y_max() - (r + 0.5) * ipm.metres_per_px_y();
-    const double xp = (curve.X(y) - ipm.x_min()) / ipm.metres_per_px_x() - 0.5;
+    const double y = ipm.IpmToGround({0.0, static_cast<double>(r)}).y();
+    const double xp = ipm.GroundToIpm({curve.X(y), y}).x();
     const int c0 = std::max(0, static_cast<int>(std::ceil(xp - half_px)));
     const int c1 = std::min(thresholded.cols - 1, static_cast<int>(std::floor(xp + half_px)));
     const float* v = thresholded.ptr<float>(r);
@@ -630,15 +633,14 @@ std::optional<Lane> Detector::RefitWindow(const cv::Mat& thresholded,
   const double mpp_x = ipm_.metres_per_px_x();
   const double mpp_y = ipm_.metres_per_px_y();
   const double max_rms_px = kRefitMaxRmsMarkings * options_.filter.marking_width_m / mpp_x;
-  auto row_of = [&](double y) { return (ipm_.y_max() - y) / mpp_y - 0.5; };
+  auto row_of = [&](double y) { return ipm_.GroundToIpm({0.0, y}).y(); };
   const double y0 = std::max(curve.y_near, ipm_.y_min());
   const double y1 = std::min(curve.y_far, ipm_.y_max());
   const int r0 = std::max(0, static_cast<int>(std::ceil(row_of(y1))));
   const int r1 = std::min(thresholded.rows - 1, static_cast<int>(std::floor(row_of(y0))));
   const int rows = r1 - r0 + 1;
   if (rows <= 0) return std::nullopt;
-  const double half_px =
-      std::clamp(w.half_width_m, 0.05, options_.line_ransac.window_half_width_m) / mpp_x;
+  const double half_px = WindowHalfWidthM(w) / mpp_x;
   const std::vector<RefitPoint> points = PeaksAlong(thresholded, ipm_, curve, half_px, r0, r1);
   auto supported = [&](size_t n) {
     return static_cast<double>(n) >= kRefitMinRowShare * rows &&
@@ -697,14 +699,14 @@ Detector::Refitted Detector::RefitTracked(const cv::Mat& thresholded,
       out.rest.windows.push_back(w);
       continue;
     }
-    const double half_m = std::clamp(w.half_width_m, 0.05, opt.line_ransac.window_half_width_m);
+    const double half_m = WindowHalfWidthM(w);
     out.lanes.push_back(*lane);
     out.half_widths_m.push_back(half_m);
     // The column a column sum puts the lane at: its mean over the rows.
     double sum = 0;
     for (int r = 0; r < thresholded.rows; ++r) {
-      const double y = ipm_.y_max() - (r + 0.5) * ipm_.metres_per_px_y();
-      sum += (w.curve->X(y) - ipm_.x_min()) / mpp_x - 0.5;
+      const double y = ipm_.IpmToGround({0.0, static_cast<double>(r)}).y();
+      sum += ipm_.GroundToIpm({w.curve->X(y), y}).x();
     }
     out.columns.push_back({sum / thresholded.rows, (half_m + opt.filter.marking_width_m) / mpp_x});
   }

@@ -195,9 +195,10 @@ struct FrameNeeds {
 // With `refit` set, a window whose `refit` is set (a confirmed lane seen in
 // the last frame) is not searched: its lane is refitted to this frame's
 // response near its predicted curve (a shift and a turn, by weighted least
-// squares over each row's localised peak), and the window is masked out of
-// the search for the other lanes. A window that does not refit (too little
-// support, or points off one curve) is searched as without `refit`.
+// squares over each row's localised peak), the column-sum Hough's peaks in
+// its window are not searched, and what the search finds along the refitted
+// lane is dropped as that lane again. A window that does not refit (too
+// little support, or points off one curve) is searched as without `refit`.
 struct DetectionPrior {
   struct Window {
     IpmLine line;  // top on row 0, bottom on the last row of the top view
@@ -301,6 +302,9 @@ class Detector {
   void SearchRoadModelWindows(const cv::Mat& filtered, float threshold,
                               const std::vector<IpmLine>& lines, const PostprocessFrame& images,
                               std::mt19937_64& rng, std::vector<Lane>& lanes) const;
+  // A prior window's half width, metres: at least 5 cm, at most the line
+  // RANSAC's window.
+  double WindowHalfWidthM(const DetectionPrior::Window& w) const;
   // The camera's column in the top view (x = 0 at its near edge).
   double CameraColumn() const;
 

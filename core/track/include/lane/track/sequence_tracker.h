@@ -46,10 +46,6 @@ class SequenceTracker {
   // with a window of 0.3 m + 2.5 standard deviations of its predicted
   // lateral position (DetectorOptions cap it at the line window). Empty
   // before the first frame and after a reset.
-  // Each window also carries its track's curve (for Detector::Refit), and
-  // `refit` is set when every track is reported, was seen in the last
-  // frame and has a window: then a refit of the windows can stand for the
-  // search (the caller bounds how many frames in a row).
   // Each window also carries its track's curve, and may be refitted
   // (DetectionPrior) when its track is reported and was seen in the last
   // frame; the caller decides whether refits are allowed (`refit`).
