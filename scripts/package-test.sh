@@ -52,7 +52,7 @@ depends=$(dpkg-deb -f "$deb" Depends)
 for lib in libopencv-core libgrpc++ libprotobuf libprometheus-cpp-core libjpeg62-turbo; do
   grep -q "$lib" <<<"$depends" || fail "Depends lacks $lib (dpkg-shlibdeps): $depends"
 done
-dpkg-deb --ctrl-tarfile "$deb" | tar -t | grep -q conffiles || fail "no conffiles"
+grep -q conffiles <<<"$(dpkg-deb --ctrl-tarfile "$deb" | tar -t)" || fail "no conffiles"
 echo "package-test: contents and Depends ok ($(wc -l <"$build/deb-contents.txt") entries)"
 
 # 3. lintian (installed on demand: the package test is its only user).
@@ -73,9 +73,9 @@ if command -v systemd-analyze >/dev/null; then
     { cat "$build/unit.log" >&2; fail "systemd-analyze verify lane-server.service"; }
   echo "package-test: systemd-analyze verify: ok"
 fi
-/usr/bin/lane --version | grep -q "^lane $version " || fail "/usr/bin/lane --version: $(/usr/bin/lane --version)"
-/usr/bin/lane-server --version | grep -q "^lane-server $version " || fail "lane-server --version"
-/usr/bin/lane-client --version | grep -q "^lane-client $version " || fail "lane-client --version"
+grep -q "^lane $version " <<<"$(/usr/bin/lane --version)" || fail "/usr/bin/lane --version: $(/usr/bin/lane --version)"
+grep -q "^lane-server $version " <<<"$(/usr/bin/lane-server --version)" || fail "lane-server --version"
+grep -q "^lane-client $version " <<<"$(/usr/bin/lane-client --version)" || fail "lane-client --version"
 [ "$(stat -c %a /etc/default/lane-server)" = 600 ] || fail "/etc/default/lane-server is not 0600"
 # The unit's flags, on free ports (the defaults may be taken on a CI host).
 # shellcheck disable=SC1091
@@ -88,7 +88,7 @@ log=$(mktemp)
 pid=$!
 port=
 for _ in $(seq 1 100); do
-  port=$(grep -o '"grpc_port":[0-9]*' "$log" | head -1 | cut -d: -f2 || true)
+  port=$(grep -m1 -o '"grpc_port":[0-9]*' "$log" | cut -d: -f2 || true)
   [ -n "$port" ] && break
   sleep 0.1
 done

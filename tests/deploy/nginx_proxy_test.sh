@@ -38,7 +38,7 @@ for i in $(seq 1 20); do
   if [ "$((ina + inb))" -ne 1 ]; then echo "FAIL: cam-$i has $ina session(s) on A and $inb on B"; exit 1; fi
   on_a=$((on_a + ina)) on_b=$((on_b + inb))
   out=$("$client" session create --target 127.0.0.1:$p --camera "cam-$i" --config "$config")
-  echo "$out" | grep -q UNCHANGED || { echo "FAIL: cam-$i again through the proxy: $out"; exit 1; }
+  grep -q UNCHANGED <<<"$out" || { echo "FAIL: cam-$i again through the proxy: $out"; exit 1; }
 done
 [ "$on_a" -gt 0 ] && [ "$on_b" -gt 0 ] || { echo "FAIL: cameras all on one replica ($on_a / $on_b)"; exit 1; }
 echo "deploy_nginx_proxy: 20 cameras, $on_a on replica A and $on_b on B, each on one; asked again, each UNCHANGED"

@@ -25,7 +25,7 @@ prefix=$dir/prefix
 
 # 1. The files.
 cmake --install "$build" --prefix "$prefix" >"$dir/install.log"
-libdir=$(sed -n 's/^libdir=\${prefix}\///p' "$(find "$prefix" -name lanedet.pc | head -1)")
+libdir=$(sed -n 's/^libdir=\${prefix}\///p' "$(find "$prefix" -name lanedet.pc -print -quit)")
 [ -n "$libdir" ] || fail "no lanedet.pc installed"
 for f in bin/lane "$libdir/liblanedet_core.a" "$libdir/liblanedet_decode.a" \
   "$libdir/cmake/lanedet/lanedetConfig.cmake" "$libdir/cmake/lanedet/lanedetConfigVersion.cmake" \
@@ -71,6 +71,6 @@ cmp -s "$dir/cmake.out" "$dir/pc.out" || fail "the two consumers disagree"
 echo "ok: pkg-config consumer: $(tail -1 "$dir/pc.out")"
 
 # 5. One version.
-"$prefix/bin/lane" --version | grep -q "^lane $version " || fail "lane --version is not $version"
+grep -q "^lane $version " <<<"$("$prefix/bin/lane" --version)" || fail "lane --version is not $version"
 [ "$(pkg-config --modversion lanedet)" = "$version" ] || fail "lanedet.pc's version is not $version"
 echo "ok: version $version"

@@ -69,16 +69,16 @@ PY
 server_pid=$!
 port=
 for _ in $(seq 1 200); do
-  port=$(sed -n 's/.*gRPC on port \([0-9]*\).*/\1/p' "$dir/server.err" | head -1)
+  port=$(sed -n 's/.*gRPC on port \([0-9]*\).*/\1/p;T;q' "$dir/server.err")
   [ -n "$port" ] && break
   sleep 0.05
 done
 [ -n "$port" ] || { cat "$dir/server.err" >&2; fail "lane-server did not report its port"; }
 target=127.0.0.1:$port
-run_py -m lane_client --version | grep -q "$version" || fail "python -m lane_client --version"
-run_py -m lane_client --target "$target" health | grep -q SERVING || fail "health"
-run_py -m lane_client --target "$target" session create cam0 "$src/configs/synthetic.json" \
-  | grep -q '"camera_id": "cam0"' || fail "session create"
+grep -q "$version" <<<"$(run_py -m lane_client --version)" || fail "python -m lane_client --version"
+grep -q SERVING <<<"$(run_py -m lane_client --target "$target" health)" || fail "health"
+created=$(run_py -m lane_client --target "$target" session create cam0 "$src/configs/synthetic.json")
+grep -q '"camera_id": "cam0"' <<<"$created" || fail "session create"
 run_py -m lane_client --target "$target" detect cam0 "$dir/frames/000000.jpg" >"$dir/detect.json" ||
   fail "detect"
 run_py - "$dir/detect.json" <<'PY' || fail "detect's JSON"

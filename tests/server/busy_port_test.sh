@@ -22,12 +22,15 @@ fail() {
 
 # --version and --help read as a user expects (one version for the three
 # binaries; no doubled program name, no build machine's path).
-"$server" --version | grep -Eq '^lane-server [0-9]+\.[0-9]+\.[0-9]+ \(git [^,]+, ' ||
-  fail "--version: $("$server" --version)"
+# No pipes into grep -q or head here: with pipefail, a reader that stops early
+# makes the writer die of SIGPIPE and the whole check fail (CI saw it once).
+version=$("$server" --version)
+grep -Eq '^lane-server [0-9]+\.[0-9]+\.[0-9]+ \(git [^,]+, ' <<<"$version" || fail "--version: $version"
 help=$("$server" --help 2>&1 || true)
-echo "$help" | head -1 | grep -q '^lane-server: lane-marker' || fail "--help header: $(echo "$help" | head -1)"
-echo "$help" | grep -q 'lane-server: lane-server' && fail "--help repeats the program name"
-echo "$help" | grep -q 'Flags from server/main.cc:' || fail "--help shows a build path"
+header=${help%%$'\n'*}
+[[ $header == "lane-server: lane-marker"* ]] || fail "--help header: $header"
+grep -q 'lane-server: lane-server' <<<"$help" && fail "--help repeats the program name"
+grep -q 'Flags from server/main.cc:' <<<"$help" || fail "--help shows a build path"
 
 # A free port: bind port 0 with the first server and read it from its log.
 "$server" --address=127.0.0.1:0 --metrics_address= 2>"$dir/first.log" &

@@ -50,7 +50,7 @@ LANE_AUTH_TOKENS="$env_token" "$server" --address=127.0.0.1:0 --metrics_address=
 server_pid=$!
 port=
 for _ in $(seq 1 200); do
-  port=$(sed -n 's/.*gRPC on port \([0-9]*\).*/\1/p' "$dir/server.err" | head -1)
+  port=$(sed -n 's/.*gRPC on port \([0-9]*\).*/\1/p;T;q' "$dir/server.err")
   [ -n "$port" ] && break
   kill -0 "$server_pid" 2>/dev/null || { cat "$dir/server.err" >&2; fail "lane-server exited"; }
   sleep 0.05
@@ -118,7 +118,7 @@ unauthenticated wrong-env-token
 
 # 4. Secrecy: the command line, then everything printed (after a clean stop).
 for token in "$file_token" "$env_token"; do
-  tr '\0' ' ' <"/proc/$server_pid/cmdline" | grep -qF "$token" && fail "a token in the command line"
+  grep -qF "$token" <<<"$(tr '\0' ' ' <"/proc/$server_pid/cmdline")" && fail "a token in the command line"
 done
 kill -TERM "$server_pid"
 wait "$server_pid" || fail "lane-server did not stop cleanly"
