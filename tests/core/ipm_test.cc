@@ -207,5 +207,32 @@ TEST(IpmTest, AreaSamplingIsBilinearWhereTheViewIsFinerThanTheImage) {
   }
 }
 
+// Area sampling reads a BGR frame's channel (or the minimum of two) straight
+// from its pixels: the same top view as from the channel extracted first,
+// including the row ends that the 16-pixel vector steps leave to the scalar
+// tail (640 = 40 x 16, so the band's width of 639 columns has a tail).
+TEST(IpmTest, AreaSamplingReadsTheChannelOfABgrFrame) {
+  CameraModel cam;  // Caltech, 640x480
+  cv::Mat bgr(cam.image_height, cam.image_width, CV_8UC3);
+  cv::RNG rng(7);
+  rng.fill(bgr, cv::RNG::UNIFORM, 0, 256);
+  IpmOptions o;
+  o.view = IpmView::kGround;
+  o.ground = {-4, 4, 5, 25, 0.1, 0.25};
+  o.interpolation = Interpolation::kArea;
+  const auto area = IpmMapping::Create(cam, o);
+  ASSERT_TRUE(area.ok());
+  cv::Mat red, green, min_rg;
+  cv::extractChannel(bgr, red, 2);
+  cv::extractChannel(bgr, green, 1);
+  cv::min(red, green, min_rg);
+  const cv::Mat from_bgr = area->Apply(bgr, 2), from_red = area->Apply(red);
+  const cv::Mat from_bgr_min = area->Apply(bgr, 2, 1), from_min = area->Apply(min_rg);
+  EXPECT_EQ(cv::norm(from_bgr, from_red, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(from_bgr_min, from_min, cv::NORM_INF), 0.0);
+  // And the channel matters (the test would pass on any one channel otherwise).
+  EXPECT_GT(cv::norm(area->Apply(bgr, 1), from_red, cv::NORM_INF), 0.01);
+}
+
 }  // namespace
 }  // namespace lane

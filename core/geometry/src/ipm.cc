@@ -33,11 +33,14 @@ void BilinearTaps(const Eigen::Vector2d& p, int image_width, int image_height, f
   add(x0 + 1, y0 + 1, w * fx * fy);
 }
 
-// p[0] = 0, p[k + 1] = px[0] + ... + px[k] for k < n: exact integers, 16
+// p[0] = 0, p[k + 1] = v(0) + ... + v(k) for k < n: exact integers, 16
 // pixels at a time where the CPU has 128-bit vectors (a running sum is a
 // chain of dependent adds, and at 1640x100 pixels a frame it was a third of
-// the area top view's time).
-void RowPrefixSums(const uint8_t* px, int n, int32_t* p) {
+// the area top view's time). `load16(k)` gives v(k .. k + 15) as a vector,
+// `at(k)` gives v(k): the channel is read from the frame's pixels here, in
+// the same pass (a separate extraction cost another pass over the band).
+template <typename Load16, typename At>
+void RowPrefixSums(int n, int32_t* p, const Load16& load16, const At& at) {
   p[0] = 0;
   int k = 0;
   int32_t acc = 0;
@@ -46,7 +49,7 @@ void RowPrefixSums(const uint8_t* px, int n, int32_t* p) {
   v_uint32x4 carry = v_setzero_u32();
   for (; k + 16 <= n; k += 16) {
     v_uint16x8 lo, hi;
-    v_expand(v_load(px + k), lo, hi);
+    v_expand(load16(k), lo, hi);
     // Prefix sums within each half (at most 16 * 255: no overflow in u16).
     lo += v_rotate_left<1>(lo);
     lo += v_rotate_left<2>(lo);
@@ -69,8 +72,38 @@ void RowPrefixSums(const uint8_t* px, int n, int32_t* p) {
     carry = v_broadcast_element<3>(d);
   }
   acc = p[k];
+#else
+  (void)load16;
 #endif
-  for (; k < n; ++k) p[k + 1] = acc += px[k];
+  for (; k < n; ++k) p[k + 1] = acc += at(k);
+}
+
+// The prefix sums of one row of a single-channel image, of channel `c` of a
+// BGR row, or of the minimum of channels `c` and `c2` of a BGR row.
+void RowPrefixSums(const uint8_t* px, int n, int32_t* p) {
+#if CV_SIMD128
+  const auto load16 = [px](int k) { return cv::v_load(px + k); };
+#else
+  const auto load16 = [](int) { return 0; };
+#endif
+  RowPrefixSums(n, p, load16, [px](int k) { return px[k]; });
+}
+void RowPrefixSumsBgr(const uint8_t* px, int n, int c, int c2, int32_t* p) {
+#if CV_SIMD128
+  const auto load16 = [px, c, c2](int k) {
+    cv::v_uint8x16 ch[3];
+    cv::v_load_deinterleave(px + 3 * k, ch[0], ch[1], ch[2]);
+    return c2 >= 0 ? cv::v_min(ch[c], ch[c2]) : ch[c];
+  };
+#else
+  const auto load16 = [](int) { return 0; };
+#endif
+  if (c2 >= 0) {
+    RowPrefixSums(n, p, load16,
+                  [px, c, c2](int k) { return std::min(px[3 * k + c], px[3 * k + c2]); });
+  } else {
+    RowPrefixSums(n, p, load16, [px, c](int k) { return px[3 * k + c]; });
+  }
 }
 
 // At most this many sub-samples per axis of one top-view pixel in area
@@ -418,13 +451,21 @@ cv::Mat IpmMapping::ApplySegments(const cv::Mat& image, int channel, int channel
   // 16384 * 255).
   const int cols = seg_cols_;
   const int rows = seg_row1_ - seg_row0_ + 1;
-  thread_local cv::Mat scratch, scratch2;
-  const cv::Mat band = ChannelBand(image, cv::Rect(0, seg_row0_, cols - 1, rows), channel, channel2,
-                                   scratch, scratch2);
   thread_local std::vector<int32_t> prefix;
   prefix.resize(static_cast<size_t>(rows) * cols);
-  for (int v = 0; v < rows; ++v) {
-    RowPrefixSums(band.ptr<uint8_t>(v), cols - 1, prefix.data() + static_cast<size_t>(v) * cols);
+  if (image.channels() == 3 && channel2 != kGrayOfBgr) {
+    // Red (or min(red, green)) straight from the BGR rows.
+    for (int v = 0; v < rows; ++v) {
+      RowPrefixSumsBgr(image.ptr<uint8_t>(seg_row0_ + v), cols - 1, channel, channel2,
+                       prefix.data() + static_cast<size_t>(v) * cols);
+    }
+  } else {
+    thread_local cv::Mat scratch, scratch2;
+    const cv::Mat band = ChannelBand(image, cv::Rect(0, seg_row0_, cols - 1, rows), channel,
+                                     channel2, scratch, scratch2);
+    for (int v = 0; v < rows; ++v) {
+      RowPrefixSums(band.ptr<uint8_t>(v), cols - 1, prefix.data() + static_cast<size_t>(v) * cols);
+    }
   }
   // The box average of one row: prefix difference between the two
   // interpolated prefix positions.
