@@ -22,7 +22,7 @@ double PixelsPerMetreAcross(const CameraModel& camera, const Eigen::Vector2d& p)
 }
 
 struct Bar {
-  double offset = 0;    // from the profile's centre, samples
+  double offset = 0;    // from the profile's centre (samples; FindBar: pixels)
   double contrast = 0;  // peak minus the brighter side
 };
 
@@ -46,9 +46,16 @@ std::optional<Bar> StrongestBar(const std::vector<double>& s, int half, int side
   return best;
 }
 
-// The strongest bar of the smoothed profile across `p` (normal `n`), smoothed
-// with `sigma_m` on the road when that is positive and its profile stays in
-// the image, else with the options' sigma (at most half a marking).
+// Profile samples per smoothing sigma (LocalizeInImage, FindBar): near the
+// camera a 10 cm sigma on the road spans 5-15 px, and a 1 px raster only
+// multiplied the samples and the taps.
+constexpr double kSamplesPerSigma = 4.0;
+
+// The strongest bar of the smoothed profile across `p` (normal `n`, a unit
+// vector), smoothed with `sigma_m` on the road when that is positive and its
+// profile stays in the image, else with the options' sigma (at most half a
+// marking). The profile is sampled every max(1, sigma / kSamplesPerSigma)
+// px; the bar's offset is in pixels.
 std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
                            const Eigen::Vector2d& p, const Eigen::Vector2d& n,
                            const ImageExtendOptions& o, double sigma_m = 0) {
@@ -58,25 +65,25 @@ std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
   const double half = std::clamp(o.search_m * ppm, o.min_search_px, o.max_search_px);
   thread_local std::vector<float> raw;
   thread_local std::vector<double> smooth;
-  double sigma = 0, side = 0;
+  double sigma = 0, side = 0, spacing = 1;
   bool inside = false;
   for (const double s : {sigma_m > 0 ? std::max(0.7, sigma_m * ppm) : 0.0,
                          std::max(0.7, std::min(o.sigma_px, 0.5 * width_px))}) {
     if (s <= 0 || inside) continue;
     sigma = QuantizedSigma(s);
     side = std::max(width_px, 2.5 * sigma);
-    const int h = static_cast<int>(std::lround(half + side + 3 * sigma));
+    spacing = std::max(1.0, sigma / kSamplesPerSigma);
+    const int h = static_cast<int>(std::lround((half + side + 3 * sigma) / spacing));
     raw.resize(2 * h + 1);
-    inside = image.SampleAlong(p, n, h, raw.data());
+    inside = image.SampleAlong(p, spacing * n, h, raw.data());
   }
   if (!inside) return std::nullopt;  // it leaves the image
-  SmoothProfile(raw, sigma, smooth);
-  return StrongestBar(smooth, static_cast<int>(std::lround(half)),
-                      static_cast<int>(std::lround(side)));
+  SmoothProfile(raw, spacing > 1 ? kSamplesPerSigma : sigma, smooth);
+  std::optional<Bar> bar = StrongestBar(smooth, static_cast<int>(std::lround(half / spacing)),
+                                        std::max(1, static_cast<int>(std::lround(side / spacing))));
+  if (bar) bar->offset *= spacing;
+  return bar;
 }
-
-// LocalizeInImage's profile samples per smoothing sigma.
-constexpr double kSamplesPerSigma = 4.0;
 
 }  // namespace
 
