@@ -51,6 +51,18 @@ std::optional<Bar> StrongestBar(const std::vector<double>& s, int half, int side
 // multiplied the samples and the taps.
 constexpr double kSamplesPerSigma = 4.0;
 
+// How a profile smoothed with `sigma_px` is sampled: every `spacing` pixels,
+// kSamplesPerSigma samples per sigma (one pixel while sigma <= 4 px), and
+// the smoothing's sigma in samples.
+struct ProfileRaster {
+  double spacing = 1;
+  double sigma_samples = 0;
+};
+ProfileRaster RasterFor(double sigma_px) {
+  const double spacing = std::max(1.0, sigma_px / kSamplesPerSigma);
+  return {spacing, spacing > 1.0 ? kSamplesPerSigma : sigma_px};
+}
+
 // The strongest bar of the smoothed profile across `p` (normal `n`, a unit
 // vector), smoothed with `sigma_m` on the road when that is positive and its
 // profile stays in the image, else with the options' sigma (at most half a
@@ -65,20 +77,22 @@ std::optional<Bar> FindBar(const ChannelView& image, const CameraModel& camera,
   const double half = std::clamp(o.search_m * ppm, o.min_search_px, o.max_search_px);
   thread_local std::vector<float> raw;
   thread_local std::vector<double> smooth;
-  double sigma = 0, side = 0, spacing = 1;
+  double side = 0;
+  ProfileRaster raster;
   bool inside = false;
   for (const double s : {sigma_m > 0 ? std::max(0.7, sigma_m * ppm) : 0.0,
                          std::max(0.7, std::min(o.sigma_px, 0.5 * width_px))}) {
     if (s <= 0 || inside) continue;
-    sigma = QuantizedSigma(s);
+    const double sigma = QuantizedSigma(s);
     side = std::max(width_px, 2.5 * sigma);
-    spacing = std::max(1.0, sigma / kSamplesPerSigma);
-    const int h = static_cast<int>(std::lround((half + side + 3 * sigma) / spacing));
+    raster = RasterFor(sigma);
+    const int h = static_cast<int>(std::lround((half + side + 3 * sigma) / raster.spacing));
     raw.resize(2 * h + 1);
-    inside = image.SampleAlong(p, spacing * n, h, raw.data());
+    inside = image.SampleAlong(p, raster.spacing * n, h, raw.data());
   }
   if (!inside) return std::nullopt;  // it leaves the image
-  SmoothProfile(raw, spacing > 1 ? kSamplesPerSigma : sigma, smooth);
+  SmoothProfile(raw, raster.sigma_samples, smooth);
+  const double spacing = raster.spacing;
   std::optional<Bar> bar = StrongestBar(smooth, static_cast<int>(std::lround(half / spacing)),
                                         std::max(1, static_cast<int>(std::lround(side / spacing))));
   if (bar) bar->offset *= spacing;
@@ -101,12 +115,7 @@ std::optional<Bezier> LocalizeInImage(const Bezier& spline, const ChannelView& i
     const Eigen::Vector2d normal = Normal(tangent);
     const double sigma = QuantizedSigma(std::max(o.min_sigma_px, o.sigma_m * ppm));
     const double half = std::clamp(o.search_m * ppm, 2.0, o.max_search_px);
-    // The profile is sampled every `spacing` pixels, kSamplesPerSigma
-    // samples per sigma (one pixel while sigma <= 4 px): near the camera a
-    // 10 cm sigma spans 5-10 px, and a 1 px raster only multiplied the
-    // samples and the taps.
-    const double spacing = std::max(1.0, sigma / kSamplesPerSigma);
-    const double sigma_samples = spacing > 1.0 ? kSamplesPerSigma : sigma;
+    const auto [spacing, sigma_samples] = RasterFor(sigma);
     thread_local std::vector<float> profile;
     double offset = 0;
     if (o.on_bars) {
