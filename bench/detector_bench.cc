@@ -423,7 +423,8 @@ void BM_TrackedVsUntracked(benchmark::State& state) {
       refit += d->refit_lanes;
       failed += d->refit_failed;
       // Lanes found, refitted or searched (as lane detect --track counts).
-      for (const lane::Lane& lane : d->lanes) lanes += lane.predicted || lane.inferred ? 0 : 1;
+      const lane::LanePathCounts paths = lane::CountLanePaths(*d);
+      lanes += paths.refit + paths.searched;
     }
   }
   const double u = Median(untracked), t = Median(tracked);

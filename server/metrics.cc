@@ -152,13 +152,9 @@ void Metrics::ObserveDetectorStages(const lane::StageTimings& t) {
 }
 
 void Metrics::CountLanePaths(const lane::Detection& detection) {
-  double refit = 0, searched = 0;
-  for (const lane::Lane& lane : detection.lanes) {
-    if (lane.predicted || lane.inferred) continue;
-    (lane.refit ? refit : searched) += 1;
-  }
-  lanes_searched_->Increment(searched);
-  lanes_refit_->Increment(refit);
+  const lane::LanePathCounts paths = lane::CountLanePaths(detection);
+  lanes_searched_->Increment(paths.searched);
+  lanes_refit_->Increment(paths.refit);
   refits_failed_->Increment(detection.refit_failed);
 }
 

@@ -169,10 +169,9 @@ class DetectRun {
          << '\n';
     out_.flush();
     total_lanes_ += static_cast<long>(detection->lanes.size());
-    for (const lane::Lane& lane : detection->lanes) {
-      if (lane.predicted || lane.inferred) continue;
-      ++(lane.refit ? refit_lanes_ : searched_lanes_);
-    }
+    const lane::LanePathCounts paths = lane::CountLanePaths(*detection);
+    refit_lanes_ += paths.refit;
+    searched_lanes_ += paths.searched;
     refits_failed_ += detection->refit_failed;
     total_ms_.push_back(detection->timings.total_ms);
     const std::string details = absl::StrFormat("detect %.2f ms, decode %.2f ms",

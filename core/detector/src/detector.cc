@@ -26,6 +26,15 @@ void SortLeftToRight(std::vector<Lane>& lanes) {
 
 }  // namespace
 
+LanePathCounts CountLanePaths(const Detection& detection) {
+  LanePathCounts counts;
+  for (const Lane& lane : detection.lanes) {
+    if (lane.predicted || lane.inferred) continue;
+    ++(lane.refit ? counts.refit : counts.searched);
+  }
+  return counts;
+}
+
 std::optional<Lane> LaneAlongCurve(const GroundCurve& curve, const IpmMapping& ipm,
                                    bool near_first) {
   constexpr int kSamples = 12;

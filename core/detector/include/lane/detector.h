@@ -158,6 +158,16 @@ struct Detection {
   int refit_failed = 0;
 };
 
+// How many of a frame's lanes each path found: refitted in a tracked window
+// (Lane::refit), or the search. Predicted (coasting) and inferred lanes were
+// not found in this frame and count in neither. What `lane detect --track`,
+// the service's lanes_found counter and the tracked benchmark report.
+struct LanePathCounts {
+  int refit = 0;
+  int searched = 0;
+};
+LanePathCounts CountLanePaths(const Detection& detection);
+
 // A lane drawn along `curve` over its extent, where it lies below the
 // horizon: its ground, image and top-view Beziers fitted to 12 points of
 // it, near end first or far end first (the detector's own lanes run far to
