@@ -26,14 +26,14 @@ namespace {
 
 namespace v1 = lane::v1;
 
-constexpr char kDescription[] =
+constexpr char kBenchDescription[] =
     "Load-tests the service with N concurrent camera streams, each with its own\n"
     "session (camera ids PREFIX0, PREFIX1, ...), and times every frame: its send\n"
     "time is matched with its response by frame_id. Frames come from INPUT (as\n"
     "for `stream`, read into memory first) or are rendered: synthetic road frames\n"
     "of the session camera's size, JPEG-encoded.";
 
-constexpr char kFooter[] =
+constexpr char kBenchFooter[] =
     "A progress line is shown on stderr when it is a terminal.\n"
     "Exit status: 0, 1 on an error (no session, no frames), 2 for a bad command\n"
     "line, 3 when --slo-p99-ms is breached.";
@@ -401,7 +401,7 @@ void AddReportOptions(CLI::App* app, BenchFlags* flags) {
 Command AddBenchCommand(CLI::App& client) {
   auto flags = std::make_shared<BenchFlags>();
   CLI::App* app = lane_tools::AddCommand(client, "bench", "load test with per-frame latency",
-                                         kDescription, kFooter);
+                                         kBenchDescription, kBenchFooter);
   AddLoadOptions(app, flags.get());
   AddFrameOptions(app, flags.get());
   AddTargetOptions(app, flags.get());

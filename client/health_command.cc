@@ -12,11 +12,11 @@
 namespace lane_client {
 namespace {
 
-constexpr char kDescription[] =
+constexpr char kHealthDescription[] =
     "Asks the gRPC health service (grpc.health.v1.Health/Check) of each target\n"
     "about NAME (default \"\": the whole server) and prints its answer.";
 
-constexpr char kFooter[] =
+constexpr char kHealthFooter[] =
     "Exit status: 0 when every target is SERVING, 1 otherwise (NOT_SERVING,\n"
     "unreachable, timed out), 2 for a bad command line.";
 
@@ -155,8 +155,9 @@ int RunHealth(const CLI::App& app, const HealthFlags& flags) {
 
 Command AddHealthCommand(CLI::App& client) {
   auto flags = std::make_shared<HealthFlags>();
-  CLI::App* app = lane_tools::AddCommand(
-      client, "health", "gRPC health check (exit 0 when SERVING)", kDescription, kFooter);
+  CLI::App* app =
+      lane_tools::AddCommand(client, "health", "gRPC health check (exit 0 when SERVING)",
+                             kHealthDescription, kHealthFooter);
   AddCallOptions(app, &flags->call, "5s");
   app->add_option("--service", flags->service, "the service to ask about")->type_name("NAME");
   return {app, [app, flags] { return RunHealth(*app, *flags); }};

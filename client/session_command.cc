@@ -22,7 +22,7 @@ constexpr char kSessionDescription[] =
     "options). Prints the server's answer as JSON, one line per target.\n"
     "create is idempotent: the same config again is UNCHANGED.";
 
-constexpr char kFooter[] =
+constexpr char kSessionFooter[] =
     "Exit status: 0 when every call succeeded, 1 otherwise, 2 for a bad command\n"
     "line.";
 
@@ -141,7 +141,7 @@ int RunInfo(const CLI::App& app, const CallFlags& flags) {
 
 std::vector<Command> AddSessionCommands(CLI::App& client) {
   CLI::App* session = lane_tools::AddCommand(client, "session", "manage camera sessions",
-                                             kSessionDescription, kFooter);
+                                             kSessionDescription, kSessionFooter);
   session->require_subcommand(1);
   struct ActionInfo {
     Action action;
@@ -157,8 +157,8 @@ std::vector<Command> AddSessionCommands(CLI::App& client) {
   for (const ActionInfo& info : actions) {
     auto flags = std::make_shared<SessionFlags>();
     flags->action = info.action;
-    CLI::App* app =
-        lane_tools::AddCommand(*session, info.name, info.summary, kSessionDescription, kFooter);
+    CLI::App* app = lane_tools::AddCommand(*session, info.name, info.summary, kSessionDescription,
+                                           kSessionFooter);
     AddCallOptions(app, &flags->call, "10s");
     if (info.action != Action::kList) {
       app->add_option("--camera", flags->camera, "the camera id")->type_name("ID")->required();

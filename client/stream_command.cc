@@ -36,7 +36,7 @@ namespace {
 
 namespace v1 = lane::v1;
 
-constexpr char kDescription[] =
+constexpr char kStreamDescription[] =
     "Streams the frames of INPUT to the service as one camera and writes one\n"
     "JSON object per frame, in input order (JSON Lines, schema 1: docs/client.md).\n"
     "INPUT is a directory (its .jpg/.jpeg/.png files, sorted), a list file (.txt,\n"
@@ -47,7 +47,7 @@ constexpr char kDescription[] =
     "client reconnects with backoff, re-creates the session and resends every\n"
     "unanswered frame: each frame appears exactly once in the output.";
 
-constexpr char kFooter[] =
+constexpr char kStreamFooter[] =
     "Without --config the camera's session must exist on the server; its config\n"
     "is read once and used to re-create it after a restart.\n"
     "Exit status: 0 when every frame was answered OK, 1 otherwise, 2 for a bad\n"
@@ -388,8 +388,9 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
 
 Command AddStreamCommand(CLI::App& client) {
   auto flags = std::make_shared<StreamFlags>();
-  CLI::App* app = lane_tools::AddCommand(
-      client, "stream", "frames of files or videos in, JSON Lines out", kDescription, kFooter);
+  CLI::App* app =
+      lane_tools::AddCommand(client, "stream", "frames of files or videos in, JSON Lines out",
+                             kStreamDescription, kStreamFooter);
   AddTargetOption(app, &flags->target, "server address");
   app->add_option("--camera", flags->camera, "camera id of the session")->type_name("ID");
   AddSessionConfigOptions(app, &flags->session);

@@ -50,7 +50,7 @@ namespace fs = std::filesystem;
 using Json = nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
-constexpr char kDescription[] =
+constexpr char kBackfillDescription[] =
     "Re-processes recorded drives listed in a manifest, in shards that can run\n"
     "anywhere (a Kubernetes Indexed Job: deploy/k8s/backfill; one machine:\n"
     "scripts/backfill-local.sh). docs/backfill.md has the details.\n"
@@ -67,7 +67,7 @@ constexpr char kDescription[] =
     "complete; a recording whose NAME.jsonl exists is skipped. The shard's\n"
     "summary: OUTPUT-DIR/summary-shard-I-of-N.json.";
 
-constexpr char kFooter[] =
+constexpr char kBackfillFooter[] =
     "Exit status: 0 when every recording of the shard was done (or skipped) with\n"
     "no failed frame, 1 when a recording or a frame failed (see the summary),\n"
     "2 for a bad command line or manifest.";
@@ -512,7 +512,7 @@ Command AddBackfillCommand(CLI::App& lane) {
   CLI::App* app = AddCommand(lane, "backfill",
                              "re-process a manifest of recordings in shards (Kubernetes Indexed "
                              "Jobs, or processes on one machine)",
-                             kDescription, kFooter);
+                             kBackfillDescription, kBackfillFooter);
   app->add_option("--manifest", flags->manifest, "JSON Lines: recording, config, output")
       ->type_name("FILE")
       ->required();

@@ -25,7 +25,7 @@
 namespace lane_tools {
 namespace {
 
-constexpr char kDescription[] =
+constexpr char kCalibrateDescription[] =
     "Estimates a camera from frames of ordinary driving and writes a complete\n"
     "config: the camera's pitch and yaw from the vanishing point of the lane\n"
     "markings (straight stretches; frames on curves or without markings are\n"
@@ -325,7 +325,7 @@ Command AddCalibrateCommand(CLI::App& lane) {
   auto flags = std::make_shared<CalibrateFlags>();
   CLI::App* app =
       AddCommand(lane, "calibrate", "estimate a camera from driving frames and write its config",
-                 kDescription);
+                 kCalibrateDescription);
   app->add_option("--height-m", flags->height_m, "camera height above the road, metres")
       ->type_name("H")
       ->required()

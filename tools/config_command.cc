@@ -11,7 +11,7 @@
 namespace lane_tools {
 namespace {
 
-constexpr char kDescription[] =
+constexpr char kConfigDescription[] =
     "Prints the full effective configuration as JSON, every key present: the\n"
     "built-in defaults or CONFIG, with --mode applied as in 'lane detect'.\n"
     "The output is itself a valid config file (docs/config.md).";
@@ -32,8 +32,8 @@ int RunConfig(const ConfigFlags& flags) {
 
 Command AddConfigCommand(CLI::App& lane) {
   auto flags = std::make_shared<ConfigFlags>();
-  CLI::App* app =
-      AddCommand(lane, "config", "print the effective configuration (every key)", kDescription);
+  CLI::App* app = AddCommand(lane, "config", "print the effective configuration (every key)",
+                             kConfigDescription);
   AddOptional(app, "--config", &flags->config, "JSON config file")
       ->type_name("CONFIG")
       ->default_str("the built-in defaults");

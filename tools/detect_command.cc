@@ -30,7 +30,7 @@
 namespace lane_tools {
 namespace {
 
-constexpr char kDescription[] =
+constexpr char kDetectDescription[] =
     "Detects the lane markings of every frame and writes one JSON object per\n"
     "frame (JSON Lines, schema 1: docs/results-format.md).\n"
     "\n"
@@ -39,7 +39,7 @@ constexpr char kDescription[] =
     "resolved against the list's folder, blank lines and # comments skipped);\n"
     "or a video (.mp4/.avi/.mkv/.mov; frames are named VIDEO#000123).";
 
-constexpr char kFooter[] =
+constexpr char kDetectFooter[] =
     "A frame that cannot be read or processed gets a record with \"error\" and\n"
     "a message on stderr; the other frames go on. Exit status: 0 when every\n"
     "frame was processed, 1 when some failed, 2 for a bad command line.";
@@ -329,7 +329,7 @@ Command AddDetectCommand(CLI::App& lane) {
   auto flags = std::make_shared<DetectFlags>();
   CLI::App* app =
       AddCommand(lane, "detect", "detect lanes in images, directories, list files or videos",
-                 kDescription, kFooter);
+                 kDetectDescription, kDetectFooter);
   app->add_option("--config", flags->config, "JSON config file (docs/config.md)")
       ->type_name("CONFIG")
       ->required();

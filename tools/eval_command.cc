@@ -37,7 +37,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr char kDescription[] =
+constexpr char kEvalDescription[] =
     "Scores lane detections against the hand-drawn labels of a data set, under\n"
     "the paper's rule (Aly 2008, Tables II/III) and the CULane metric, and\n"
     "prints the tables (Markdown) on stdout. With --config it runs the detector\n"
@@ -47,7 +47,7 @@ constexpr char kDescription[] =
     "CULane frames (NNNNN.jpg + NNNNN.lines.txt), TuSimple label files (.json)\n"
     "or `lane render` output (labels.jsonl); the format is detected.";
 
-constexpr char kFooter[] =
+constexpr char kEvalFooter[] =
     "Exit status: 0 when every frame was scored, 1 when the data set, config or\n"
     "results could not be read or frames failed, 2 for a bad command line.";
 
@@ -514,7 +514,7 @@ Command AddEvalCommand(CLI::App& lane, const std::vector<std::string>& args) {
   auto flags = std::make_shared<EvalFlags>();
   CLI::App* app = AddCommand(lane, "eval",
                              "score detections against a labelled data set (paper rule, CULane F1)",
-                             kDescription, kFooter);
+                             kEvalDescription, kEvalFooter);
   AddOptional(app, "--config", &flags->config,
               "detector config (docs/config.md). With --results it only gives the frame size "
               "and the ROI (2-lanes scoring)")

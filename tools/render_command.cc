@@ -17,7 +17,7 @@
 namespace lane_tools {
 namespace {
 
-constexpr char kDescription[] =
+constexpr char kRenderDescription[] =
     "Renders N synthetic road frames through the config's camera, with exact\n"
     "ground truth. Writes DIR/000000.png ... (frame i uses seed S + i),\n"
     "DIR/labels.jsonl (one JSON object per frame: docs/results-format.md) and\n"
@@ -132,8 +132,8 @@ int RunRender(const RenderFlags& flags) {
 
 Command AddRenderCommand(CLI::App& lane) {
   auto flags = std::make_shared<RenderFlags>();
-  CLI::App* app = AddCommand(lane, "render",
-                             "render synthetic road frames with ground-truth labels", kDescription);
+  CLI::App* app = AddCommand(
+      lane, "render", "render synthetic road frames with ground-truth labels", kRenderDescription);
   app->add_option("--config", flags->config, "JSON config file whose camera is used")
       ->type_name("CONFIG")
       ->required();

@@ -57,7 +57,7 @@
 namespace lane::decode::internal {
 namespace {
 
-enum class Failure {
+enum class JpegFailure {
   kNone,
   kError,       // libjpeg's error_exit: message[] holds libjpeg's message
   kDamaged,     // a libjpeg warning and !accept_damaged: message[] likewise
@@ -101,7 +101,7 @@ struct JpegState {
   // Outcome.
   int decoded_left;  // columns [decoded_left, decoded_right) were written
   int decoded_right;
-  Failure failure;
+  JpegFailure failure;
   int color_space;
   char message[JMSG_LENGTH_MAX];
 };
@@ -110,16 +110,16 @@ static_assert(std::is_trivially_destructible_v<JpegState>,
 
 JpegState* StateOf(j_common_ptr cinfo) { return static_cast<JpegState*>(cinfo->client_data); }
 
-[[noreturn]] void Fail(JpegState* state, Failure failure) {
-  if (state->failure == Failure::kNone) state->failure = failure;
+[[noreturn]] void Fail(JpegState* state, JpegFailure failure) {
+  if (state->failure == JpegFailure::kNone) state->failure = failure;
   std::longjmp(state->jump, 1);
 }
 
 // error_exit: an error libjpeg cannot continue after.
 [[noreturn]] void OnErrorExit(j_common_ptr cinfo) {
   JpegState* state = StateOf(cinfo);
-  if (state->failure == Failure::kNone) (*cinfo->err->format_message)(cinfo, state->message);
-  Fail(state, Failure::kError);
+  if (state->failure == JpegFailure::kNone) (*cinfo->err->format_message)(cinfo, state->message);
+  Fail(state, JpegFailure::kError);
 }
 
 // emit_message: level -1 is a warning (damaged data libjpeg works around),
@@ -129,14 +129,14 @@ void OnEmitMessage(j_common_ptr cinfo, int msg_level) {
   ++cinfo->err->num_warnings;
   JpegState* state = StateOf(cinfo);
   if (state->accept_damaged) return;
-  if (state->failure == Failure::kNone) (*cinfo->err->format_message)(cinfo, state->message);
-  Fail(state, Failure::kDamaged);
+  if (state->failure == JpegFailure::kNone) (*cinfo->err->format_message)(cinfo, state->message);
+  Fail(state, JpegFailure::kDamaged);
 }
 
 void OnOutputMessage(j_common_ptr /*cinfo*/) {}
 
 void CheckBudget(JpegState* state) {
-  if (state->budget->Exceeded()) Fail(state, Failure::kBudget);
+  if (state->budget->Exceeded()) Fail(state, JpegFailure::kBudget);
 }
 
 // Called before each iMCU row of each scan libjpeg consumes (progressive and
@@ -147,18 +147,18 @@ void OnProgress(j_common_ptr cinfo) {
   const auto* decompress = reinterpret_cast<j_decompress_ptr>(cinfo);
   // input_scan_number counts the SOS markers read, so the first call after
   // scan max_scans + 1 has started refuses it before any of it is decoded.
-  if (decompress->input_scan_number > state->max_scans) Fail(state, Failure::kScanLimit);
+  if (decompress->input_scan_number > state->max_scans) Fail(state, JpegFailure::kScanLimit);
   CheckBudget(state);
 }
 
 // ---- Source: the data in memory, handed over in slices --------------------------
 //
-// As jpeg_mem_src, but kFeedBytes at a time, so that the CPU budget is checked
+// As jpeg_mem_src, but kJpegFeedBytes at a time, so that the CPU budget is checked
 // as the data is consumed: jpeg_skip_scanlines entropy-decodes the rows it
 // skips without calling the progress monitor. The slices are large enough
 // that libjpeg-turbo's Huffman decoder rarely leaves its fast path, which
 // wants a few KiB of data ahead.
-constexpr size_t kFeedBytes = 256 << 10;
+constexpr size_t kJpegFeedBytes = 256 << 10;
 
 void OnInitSource(j_decompress_ptr /*cinfo*/) {}
 void OnTermSource(j_decompress_ptr /*cinfo*/) {}
@@ -167,7 +167,7 @@ boolean OnFillInput(j_decompress_ptr cinfo) {
   JpegState* state = StateOf(reinterpret_cast<j_common_ptr>(cinfo));
   CheckBudget(state);
   if (state->fed < state->size) {
-    const size_t count = std::min(kFeedBytes, state->size - state->fed);
+    const size_t count = std::min(kJpegFeedBytes, state->size - state->fed);
     state->source.next_input_byte = state->data + state->fed;
     state->source.bytes_in_buffer = count;
     state->fed += count;
@@ -241,7 +241,7 @@ bool StartDecode(JpegState* state) {
   jpeg_read_header(cinfo, TRUE);
   if (static_cast<int>(cinfo->image_width) != state->width ||
       static_cast<int>(cinfo->image_height) != state->height) {
-    Fail(state, Failure::kUnexpected);
+    Fail(state, JpegFailure::kUnexpected);
   }
   switch (cinfo->jpeg_color_space) {
     case JCS_GRAYSCALE:
@@ -250,7 +250,7 @@ bool StartDecode(JpegState* state) {
       break;
     default:
       state->color_space = static_cast<int>(cinfo->jpeg_color_space);
-      Fail(state, Failure::kColorSpace);
+      Fail(state, JpegFailure::kColorSpace);
   }
   const bool grey_file = cinfo->jpeg_color_space == JCS_GRAYSCALE;
   const bool via_rgb = state->output == Output::kRed && !grey_file;
@@ -264,7 +264,7 @@ bool StartDecode(JpegState* state) {
   if (static_cast<int>(cinfo->output_width) != state->out_width ||
       static_cast<int>(cinfo->output_height) != state->out_height ||
       cinfo->output_components != (via_rgb ? 3 : components)) {
-    Fail(state, Failure::kUnexpected);
+    Fail(state, JpegFailure::kUnexpected);
   }
   return via_rgb;
 }
@@ -295,7 +295,7 @@ int CropColumns(JpegState* state) {
     const int crop_end = crop_first + static_cast<int>(count);
     if (crop_first > state->left || crop_end < state->right || crop_end > state->out_width ||
         static_cast<int>(cinfo->output_width) != crop_end - crop_first) {
-      Fail(state, Failure::kUnexpected);
+      Fail(state, JpegFailure::kUnexpected);
     }
     state->decoded_left = crop_first == 0 ? 0 : crop_first + 1;
     state->decoded_right = crop_end == state->out_width ? crop_end : crop_end - 1;
@@ -327,7 +327,7 @@ void ReadRegionRows(JpegState* state, bool via_rgb, unsigned char* first_column,
   const auto row_width = static_cast<int>(cinfo->output_width);
   if (state->top > 0) {
     const auto skip = static_cast<JDIMENSION>(state->top);
-    if (jpeg_skip_scanlines(cinfo, skip) != skip) Fail(state, Failure::kNoProgress);
+    if (jpeg_skip_scanlines(cinfo, skip) != skip) Fail(state, JpegFailure::kNoProgress);
     CheckBudget(state);
   }
   JSAMPROW rows[kRowsPerCall];
@@ -340,7 +340,7 @@ void ReadRegionRows(JpegState* state, bool via_rgb, unsigned char* first_column,
     }
     const auto got =
         static_cast<int>(jpeg_read_scanlines(cinfo, rows, static_cast<JDIMENSION>(count)));
-    if (got == 0) Fail(state, Failure::kNoProgress);
+    if (got == 0) Fail(state, JpegFailure::kNoProgress);
     if (via_rgb) {
       for (int i = 0; i < got; ++i) {
         TakeRed(scratch[i], first_column + static_cast<size_t>(first + i) * state->stride,
@@ -367,9 +367,9 @@ void DecodeSteps(JpegState* state) {
     // declare the end reached).
     const auto rest = static_cast<JDIMENSION>(state->out_height - state->bottom);
     if (rest > 1 && jpeg_skip_scanlines(cinfo, rest - 1) != rest - 1) {
-      Fail(state, Failure::kNoProgress);
+      Fail(state, JpegFailure::kNoProgress);
     }
-    if (jpeg_read_scanlines(cinfo, scratch, 1) != 1) Fail(state, Failure::kNoProgress);
+    if (jpeg_read_scanlines(cinfo, scratch, 1) != 1) Fail(state, JpegFailure::kNoProgress);
   }
   // Reads the rest up to EOI (a single-scan file's trailing markers): bounded
   // by the byte cap; a warning there (garbage, a truncated tail) still counts.
@@ -433,24 +433,24 @@ absl::Status DecodeJpeg(const CodecRequest& request, cv::Mat& out, cv::Rect& dec
   }
 
   switch (state.failure) {
-    case Failure::kDamaged:
+    case JpegFailure::kDamaged:
       return absl::InvalidArgumentError(
           absl::StrCat("damaged JPEG frame: ", LibraryMessage(state.message)));
-    case Failure::kScanLimit:
+    case JpegFailure::kScanLimit:
       return absl::InvalidArgumentError(
           absl::StrCat("the JPEG frame has more than ", state.max_scans,
                        " scans, the scan limit (max_progressive_scans)"));
-    case Failure::kBudget:
+    case JpegFailure::kBudget:
       return BudgetExceeded("JPEG", request.budget->budget());
-    case Failure::kColorSpace:
+    case JpegFailure::kColorSpace:
       return absl::InvalidArgumentError(
           absl::StrCat("JPEG frames in libjpeg colour space ", state.color_space,
                        " (CMYK, YCCK or unknown) are not supported: send grey, YCbCr or RGB"));
-    case Failure::kUnexpected:
-    case Failure::kNoProgress:
+    case JpegFailure::kUnexpected:
+    case JpegFailure::kNoProgress:
       return absl::InvalidArgumentError("the JPEG frame decoded to an unexpected image");
-    case Failure::kError:
-    case Failure::kNone:
+    case JpegFailure::kError:
+    case JpegFailure::kNone:
       break;
   }
   if (state.error.msg_code == JERR_NO_BACKING_STORE) {

@@ -11,7 +11,7 @@
 // A region: every row down to the region's last is still inflated and
 // unfiltered (each row's filter refers to the one above), only the region's
 // rows are stored, and unless the request reads to the end no more input is
-// fed after the slice (kFeedBytes) in which the last pass delivered the
+// fed after the slice (kPngFeedBytes) in which the last pass delivered the
 // region's last row. Red output and scaling go through a full-resolution BGR
 // or grey copy of the region's rows, reduced afterwards.
 //
@@ -34,7 +34,7 @@
 namespace lane::decode::internal {
 namespace {
 
-enum class Failure {
+enum class PngFailure {
   kNone,
   kError,       // libpng's error: message[] holds libpng's message
   kDamaged,     // a libpng warning and !accept_damaged: message[] likewise
@@ -67,7 +67,7 @@ struct PngState {
   bool end_seen;     // IEND was read
 
   // Outcome.
-  Failure failure;
+  PngFailure failure;
   char message[kMaxLibraryMessage + 1];
 };
 static_assert(std::is_trivially_destructible_v<PngState>,
@@ -75,7 +75,7 @@ static_assert(std::is_trivially_destructible_v<PngState>,
 
 // Input is fed to libpng in slices of this size, the CPU budget checked
 // between them (the rows' own checks do not see CRC-only skipping).
-constexpr size_t kFeedBytes = 64 << 10;
+constexpr size_t kPngFeedBytes = 64 << 10;
 // Largest non-IDAT chunk libpng accepts without a warning (so, unless
 // accept_damaged, at all): PLTE is 768 bytes; everything else is ignored,
 // but libpng's push reader buffers a chunk whole before skipping it.
@@ -85,8 +85,8 @@ constexpr png_uint_32 kMaxCachedChunks = 32;
 
 PngState* StateOf(png_structp png) { return static_cast<PngState*>(png_get_error_ptr(png)); }
 
-void Record(PngState* state, Failure failure, const char* message) {
-  if (state->failure != Failure::kNone) return;
+void Record(PngState* state, PngFailure failure, const char* message) {
+  if (state->failure != PngFailure::kNone) return;
   state->failure = failure;
   std::strncpy(state->message, message, kMaxLibraryMessage);
   state->message[kMaxLibraryMessage] = '\0';
@@ -94,24 +94,24 @@ void Record(PngState* state, Failure failure, const char* message) {
 
 // Must not return (libpng would print the message and then longjmp).
 [[noreturn]] void OnError(png_structp png, png_const_charp message) {
-  Record(StateOf(png), Failure::kError, message);
+  Record(StateOf(png), PngFailure::kError, message);
   png_longjmp(png, 1);
 }
 
 void OnWarning(png_structp png, png_const_charp message) {
   PngState* state = StateOf(png);
   if (state->accept_damaged) return;
-  Record(state, Failure::kDamaged, message);
+  Record(state, PngFailure::kDamaged, message);
   png_error(png, message);  // does not return
 }
 
-[[noreturn]] void Fail(png_structp png, Failure failure) {
+[[noreturn]] void Fail(png_structp png, PngFailure failure) {
   Record(StateOf(png), failure, "");
   png_error(png, "");
 }
 
 void CheckBudget(png_structp png, const PngState* state) {
-  if (state->budget->Exceeded()) Fail(png, Failure::kBudget);
+  if (state->budget->Exceeded()) Fail(png, PngFailure::kBudget);
 }
 
 // After the chunks before the first IDAT: the output transformations.
@@ -125,7 +125,7 @@ void OnInfo(png_structp png, png_infop info) {
   png_get_IHDR(png, info, &width, &height, &bit_depth, &color_type, &interlace, nullptr, nullptr);
   if (width != static_cast<png_uint_32>(state->width) ||
       height != static_cast<png_uint_32>(state->height)) {
-    Fail(png, Failure::kUnexpected);
+    Fail(png, PngFailure::kUnexpected);
   }
   // What cv::imdecode asks of libpng: palette -> RGB and grey < 8 bits -> 8
   // (png_set_expand; it also turns tRNS into alpha, which is then dropped, so
@@ -148,7 +148,7 @@ void OnInfo(png_structp png, png_infop info) {
   const png_byte channels = state->gray ? 1 : 3;
   if (png_get_channels(png, info) != channels || png_get_bit_depth(png, info) != 8 ||
       png_get_rowbytes(png, info) != static_cast<size_t>(state->width) * channels) {
-    Fail(png, Failure::kUnexpected);
+    Fail(png, PngFailure::kUnexpected);
   }
 }
 
@@ -159,7 +159,7 @@ void OnInfo(png_structp png, png_infop info) {
 void OnRow(png_structp png, png_bytep new_row, png_uint_32 row, int pass) {
   PngState* state = StateOf(png);
   CheckBudget(png, state);
-  if (row >= static_cast<png_uint_32>(state->height)) Fail(png, Failure::kUnexpected);
+  if (row >= static_cast<png_uint_32>(state->height)) Fail(png, PngFailure::kUnexpected);
   const bool stored = row >= static_cast<png_uint_32>(state->first_row) &&
                       row < static_cast<png_uint_32>(state->end_row);
   if (new_row != nullptr && stored) {
@@ -195,7 +195,7 @@ void DecodeSteps(PngState* state) {
   }
   size_t pos = 0;
   while (pos < state->size && !state->end_seen && (state->read_to_end || !state->region_done)) {
-    const size_t count = std::min(kFeedBytes, state->size - pos);
+    const size_t count = std::min(kPngFeedBytes, state->size - pos);
     // libpng only reads the buffer; its API predates const.
     png_process_data(png, state->info, const_cast<png_bytep>(state->data + pos), count);
     pos += count;
@@ -208,13 +208,13 @@ void DecodeSteps(PngState* state) {
 bool RunPng(PngState* state) {
   state->png = png_create_read_struct(PNG_LIBPNG_VER_STRING, state, OnError, OnWarning);
   if (state->png == nullptr) {
-    Record(state, Failure::kError, "out of memory");
+    Record(state, PngFailure::kError, "out of memory");
     return false;
   }
   state->info = png_create_info_struct(state->png);
   if (state->info == nullptr) {
     png_destroy_read_struct(&state->png, nullptr, nullptr);
-    Record(state, Failure::kError, "out of memory");
+    Record(state, PngFailure::kError, "out of memory");
     return false;
   }
   if (setjmp(png_jmpbuf(state->png)) != 0) {
@@ -301,14 +301,14 @@ absl::Status DecodePng(const CodecRequest& request, cv::Mat& out, cv::Rect& deco
   state.budget = request.budget;
   if (!RunPng(&state)) {
     switch (state.failure) {
-      case Failure::kDamaged:
+      case PngFailure::kDamaged:
         return absl::InvalidArgumentError(absl::StrCat("damaged PNG frame: ", state.message));
-      case Failure::kBudget:
+      case PngFailure::kBudget:
         return BudgetExceeded("PNG", request.budget->budget());
-      case Failure::kUnexpected:
+      case PngFailure::kUnexpected:
         return absl::InvalidArgumentError("the PNG frame decoded to an unexpected image");
-      case Failure::kError:
-      case Failure::kNone:
+      case PngFailure::kError:
+      case PngFailure::kNone:
         break;
     }
     return absl::InvalidArgumentError(absl::StrCat("cannot decode the PNG frame: ", state.message));

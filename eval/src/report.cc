@@ -13,7 +13,7 @@
 namespace lane::eval {
 namespace {
 
-using Json = nlohmann::ordered_json;
+using OrderedJson = nlohmann::ordered_json;
 
 std::string Fixed(double v, int decimals) {
   if (std::isnan(v)) return "n/a";
@@ -24,7 +24,7 @@ std::string Fixed(double v, int decimals) {
 
 std::string Percent(double v) { return std::isnan(v) ? "n/a" : Fixed(100 * v, 2) + "%"; }
 
-Json Number(double v, double scale = 1e4) {
+OrderedJson Number(double v, double scale = 1e4) {
   if (std::isnan(v)) return nullptr;
   return std::round(v * scale) / scale;
 }
@@ -88,8 +88,8 @@ std::string PaperOwnSpreadRow(const EvalReport& report, const ClipSpread& c) {
                       " | ", Fixed(r->F1(), 3), " | | | |\n");
 }
 
-Json SpreadJson(const Spread& s) {
-  Json out = Json::object();
+OrderedJson SpreadJson(const Spread& s) {
+  OrderedJson out = OrderedJson::object();
   out["mean"] = Number(s.mean);
   out["std"] = Number(s.std);
   out["min"] = Number(s.min);
@@ -97,8 +97,8 @@ Json SpreadJson(const Spread& s) {
   return out;
 }
 
-Json ClipSpreadJson(const ClipSpread& c) {
-  Json out = Json::object();
+OrderedJson ClipSpreadJson(const ClipSpread& c) {
+  OrderedJson out = OrderedJson::object();
   out["clip"] = c.clip;
   out["detected"] = SpreadJson(c.detected);
   out["correct_rate"] = SpreadJson(c.correct_rate);
@@ -112,15 +112,15 @@ Json ClipSpreadJson(const ClipSpread& c) {
   return out;
 }
 
-Json CountsJson(const ClipCounts& c) {
-  Json out = Json::object();
+OrderedJson CountsJson(const ClipCounts& c) {
+  OrderedJson out = OrderedJson::object();
   out["clip"] = c.clip;
   out["frames"] = c.frames;
   out["unlabelled_frames"] = c.unlabelled_frames;
   out["failed_frames"] = c.failed_frames;
   out["missing_results"] = c.missing_results;
   const PaperCounts& p = c.paper;
-  Json paper = Json::object();
+  OrderedJson paper = OrderedJson::object();
   paper["labels"] = p.labels;
   paper["detected"] = p.detections;
   paper["correct"] = p.correct;
@@ -134,7 +134,7 @@ Json CountsJson(const ClipCounts& c) {
   paper["f1"] = Number(p.F1());
   out["paper"] = std::move(paper);
   const CulaneCounts& k = c.culane;
-  Json culane = Json::object();
+  OrderedJson culane = OrderedJson::object();
   culane["labels"] = k.labels;
   culane["detected"] = k.detections;
   culane["true_positives"] = k.true_positives;
@@ -224,13 +224,13 @@ std::string ReportMarkdown(const EvalReport& report, const SeedSummary* seeds) {
 
 std::string ReportJson(const EvalReport& report, const SeedSummary* seeds) {
   const EvalOptions& o = report.options;
-  Json out = Json::object();
+  OrderedJson out = OrderedJson::object();
   out["schema"] = 1;
   out["dataset"] = report.dataset;
   out["format"] = DatasetFormatName(report.format);
   out["mode"] = ModeName(o.mode);
   out["source"] = report.source;
-  Json paper = Json::object();
+  OrderedJson paper = OrderedJson::object();
   paper["median_px"] = o.paper.median_px;
   paper["mean_px"] = o.paper.mean_px;
   paper["reference_width"] = o.paper.reference_width;
@@ -238,36 +238,36 @@ std::string ReportJson(const EvalReport& report, const SeedSummary* seeds) {
   paper["assignment"] = AssignmentName(o.paper.assignment);
   paper["samples"] = o.paper.samples;
   out["paper_rule"] = std::move(paper);
-  Json culane = Json::object();
+  OrderedJson culane = OrderedJson::object();
   culane["line_width_px"] = o.culane.line_width_px;
   culane["reference_width"] = o.culane.reference_width;
   culane["iou_threshold"] = o.culane.iou_threshold;
   out["culane_metric"] = std::move(culane);
   if (o.mode == Mode::kTwo) {
-    out["ego_row"] = o.ego_row >= 0 ? Json(o.ego_row) : Json(nullptr);
+    out["ego_row"] = o.ego_row >= 0 ? OrderedJson(o.ego_row) : OrderedJson(nullptr);
   }
-  Json clips = Json::array();
+  OrderedJson clips = OrderedJson::array();
   for (const ClipCounts& c : report.clips) clips.push_back(CountsJson(c));
   out["clips"] = std::move(clips);
   out["total"] = CountsJson(report.total);
   out["warnings"] = report.warnings;
   if (seeds != nullptr && !seeds->seeds.empty()) {
-    Json s = Json::object();
+    OrderedJson s = OrderedJson::object();
     s["seeds"] = seeds->seeds;
-    Json clips_spread = Json::array();
+    OrderedJson clips_spread = OrderedJson::array();
     for (const ClipSpread& c : seeds->clips) clips_spread.push_back(ClipSpreadJson(c));
     s["clips"] = std::move(clips_spread);
     s["total"] = ClipSpreadJson(seeds->total);
     out["seeds"] = std::move(s);
   }
-  return out.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
+  return out.dump(2, ' ', false, OrderedJson::error_handler_t::replace) + "\n";
 }
 
 std::string BaselineJson(const EvalReport& report, const std::string& command,
                          const SeedSummary* seeds) {
   const ClipCounts& t = report.total;
   const bool over_seeds = seeds != nullptr && !seeds->seeds.empty();
-  Json out = Json::object();
+  OrderedJson out = OrderedJson::object();
   out["about"] =
       "Regression baseline of lane eval (tests/eval/eval_regression_test.cc fails when the "
       "CULane F1, the mean over `seeds`, drops more than 0.02 below culane_f1, or the paper "
@@ -299,13 +299,13 @@ std::string BaselineJson(const EvalReport& report, const std::string& command,
   }
   out["source"] = report.source;
   out["command"] = command;
-  return out.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
+  return out.dump(2, ' ', false, OrderedJson::error_handler_t::replace) + "\n";
 }
 
 absl::StatusOr<Baseline> ReadBaseline(const std::string& path) {
   absl::StatusOr<std::string> text = ReadTextFile(path);
   if (!text.ok()) return text.status();
-  const Json j = Json::parse(*text, nullptr, /*allow_exceptions=*/false);
+  const OrderedJson j = OrderedJson::parse(*text, nullptr, /*allow_exceptions=*/false);
   if (j.is_discarded() || !j.is_object()) {
     return absl::InvalidArgumentError(absl::StrCat(path, ": not a JSON object"));
   }
@@ -327,7 +327,7 @@ absl::StatusOr<Baseline> ReadBaseline(const std::string& path) {
     if (!j["seeds"].is_array()) {
       return absl::InvalidArgumentError(absl::StrCat(path, ": \"seeds\" must be an array"));
     }
-    for (const Json& s : j["seeds"]) {
+    for (const OrderedJson& s : j["seeds"]) {
       if (!s.is_number_unsigned()) {
         return absl::InvalidArgumentError(
             absl::StrCat(path, ": \"seeds\" must hold non-negative integers"));

@@ -18,7 +18,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path TempDir(const std::string& name) {
+fs::path CcvlTempDir(const std::string& name) {
   const fs::path dir = fs::path(::testing::TempDir()) / ("lane_eval_ccvl_" + name);
   fs::remove_all(dir);
   fs::create_directories(dir);
@@ -106,7 +106,7 @@ const std::vector<Eigen::Vector2d> kLeft = {
 const std::vector<Eigen::Vector2d> kRight = {{520, 479}, {470, 400}, {420, 320}, {380, 240}};
 
 TEST(CcvlTest, WrittenInTheDocumentedLayoutAndReadBack) {
-  const fs::path dir = TempDir("layout");
+  const fs::path dir = CcvlTempDir("layout");
   WriteCcvl(dir / "labels.ccvl", {{"f00000.png", {{kLeft, "bw"}, {kRight, "sy"}}},
                                   {"f00001.png", {}},
                                   {"f00002.png", {}, /*labels_as_empty_matrix=*/true},
@@ -135,7 +135,7 @@ TEST(CcvlTest, WrittenInTheDocumentedLayoutAndReadBack) {
 }
 
 TEST(CcvlTest, MalformedPointsNameTheElement) {
-  const fs::path dir = TempDir("malformed");
+  const fs::path dir = CcvlTempDir("malformed");
   WriteCcvl(dir / "labels.ccvl", {{"f00000.png", {{kLeft, "bw"}}},
                                   {"f00001.png", {{kLeft, "bw"}, {kLeft, "sw", /*cols=*/8}}}});
   const auto frames = ReadCcvl((dir / "labels.ccvl").string());
@@ -147,7 +147,7 @@ TEST(CcvlTest, MalformedPointsNameTheElement) {
 }
 
 TEST(CcvlTest, NotAMatFile) {
-  const fs::path dir = TempDir("not_mat");
+  const fs::path dir = CcvlTempDir("not_mat");
   std::ofstream(dir / "labels.ccvl") << "this is not a MAT-file\n";
   const auto frames = ReadCcvl((dir / "labels.ccvl").string());
   ASSERT_FALSE(frames.ok());
@@ -157,7 +157,7 @@ TEST(CcvlTest, NotAMatFile) {
 TEST(CcvlTest, ClipWithListLoadsAsCaltechDataset) {
   // caltech/cordova1/{labels.ccvl,list.txt}; the list names one frame the
   // labels do not have.
-  const fs::path root = TempDir("dataset");
+  const fs::path root = CcvlTempDir("dataset");
   const fs::path clip = root / "cordova1";
   fs::create_directories(clip);
   WriteCcvl(clip / "labels.ccvl",

@@ -23,7 +23,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path TempDir(const std::string& name) {
+fs::path DatasetTempDir(const std::string& name) {
   const fs::path dir = fs::path(::testing::TempDir()) / ("lane_eval_dataset_" + name);
   fs::remove_all(dir);
   fs::create_directories(dir);
@@ -37,7 +37,7 @@ void WriteImage(const fs::path& path, int width, int height) {
 TEST(DatasetTest, CulaneFolderTree) {
   // driver_161_90frame/06030819_0755.MP4/{00000,00090}.jpg + .lines.txt, and
   // a second clip with an image whose labels are missing.
-  const fs::path root = TempDir("culane");
+  const fs::path root = DatasetTempDir("culane");
   const fs::path a = root / "driver_161_90frame" / "06030819_0755.MP4";
   const fs::path b = root / "driver_161_90frame" / "06030822_0756.MP4";
   fs::create_directories(a);
@@ -74,7 +74,7 @@ TEST(DatasetTest, LabelsCopiedFromFrameToFrameAreCountedAndWarned) {
   // 00000 and 00090 differ; 00180 and 00270 repeat 00090 to the last digit;
   // 00360 has no lanes (does not count, and does not break the run's
   // comparison: 00450 repeats 00270); 00540 moves by a hundredth of a pixel.
-  const fs::path root = TempDir("culane_copies");
+  const fs::path root = DatasetTempDir("culane_copies");
   const std::string moving = "10 23 20 13\n40 23 30 13\n";
   const std::string copied = "11 23 21 13\n41 23 31 13\n";
   const std::vector<std::pair<std::string, std::string>> frames = {
@@ -101,7 +101,7 @@ TEST(DatasetTest, LabelsCopiedFromFrameToFrameAreCountedAndWarned) {
   EXPECT_NE(dataset->warnings[0].find("00180.jpg"), std::string::npos);
 
   // A clip whose labels all differ gets no warning.
-  const fs::path moving_root = TempDir("culane_moving");
+  const fs::path moving_root = DatasetTempDir("culane_moving");
   for (int i = 0; i < 3; ++i) {
     const std::string stem = "0000" + std::to_string(i);
     WriteImage(moving_root / (stem + ".jpg"), 64, 24);
@@ -114,7 +114,7 @@ TEST(DatasetTest, LabelsCopiedFromFrameToFrameAreCountedAndWarned) {
 }
 
 TEST(DatasetTest, MalformedCulaneLabelNamesTheFile) {
-  const fs::path root = TempDir("culane_bad");
+  const fs::path root = DatasetTempDir("culane_bad");
   WriteImage(root / "00000.jpg", 64, 24);
   std::ofstream(root / "00000.lines.txt") << "10 23 20 13\n40 23 30\n";
   const auto dataset = LoadDataset(root.string());
@@ -124,7 +124,7 @@ TEST(DatasetTest, MalformedCulaneLabelNamesTheFile) {
 }
 
 TEST(DatasetTest, TusimpleLabelFiles) {
-  const fs::path root = TempDir("tusimple");
+  const fs::path root = DatasetTempDir("tusimple");
   std::ofstream(root / "label_data_0313.json")
       << R"({"lanes": [[-2, 600, 610]], "h_samples": [240, 250, 260], )"
       << R"("raw_file": "clips/0313-1/6040/20.jpg"})"
@@ -143,7 +143,7 @@ TEST(DatasetTest, TusimpleLabelFiles) {
 }
 
 TEST(DatasetTest, UnknownFolder) {
-  const fs::path root = TempDir("unknown");
+  const fs::path root = DatasetTempDir("unknown");
   std::ofstream(root / "readme.txt") << "hello\n";
   const auto format = DetectDatasetFormat(root.string());
   ASSERT_FALSE(format.ok());
@@ -157,7 +157,7 @@ TEST(DatasetTest, UnknownFolder) {
 
 // Synthetic frames as `lane render` writes them: PNGs, list.txt, labels.jsonl.
 fs::path RenderClip(const std::string& name, int frames) {
-  const fs::path dir = TempDir(name);
+  const fs::path dir = DatasetTempDir(name);
   std::ofstream labels(dir / "labels.jsonl");
   std::ofstream list(dir / "list.txt");
   const CameraModel camera;
@@ -262,7 +262,7 @@ TEST(EvaluateTest, ResultsMatchedByNameIndexAndSize) {
 }
 
 TEST(EvaluateTest, AmbiguousNamesAcrossClips) {
-  const fs::path root = TempDir("ambiguous");
+  const fs::path root = DatasetTempDir("ambiguous");
   for (const char* clip : {"a", "b"}) {
     fs::create_directories(root / clip);
     WriteImage(root / clip / "00000.jpg", 64, 24);

@@ -10,7 +10,7 @@ namespace {
 
 // A straight boundary through (x_bottom, 480) and the vanishing point
 // (320, 200) of a 640x480 frame, labelled from row 470 up to row 250.
-Curve Boundary(double x_bottom) {
+Curve StraightBoundary(double x_bottom) {
   const auto at = [&](double y) {
     return Eigen::Vector2d(320 + (x_bottom - 320) * (y - 200) / 280, y);
   };
@@ -19,8 +19,9 @@ Curve Boundary(double x_bottom) {
 
 TEST(EgoTest, NearestBoundaryOnEachSideOfTheCentre) {
   // Left to right: -330, 10, 290, 610, 900 at the bottom row; unordered.
-  const std::vector<Curve> labels = {Boundary(610), Boundary(10), Boundary(900), Boundary(290),
-                                     Boundary(-330)};
+  const std::vector<Curve> labels = {StraightBoundary(610), StraightBoundary(10),
+                                     StraightBoundary(900), StraightBoundary(290),
+                                     StraightBoundary(-330)};
   const EgoBoundaries ego = SelectEgoBoundaries(labels, 320, 350);
   EXPECT_EQ(ego.left, 3);   // 290 at the bottom
   EXPECT_EQ(ego.right, 0);  // 610
@@ -41,14 +42,15 @@ TEST(EgoTest, ChosenAtTheGivenRow) {
 
 TEST(EgoTest, LabelsStoppingShortOfTheRowAreExtended) {
   // The row (479) is below both labels' lower ends (470).
-  const std::vector<Curve> labels = {Boundary(200), Boundary(450)};
+  const std::vector<Curve> labels = {StraightBoundary(200), StraightBoundary(450)};
   const EgoBoundaries ego = SelectEgoBoundaries(labels, 320, 479);
   EXPECT_EQ(ego.left, 0);
   EXPECT_EQ(ego.right, 1);
 }
 
 TEST(EgoTest, MissingSide) {
-  const EgoBoundaries ego = SelectEgoBoundaries({Boundary(100), Boundary(250)}, 320, 400);
+  const EgoBoundaries ego =
+      SelectEgoBoundaries({StraightBoundary(100), StraightBoundary(250)}, 320, 400);
   EXPECT_EQ(ego.left, 1);
   EXPECT_EQ(ego.right, -1);
   const EgoBoundaries none = SelectEgoBoundaries({}, 320, 400);
@@ -59,12 +61,13 @@ TEST(EgoTest, MissingSide) {
 TEST(EgoTest, TwoLanesModeScoresOnlyTheEgoBoundaries) {
   LabelledFrame frame;
   for (double x : {-330.0, 10.0, 290.0, 610.0, 900.0})
-    frame.boundaries.push_back({Boundary(x), ""});
+    frame.boundaries.push_back({StraightBoundary(x), ""});
   EvalOptions options;
   options.mode = Mode::kTwo;
   options.ego_row = 350;
   // Detections on the ego boundaries and on an outer one.
-  const std::vector<Curve> detections = {Boundary(290), Boundary(610), Boundary(10)};
+  const std::vector<Curve> detections = {StraightBoundary(290), StraightBoundary(610),
+                                         StraightBoundary(10)};
   const FrameScore score = ScoreFrame(detections, frame, 640, 480, options);
   EXPECT_EQ(score.scored_labels, (std::vector<int>{2, 3}));
   EXPECT_EQ(score.paper.MatchedLabels(), 2);

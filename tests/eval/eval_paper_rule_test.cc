@@ -12,7 +12,7 @@ namespace lane::eval {
 namespace {
 
 // A gently curved boundary in a 640x480 frame, bottom to top.
-Curve Boundary(double dx = 0) {
+Curve CurvedBoundary(double dx = 0) {
   return Curve::FromBezier(std::array<Eigen::Vector2d, 4>{
       Eigen::Vector2d(200 + dx, 470), Eigen::Vector2d(240 + dx, 400),
       Eigen::Vector2d(270 + dx, 330), Eigen::Vector2d(290 + dx, 250)});
@@ -22,7 +22,7 @@ Curve Boundary(double dx = 0) {
 Curve AsPolyline(const Curve& c, int vertices) { return Curve::Polyline(c.Sample(vertices)); }
 
 TEST(CurveTest, BezierSamplesAreThePapersT) {
-  const Curve c = Boundary();
+  const Curve c = CurvedBoundary();
   const std::vector<Eigen::Vector2d> s = c.Sample();
   ASSERT_EQ(s.size(), 101u);
   EXPECT_TRUE(s.front().isApprox(c.points[0]));
@@ -63,7 +63,7 @@ TEST(CurveTest, XAtRowCrossesAndExtends) {
 }
 
 TEST(PaperRuleTest, IdenticalCurvesMatch) {
-  const Matching m = MatchPaperRule({Boundary()}, {Boundary()}, 640);
+  const Matching m = MatchPaperRule({CurvedBoundary()}, {CurvedBoundary()}, 640);
   EXPECT_EQ(m.detection_label, std::vector<int>{0});
   EXPECT_EQ(m.label_detection, std::vector<int>{0});
   EXPECT_EQ(m.MatchedLabels(), 1);
@@ -71,38 +71,39 @@ TEST(PaperRuleTest, IdenticalCurvesMatch) {
 }
 
 TEST(PaperRuleTest, ThirtyPixelShiftAt640DoesNotMatch) {
-  const Matching m = MatchPaperRule({Boundary(30)}, {Boundary()}, 640);
+  const Matching m = MatchPaperRule({CurvedBoundary(30)}, {CurvedBoundary()}, 640);
   EXPECT_EQ(m.MatchedLabels(), 0);
   EXPECT_EQ(m.FalsePositives(), 1);
   EXPECT_EQ(m.Misses(), 1);
   // Under both the AND and the OR rule: every distance exceeds both bounds.
   PaperRuleOptions loose;
   loose.rule = PaperRuleOptions::Rule::kOr;
-  EXPECT_EQ(MatchPaperRule({Boundary(30)}, {Boundary()}, 640, loose).MatchedLabels(), 0);
+  EXPECT_EQ(MatchPaperRule({CurvedBoundary(30)}, {CurvedBoundary()}, 640, loose).MatchedLabels(),
+            0);
   // A 10 px shift matches.
-  EXPECT_EQ(MatchPaperRule({Boundary(10)}, {Boundary()}, 640).MatchedLabels(), 1);
+  EXPECT_EQ(MatchPaperRule({CurvedBoundary(10)}, {CurvedBoundary()}, 640).MatchedLabels(), 1);
 }
 
 TEST(PaperRuleTest, BezierMatchesDensifiedPolylineOfTheSameCurve) {
-  const Curve polyline = AsPolyline(Boundary(), 23);  // like a CULane label
+  const Curve polyline = AsPolyline(CurvedBoundary(), 23);  // like a CULane label
   ASSERT_EQ(polyline.kind, Curve::Kind::kPolyline);
-  const MatchDistances d = CurveMatchDistances(Boundary().Sample(), polyline.Sample());
+  const MatchDistances d = CurveMatchDistances(CurvedBoundary().Sample(), polyline.Sample());
   // Bezier t is not arc length, so the samples differ, but lie on one curve.
   EXPECT_LT(d.median, 1.0);
   EXPECT_LT(d.mean, 1.0);
-  EXPECT_EQ(MatchPaperRule({Boundary()}, {polyline}, 640).MatchedLabels(), 1);
+  EXPECT_EQ(MatchPaperRule({CurvedBoundary()}, {polyline}, 640).MatchedLabels(), 1);
   // And a detection covering only the lower half of a label still matches:
   // the rule takes the smaller of the two directed distances.
   const Curve lower_half = Curve::Polyline(
       std::vector<Eigen::Vector2d>(polyline.points.begin(), polyline.points.begin() + 12));
-  EXPECT_EQ(MatchPaperRule({lower_half}, {Boundary()}, 640).MatchedLabels(), 1);
+  EXPECT_EQ(MatchPaperRule({lower_half}, {CurvedBoundary()}, 640).MatchedLabels(), 1);
 }
 
 TEST(PaperRuleTest, OneToOneAssignmentBestPairsFirst) {
   // Two detections on one label: the nearer is correct, the other a false
   // positive. A second label far away is missed.
-  const std::vector<Curve> detections = {Boundary(8), Boundary(2)};
-  const std::vector<Curve> labels = {Boundary(), Boundary(200)};
+  const std::vector<Curve> detections = {CurvedBoundary(8), CurvedBoundary(2)};
+  const std::vector<Curve> labels = {CurvedBoundary(), CurvedBoundary(200)};
   const Matching m = MatchPaperRule(detections, labels, 640);
   EXPECT_EQ(m.detection_label, (std::vector<int>{-1, 0}));
   EXPECT_EQ(m.label_detection, (std::vector<int>{1, -1}));
@@ -125,8 +126,8 @@ TEST(PaperRuleTest, OneToOneAssignmentBestPairsFirst) {
 TEST(PaperRuleTest, OneToOneGivesEachDetectionItsOwnLabel) {
   // Two labels 12 px apart, two detections between them: each label gets
   // one detection even though both detections are within bounds of both.
-  const std::vector<Curve> labels = {Boundary(0), Boundary(12)};
-  const std::vector<Curve> detections = {Boundary(10), Boundary(3)};
+  const std::vector<Curve> labels = {CurvedBoundary(0), CurvedBoundary(12)};
+  const std::vector<Curve> detections = {CurvedBoundary(10), CurvedBoundary(3)};
   const Matching m = MatchPaperRule(detections, labels, 640);
   EXPECT_EQ(m.detection_label, (std::vector<int>{1, 0}));
   EXPECT_EQ(m.MatchedLabels(), 2);
@@ -150,7 +151,7 @@ TEST(PaperRuleTest, ThresholdsScaleWithWidth) {
   // The same picture at twice the size: a 30 px shift at 1280 px is a 15 px
   // shift at 640 px, and matches.
   const auto scaled = [](double dx) {
-    Curve c = Boundary(dx / 2);
+    Curve c = CurvedBoundary(dx / 2);
     for (Eigen::Vector2d& p : c.points) p *= 2;
     return c;
   };
@@ -160,9 +161,9 @@ TEST(PaperRuleTest, ThresholdsScaleWithWidth) {
 }
 
 TEST(PaperRuleTest, EmptySides) {
-  const Matching none = MatchPaperRule({}, {Boundary()}, 640);
+  const Matching none = MatchPaperRule({}, {CurvedBoundary()}, 640);
   EXPECT_EQ(none.Misses(), 1);
-  const Matching fp = MatchPaperRule({Boundary()}, {}, 640);
+  const Matching fp = MatchPaperRule({CurvedBoundary()}, {}, 640);
   EXPECT_EQ(fp.FalsePositives(), 1);
 }
 

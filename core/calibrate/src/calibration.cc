@@ -12,9 +12,8 @@
 namespace lane {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
-
-double Median(std::vector<double> v) {
+// The upper of the two middle values for an even count, 0 for none.
+double UpperMedian(std::vector<double> v) {
   if (v.empty()) return 0;
   const size_t h = v.size() / 2;
   std::nth_element(v.begin(), v.begin() + static_cast<long>(h), v.end());
@@ -63,7 +62,7 @@ std::vector<double> RoadRowFinder::RowSpread() const {
     std::vector<double> s(static_cast<size_t>(m2_.cols));
     const double* m = m2_.ptr<double>(r);
     for (int c = 0; c < m2_.cols; ++c) s[static_cast<size_t>(c)] = std::sqrt(m[c] / (frames_ - 1));
-    spread.push_back(Median(std::move(s)));
+    spread.push_back(UpperMedian(std::move(s)));
   }
   return spread;
 }
@@ -76,7 +75,7 @@ int RoadRowFinder::RoadBottomRow() const {
   // The road's level: the median spread of the rows of the image's lower
   // half above its last eighth (road in every mounting seen so far).
   std::vector<double> road(spread.begin() + rows / 2, spread.begin() + rows * 7 / 8);
-  const double level = Median(road);
+  const double level = UpperMedian(road);
   if (level <= 0) return bottom;
   // From the bottom up: the first run of 2 rows at half the road's level or
   // more ends the still band.

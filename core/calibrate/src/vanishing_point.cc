@@ -9,11 +9,10 @@
 #include <random>
 
 #include "lane/base/median.h"
+#include "lane/geometry/camera.h"
 
 namespace lane {
 namespace {
-
-constexpr double kDegToRad = M_PI / 180.0;
 
 // The quantile of the non-negative values of `values` in a histogram of
 // quarter grey levels (responses are differences of 8-bit means).

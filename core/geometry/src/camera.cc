@@ -8,8 +8,6 @@
 namespace lane {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
-
 struct Trig {
   double c1, s1, c2, s2;  // cos/sin of pitch (1) and yaw (2)
 };

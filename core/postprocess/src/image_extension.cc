@@ -7,8 +7,6 @@
 namespace lane {
 namespace {
 
-Eigen::Vector2d Normal(const Eigen::Vector2d& t) { return Eigen::Vector2d(-t.y(), t.x()); }
-
 bool InImage(const Eigen::Vector2d& p, const ChannelView& image) {
   return image.Inside(p.x(), p.y());
 }

@@ -14,10 +14,6 @@ namespace {
 
 float Bilinear(const ChannelView& image, double x, double y) { return image.Bilinear(x, y); }
 
-Eigen::Vector2d Normal(const Eigen::Vector2d& tangent) {
-  return Eigen::Vector2d(-tangent.y(), tangent.x());
-}
-
 bool InBounds(const Eigen::Vector2d& p, const ChannelView& image) {
   return image.Inside(p.x(), p.y());
 }

@@ -9,10 +9,14 @@
 #define LANE_CAMERA_H_
 
 #include <Eigen/Core>
+#include <cmath>
 
 #include "absl/status/status.h"
 
 namespace lane {
+
+// Degrees to radians, for the angles of a camera and of lines.
+inline constexpr double kDegToRad = M_PI / 180.0;
 
 struct CameraModel {
   // Focal lengths in pixels. Defaults: the Caltech Lanes camera (640x480).

@@ -14,6 +14,11 @@
 
 namespace lane {
 
+// A curve's normal: its tangent turned by +90 degrees.
+inline Eigen::Vector2d Normal(const Eigen::Vector2d& tangent) {
+  return Eigen::Vector2d(-tangent.y(), tangent.x());
+}
+
 // Samples of one channel along the segment center +- half * normal, one per
 // pixel step, bilinear, into `out` (resized: no allocation once it has
 // grown); positions outside the image read as 0.
