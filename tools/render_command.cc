@@ -40,6 +40,7 @@ struct RenderFlags {
   bool clutter = false;
   bool straight = false;
   bool night = false;
+  double double_lines = 0;
   double fps = lane::SyntheticDriveOptions().fps;
   double speed_mps = lane::SyntheticDriveOptions().speed_mps;
 };
@@ -69,6 +70,7 @@ int RunRender(const RenderFlags& flags) {
   options.jpeg_quality = flags.jpeg_quality;
   if (flags.clutter) lane::SetRoadsideClutter(&options);
   options.night = flags.night;
+  options.double_line_probability = flags.double_lines;
   if (flags.straight) {
     options.straight_probability = 1.0;
     options.max_heading_rad = 0.005;
@@ -168,6 +170,12 @@ Command AddRenderCommand(CLI::App& lane) {
   app->add_flag("--night", flags->night,
                 "night: the road lit by the car's low beams over a little ambient light, with "
                 "street lights and oncoming headlights (independent frames)")
+      ->excludes(sequence);
+  app->add_option("--double-lines", flags->double_lines,
+                  "the share of inner boundaries drawn as solid double lines, 0.10-0.20 m "
+                  "apart; each is labelled once, along its centre (independent frames)")
+      ->type_name("P")
+      ->check(CLI::Range(0.0, 1.0))
       ->excludes(sequence);
   app->add_flag("--straight", flags->straight,
                 "straight roads only, nearly aligned with the car (independent frames): "

@@ -54,7 +54,9 @@ absl::StatusOr<std::vector<LabelledFrame>> ParseRenderLabels(absl::string_view t
           const std::string colour = boundary.contains("color") && boundary["color"].is_string()
                                          ? boundary["color"].get<std::string>()
                                          : std::string("white");
-          label.type = absl::StrCat(dashed ? "dashed " : "solid ", colour);
+          const bool twin = boundary.contains("double") && boundary["double"].is_boolean() &&
+                            boundary["double"].get<bool>();
+          label.type = absl::StrCat(twin ? "double " : (dashed ? "dashed " : "solid "), colour);
           frame.boundaries.push_back(std::move(label));
         }
         frames.push_back(std::move(frame));
@@ -85,6 +87,7 @@ std::string RenderLabelsJson(const std::string& frame_name, const SyntheticFrame
     e["points"] = pts;
     e["dashed"] = b.dashed;
     e["color"] = b.yellow ? "yellow" : "white";
+    if (b.double_line) e["double"] = true;
     e["ego"] = i == frame.ego_left ? "left" : (i == frame.ego_right ? "right" : "none");
     e["id"] = b.id;
     if (frame.ego) e["type_changes"] = b.type_changes;

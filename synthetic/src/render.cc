@@ -177,10 +177,21 @@ double MarkingCover(const Road& road, const Boundary& m, const GroundPixel& p) {
   const double nx = inv_norm, ny = -slope * inv_norm;  // unit normal
   const double fd = std::max(1e-4, std::abs(nx * jux + ny * juy) + std::abs(nx * jvx + ny * jvy));
   const double half = 0.5 * m.width;
-  if (std::abs(d) >= half + 0.5 * fd) return 0.0;
-  const double lo = std::max(d - 0.5 * fd, -half);
-  const double hi = std::min(d + 0.5 * fd, half);
-  double cover = std::max(0.0, hi - lo) / fd;
+  // A line of the marking centred `c` metres across from its offset.
+  auto strip = [&](double c) {
+    const double lo = std::max(d - c - 0.5 * fd, -half);
+    const double hi = std::min(d - c + 0.5 * fd, half);
+    return std::max(0.0, hi - lo) / fd;
+  };
+  double cover = 0;
+  if (m.double_gap > 0) {
+    const double c = 0.5 * (m.double_gap + m.width);
+    if (std::abs(d) >= c + half + 0.5 * fd) return 0.0;
+    cover = std::min(1.0, strip(-c) + strip(c));
+  } else {
+    if (std::abs(d) >= half + 0.5 * fd) return 0.0;
+    cover = strip(0);
+  }
   if (m.dashed) {
     const double tx = slope * inv_norm, ty = inv_norm;  // unit tangent
     const double fa = std::abs(tx * jux + ty * juy) + std::abs(tx * jvx + ty * jvy);
@@ -457,6 +468,7 @@ SyntheticFrame RenderScene(const CameraModel& camera, const SyntheticOptions& op
     SyntheticBoundary out;
     out.image = m.truth.p;
     out.dashed = m.dashed;
+    out.double_line = m.double_gap > 0;
     out.yellow = m.yellow;
     out.lateral_offset_m = m.offset;
     out.id = i;

@@ -165,7 +165,8 @@ absl::Status ValidateOptions(const SyntheticOptions& o) {
     return bad("extra_roadside_objects must be in 0..256");
   }
   for (double p :
-       {o.tree_row_probability, o.sign_probability, o.guardrail_probability, o.worn_probability}) {
+       {o.tree_row_probability, o.sign_probability, o.guardrail_probability, o.worn_probability,
+        o.double_line_probability}) {
     if (!(p >= 0.0 && p <= 1.0)) return bad("clutter probabilities must be in [0, 1]");
   }
   if (!std::isfinite(o.truth_near_m) || o.truth_near_m < 0) return bad("truth_near_m must be >= 0");
@@ -209,6 +210,13 @@ Road SampleRoad(const SyntheticOptions& o, Rng& rng) {
                            static_cast<float>(w * Uniform(rng, 0.96, 1.0)));
     }
     m.salt = rng();
+    // Drawn only when asked for, so that frames without double lines keep
+    // their random stream.
+    if (o.double_line_probability > 0 && b > 0 && b < lanes &&
+        Chance(rng, o.double_line_probability)) {
+      m.double_gap = Uniform(rng, 0.10, 0.20);
+      m.dashed = false;
+    }
     road.boundaries.push_back(m);
   }
   road.ego_left = ego;

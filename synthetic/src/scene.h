@@ -48,6 +48,9 @@ struct Boundary {
   double phase = 0.0;  // metres
   double alpha = 1.0;  // paint opacity
   double wear = 0.0;   // 0 = fresh paint
+  // > 0: a double line, two lines of `width` this far apart (metres),
+  // centred on `offset`.
+  double double_gap = 0.0;
   cv::Vec3f colour;
   uint64_t salt = 0;
   // A dashed boundary is solid from this far ahead on (metres; a drive's

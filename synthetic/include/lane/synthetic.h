@@ -46,6 +46,11 @@ struct SyntheticOptions {
   double sign_probability = 0;       // a sign on two posts beside the road
   double guardrail_probability = 0;  // a guardrail along one road edge
   double worn_probability = 0;       // per boundary: the paint worn to 0-30 %, or gone
+  // Per inner boundary (not the outermost two): a solid double line, two
+  // lines of the boundary's width 0.10-0.20 m apart. Its truth runs along
+  // its centre (docs/evaluation.md, "Double lines"). 0 by default: the
+  // frame is then exactly as without it.
+  double double_line_probability = 0;
   // Night: the scene lit by the car's low beams (bright from a few metres
   // to 20-35 m ahead, falling off with the square of the distance beyond,
   // within a cone of +-20-30 deg) over an ambient 3-10 % of daylight, with
@@ -69,6 +74,7 @@ struct SyntheticBoundary {
   std::array<Eigen::Vector2d, 4> image;  // Bezier control points, image pixels
   bool dashed = false;
   bool yellow = false;
+  bool double_line = false;  // two lines; `image` runs along their centre
   double lateral_offset_m = 0;  // at y = 0, metres (right +)
   // The boundary's index on the road, from the left: in a drive, the same
   // painted line keeps its id in every frame.
