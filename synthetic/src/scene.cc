@@ -164,9 +164,8 @@ absl::Status ValidateOptions(const SyntheticOptions& o) {
   if (o.extra_roadside_objects < 0 || o.extra_roadside_objects > 256) {
     return bad("extra_roadside_objects must be in 0..256");
   }
-  for (double p :
-       {o.tree_row_probability, o.sign_probability, o.guardrail_probability, o.worn_probability,
-        o.double_line_probability}) {
+  for (double p : {o.tree_row_probability, o.sign_probability, o.guardrail_probability,
+                   o.worn_probability, o.double_line_probability}) {
     if (!(p >= 0.0 && p <= 1.0)) return bad("clutter probabilities must be in [0, 1]");
   }
   if (!std::isfinite(o.truth_near_m) || o.truth_near_m < 0) return bad("truth_near_m must be >= 0");

@@ -211,9 +211,10 @@ TEST(DetectorEndToEnd, ReportsADoubleLineOnceAlongItsCentre) {
   }
   std::sort(errors.begin(), errors.end());
   const double median = errors.empty() ? 1e9 : errors[errors.size() / 2];
-  std::printf("[ double lines ] %d in view: %d reported once, %d twice or more, median "
-              "distance from the centre %.3f m\n",
-              doubles, once, twice, median);
+  std::printf(
+      "[ double lines ] %d in view: %d reported once, %d twice or more, median "
+      "distance from the centre %.3f m\n",
+      doubles, once, twice, median);
   ASSERT_GE(doubles, 40);
   EXPECT_EQ(twice, 0);
   EXPECT_GE(once, 0.9 * doubles);

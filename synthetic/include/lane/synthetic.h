@@ -74,7 +74,7 @@ struct SyntheticBoundary {
   std::array<Eigen::Vector2d, 4> image;  // Bezier control points, image pixels
   bool dashed = false;
   bool yellow = false;
-  bool double_line = false;  // two lines; `image` runs along their centre
+  bool double_line = false;     // two lines; `image` runs along their centre
   double lateral_offset_m = 0;  // at y = 0, metres (right +)
   // The boundary's index on the road, from the left: in a drive, the same
   // painted line keeps its id in every frame.
