@@ -154,7 +154,7 @@ TEST(DetectorEndToEnd, FindsSyntheticBoundariesAtNightAndInClutter) {
 
 // The lateral position (ground x, metres) `y` metres ahead of a curve given
 // as image points mapped to the ground; NaN where it does not reach.
-double GroundXAt(const std::vector<Eigen::Vector2d>& ground, double y) {
+double CurveXAt(const std::vector<Eigen::Vector2d>& ground, double y) {
   for (size_t i = 1; i < ground.size(); ++i) {
     const Eigen::Vector2d& a = ground[i - 1];
     const Eigen::Vector2d& b = ground[i];
@@ -192,13 +192,13 @@ TEST(DetectorEndToEnd, ReportsADoubleLineOnceAlongItsCentre) {
     ASSERT_TRUE(result.ok()) << result.status();
     for (const SyntheticBoundary& b : frame->boundaries) {
       if (!b.double_line) continue;
-      const double truth_x = GroundXAt(ImageCurveOnGround(Bezier{b.image}, cam), 12.0);
+      const double truth_x = CurveXAt(ImageCurveOnGround(Bezier{b.image}, cam), 12.0);
       if (!std::isfinite(truth_x) || std::abs(truth_x) > 6.0) continue;
       ++doubles;
       int near = 0;
       double best = 1e9;
       for (const Lane& lane : result->lanes) {
-        const double x = GroundXAt(Bezier{lane.ground}.Sample(61), 12.0);
+        const double x = CurveXAt(Bezier{lane.ground}.Sample(61), 12.0);
         if (std::isfinite(x) && std::abs(x - truth_x) < 0.6) {
           ++near;
           best = std::min(best, std::abs(x - truth_x));
