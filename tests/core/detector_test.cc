@@ -152,23 +152,12 @@ TEST(DetectorEndToEnd, FindsSyntheticBoundariesAtNightAndInClutter) {
   EXPECT_LE(c.false_positives, 0.3 * c.frames);  // measured 0.125 per frame
 }
 
-// The lateral position (ground x, metres) `y` metres ahead of a curve given
-// as image points mapped to the ground; NaN where it does not reach.
-double CurveXAt(const std::vector<Eigen::Vector2d>& ground, double y) {
-  for (size_t i = 1; i < ground.size(); ++i) {
-    const Eigen::Vector2d& a = ground[i - 1];
-    const Eigen::Vector2d& b = ground[i];
-    if ((a.y() - y) * (b.y() - y) <= 0 && a.y() != b.y()) {
-      return a.x() + (b.x() - a.x()) * (y - a.y()) / (b.y() - a.y());
-    }
-  }
-  return std::nan("");
-}
-
-std::vector<Eigen::Vector2d> ImageCurveOnGround(const Bezier& image, const CameraModel& cam) {
-  std::vector<Eigen::Vector2d> out;
-  for (const auto& p : image.Sample(61)) out.push_back(cam.ImageToGround(p));
-  return out;
+// The lateral position (ground x, metres) of a ground curve `y` metres
+// ahead (the road model's LateralProfile); NaN where it does not reach.
+double GroundXAt(const Bezier& ground, double y) {
+  const std::optional<LateralProfile> p = LateralProfile::FromGround(ground);
+  if (!p || y < p->y_near() || y > p->y_far()) return std::nan("");
+  return p->XAt(y);
 }
 
 // Issue 34, double lines: a solid double line (two lines 0.10-0.20 m apart,
@@ -192,13 +181,16 @@ TEST(DetectorEndToEnd, ReportsADoubleLineOnceAlongItsCentre) {
     ASSERT_TRUE(result.ok()) << result.status();
     for (const SyntheticBoundary& b : frame->boundaries) {
       if (!b.double_line) continue;
-      const double truth_x = CurveXAt(ImageCurveOnGround(Bezier{b.image}, cam), 12.0);
+      const auto truth = MapSpline(
+          Bezier{b.image}, 21, [&cam](const Eigen::Vector2d& q) { return cam.ImageToGround(q); });
+      ASSERT_TRUE(truth.has_value());
+      const double truth_x = GroundXAt(*truth, 12.0);
       if (!std::isfinite(truth_x) || std::abs(truth_x) > 6.0) continue;
       ++doubles;
       int near = 0;
       double best = 1e9;
       for (const Lane& lane : result->lanes) {
-        const double x = CurveXAt(Bezier{lane.ground}.Sample(61), 12.0);
+        const double x = GroundXAt(Bezier{lane.ground}, 12.0);
         if (std::isfinite(x) && std::abs(x - truth_x) < 0.6) {
           ++near;
           best = std::min(best, std::abs(x - truth_x));
