@@ -16,6 +16,11 @@
 #                           may run on (see below)
 #   LANE_SHUTDOWN_DEADLINE  drain deadline after SIGTERM                   10s
 #
+# lane-server itself reads LANE_AUTH_TOKENS (Bearer tokens) and
+# LANE_RESUME_STATE_KEYS (the replicas' shared resume-state key, hex;
+# "NEW,OLD" while rotating) from the environment; neither is a flag, so
+# neither shows in ps.
+#
 # lane-server's "one per core" is std::thread::hardware_concurrency(), the
 # CPUs of the affinity mask. A CPU quota (docker --cpus, a Kubernetes CPU
 # limit) does not change it, so with a quota set LANE_WORKERS to it.

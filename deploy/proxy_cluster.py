@@ -78,10 +78,21 @@ def parse_args():
     return args
 
 
+def shared_key_file(out):
+    """The replicas' resume-state key: made once per run, mode 0600."""
+    path = os.path.join(out, "resume-state.key")
+    if not os.path.exists(path):
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        with os.fdopen(fd, "w") as f:
+            f.write(os.urandom(32).hex() + "\n")
+    return path
+
+
 class Replica:
     def __init__(self, index, server, port, metrics_port, out, args):
         self.index, self.server, self.port, self.metrics_port = index, server, port, metrics_port
         self.out, self.max_age, self.every = out, args.max_age, args.resume_state_every
+        self.key_file = shared_key_file(out)
         self.proc = None
         self.starts = 0
         self.scrapes = []  # (incarnation, metrics) of the last scrape of each incarnation
@@ -98,7 +109,10 @@ class Replica:
              "--workers=1", "--metrics_camera_labels=4096", "--shutdown_deadline=10s",
              "--max_sessions=1024",
              "--max_connection_age=%gs" % self.max_age, "--max_connection_age_grace=10s",
-             "--resume_state_every=%d" % self.every],
+             "--resume_state_every=%d" % self.every,
+             # Every replica holds the same resume-state key, as a
+             # deployment's Secret gives them (docs/deployment.md).
+             "--resume_state_key_file=" + self.key_file],
             stdout=logf, stderr=subprocess.STDOUT)
         self.starts += 1
 

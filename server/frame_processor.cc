@@ -115,43 +115,6 @@ void FinishFrame(Session& session, bool tracked, std::optional<lane::Detection>&
   wire::LanesToProto(*detection, response);
 }
 
-void ResumeTracking(const v1::FrameRequest& request, Session& session, Metrics& metrics,
-                    v1::FrameResponse* response) {
-  absl::Status status;
-  Metrics::Resume outcome = Metrics::Resume::kKept;
-  if (!session.TracksStreams()) {
-    status = absl::InvalidArgumentError(
-        "resume_state: the session does not track streams (tracking.disabled)");
-    outcome = Metrics::Resume::kRefused;
-  } else {
-    if (!request.resume_state().empty()) {
-      absl::StatusOr<lane::TrackerState> state = wire::DecodeTrackerState(request.resume_state());
-      absl::StatusOr<bool> restored =
-          state.ok() ? session.tracker().Resume(*state) : absl::StatusOr<bool>(state.status());
-      if (!restored.ok()) {
-        session.tracker().Reset();  // a fresh start, ids going on
-        status = restored.status();
-        outcome = Metrics::Resume::kRefused;
-      } else if (*restored) {
-        outcome = Metrics::Resume::kRestored;
-      }
-    }
-    if (request.min_lane_id() > 0) {
-      session.tracker().ReserveIdsBelow(
-          static_cast<int>(std::min<uint32_t>(request.min_lane_id(), lane::TrackerState::kMaxId)));
-    }
-  }
-  metrics.CountResume(outcome);
-  wire::ToFrameStatus(status, response->mutable_resume_status());
-}
-
-void AttachResumeState(Session& session, Metrics& metrics, v1::FrameResponse* response) {
-  std::string bytes = wire::EncodeTrackerState(session.tracker().Save());
-  if (bytes.size() > wire::kMaxResumeStateBytes) return;  // cannot happen: kMaxTracks
-  metrics.ObserveResumeStateBytes(bytes.size());
-  response->set_resume_state(std::move(bytes));
-}
-
 void AnswerUnprocessed(const absl::Status& status, Metrics& metrics, v1::FrameResponse* response) {
   wire::ToFrameStatus(status, response->mutable_status());
   metrics.CountFrame(wire::ToFrameResult(response->status().code()));

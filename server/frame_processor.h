@@ -67,17 +67,6 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, Session& session,
 void FinishFrame(Session& session, bool tracked, std::optional<lane::Detection>& detection,
                  v1::FrameResponse* response);
 
-// A tracked stream's first request asks to resume (resume_state,
-// min_lane_id): the session's tracker is restored from the client's state
-// (or kept, when it already continues it; or started afresh when the state
-// is refused), new ids start at min_lane_id, and the outcome goes into
-// `response`'s resume_status. Before the frame is measured.
-void ResumeTracking(const v1::FrameRequest& request, Session& session, Metrics& metrics,
-                    v1::FrameResponse* response);
-// The session tracker's resume state after the last committed frame into
-// `response` (FrameResponse.resume_state).
-void AttachResumeState(Session& session, Metrics& metrics, v1::FrameResponse* response);
-
 // Answers a frame without processing it (dropped, or refused before
 // processing): sets the status and counts the result.
 void AnswerUnprocessed(const absl::Status& status, Metrics& metrics, v1::FrameResponse* response);

@@ -194,7 +194,10 @@ void FrameStream::Process(const std::shared_ptr<Slot>& slot) {
       }
     }
     if (slot->resume && slot->session != nullptr) {
-      ResumeTracking(request, *slot->session, deps_.metrics, &slot->response);
+      const ResumeResult resumed =
+          ResumeTracking(request, *slot->session, deps_.seal, deps_.sessions);
+      deps_.metrics.CountResume(resumed.outcome);
+      wire::ToFrameStatus(resumed.status, slot->response.mutable_resume_status());
     }
     if (slot->session != nullptr) {
       // A bad frame's status is in its response; the stream goes on.
@@ -330,7 +333,11 @@ void FrameStream::MaybeAttachResumeStateLocked(Slot& front) {
     ++since_resume_state_;
     return;
   }
-  AttachResumeState(*front.session, deps_.metrics, &front.response);
+  std::string sealed = SealedResumeState(*front.session, deps_.seal);
+  if (!sealed.empty()) {
+    deps_.metrics.ObserveResumeStateBytes(sealed.size());
+    front.response.set_resume_state(std::move(sealed));
+  }
   since_resume_state_ = 0;
 }
 

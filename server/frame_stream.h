@@ -32,8 +32,10 @@
 #include "frame_processor.h"
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "metrics.h"
+#include "resume_seal.h"
 #include "session.h"
 #include "session_registry.h"
+#include "stream_resume.h"
 #include "worker_pool.h"
 
 namespace lane::server {
@@ -57,6 +59,8 @@ struct StreamOptions {
 // What a stream needs from the server, handed over once.
 struct StreamDeps {
   SessionRegistry& sessions;
+  // Seals and opens resume states.
+  const ResumeStateSeal& seal;
   WorkerPool& pool;
   Metrics& metrics;
   FrameLimits limits;

@@ -41,7 +41,11 @@ void DefaultConfigToProto(lane::Mode mode, uint32_t max_inflight, v1::SessionCon
 
 LaneServiceImpl::LaneServiceImpl(ServiceOptions options, SessionRegistry& sessions,
                                  WorkerPool& pool, Metrics& metrics)
-    : options_(std::move(options)), sessions_(sessions), pool_(pool), metrics_(metrics) {}
+    : options_(std::move(options)), sessions_(sessions), pool_(pool), metrics_(metrics) {
+  if (options_.resume_seal == nullptr) {
+    options_.resume_seal = std::make_shared<ResumeStateSeal>(ResumeStateKeys::Random());
+  }
+}
 
 LaneServiceImpl::~LaneServiceImpl() {
   // The server has shut down, so every stream's OnDone has returned; the last
@@ -165,7 +169,9 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* LaneServiceImpl::St
     grpc::CallbackServerContext* context) {
   absl::Status reject = CheckBearerToken(*context, options_.auth_tokens);
   const bool admitted = reject.ok();
-  StreamDeps deps{sessions_, pool_, metrics_, options_.frame_limits, options_.stream, nullptr};
+  StreamDeps deps{sessions_, *options_.resume_seal, pool_,
+                  metrics_,  options_.frame_limits, options_.stream,
+                  nullptr};
   if (admitted) deps.on_done = [this](FrameStream* stream) { Unregister(stream); };
   auto* stream = new FrameStream(std::move(deps));
   if (admitted) {

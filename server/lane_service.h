@@ -11,6 +11,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <unordered_set>
 #include <vector>
@@ -23,6 +24,7 @@
 #include "frame_stream.h"
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "metrics.h"
+#include "resume_seal.h"
 #include "session_registry.h"
 #include "worker_pool.h"
 
@@ -39,6 +41,9 @@ struct ServiceOptions {
   StreamOptions stream;
   // Reported by GetServerInfo.
   uint64_t max_receive_message_bytes = 0;
+  // Seals the resume states of tracked streams and opens those clients send
+  // back (resume_seal.h). Null: a random key of the service's own.
+  std::shared_ptr<const ResumeStateSeal> resume_seal;
   // Accepted Bearer tokens (authorization metadata); empty = no auth.
   std::vector<std::string> auth_tokens;
   BuildInfo build;
@@ -103,7 +108,7 @@ class LaneServiceImpl final : public RawLaneService {
   // Drops a finished stream from streams_ (its on_done callback).
   void Unregister(FrameStream* stream);
 
-  const ServiceOptions options_;
+  ServiceOptions options_;  // const after construction
   SessionRegistry& sessions_;
   WorkerPool& pool_;
   Metrics& metrics_;

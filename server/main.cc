@@ -24,6 +24,7 @@
 #include "absl/flags/usage_config.h"
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_replace.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
@@ -77,6 +78,13 @@ ABSL_FLAG(absl::Duration, max_connection_age_grace, absl::Seconds(30),
 ABSL_FLAG(uint32_t, resume_state_every, 15,
           "Tracked streams: put the camera tracker's resume state into a response every this "
           "many frames (and into every response while draining); 0 = never.");
+ABSL_FLAG(std::string, resume_state_key_file, "",
+          "File of the key resume states are sealed with (HMAC-SHA-256), shared by every "
+          "replica: one line of hex digits (`openssl rand -hex 32`), the current key, and "
+          "optionally a second line, the previous key, still accepted while keys rotate "
+          "(docs/deployment.md). The keys may instead come from the environment variable "
+          "LANE_RESUME_STATE_KEYS (current[,previous], hex). Without either the server makes a "
+          "random key at start, and a state resumes only on the replica that made it.");
 ABSL_FLAG(absl::Duration, shutdown_deadline, absl::Seconds(10),
           "On SIGTERM/SIGINT: time for open streams to answer their frames before "
           "Shutdown cancels what remains.");
@@ -267,6 +275,29 @@ absl::StatusOr<lane::server::ServerOptions> ServerOptionsFromFlags(
       options.auth_tokens.push_back(std::move(token));
     }
   }
+  if (const std::string path = absl::GetFlag(FLAGS_resume_state_key_file); !path.empty()) {
+    absl::StatusOr<lane::server::ResumeStateKeys> keys =
+        lane::server::ResumeStateKeys::ReadFile(path);
+    if (!keys.ok()) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("--resume_state_key_file: ", keys.status().message()));
+    }
+    options.resume_state_keys = *std::move(keys);
+  }
+  // Keys: never a command-line literal (visible in ps), never logged.
+  if (const char* env = std::getenv("LANE_RESUME_STATE_KEYS"); env != nullptr && *env != '\0') {
+    if (options.resume_state_keys) {
+      return absl::InvalidArgumentError(
+          "both --resume_state_key_file and LANE_RESUME_STATE_KEYS are set; give one");
+    }
+    absl::StatusOr<lane::server::ResumeStateKeys> keys =
+        lane::server::ResumeStateKeys::Parse(absl::StrReplaceAll(env, {{",", "\n"}}));
+    if (!keys.ok()) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("LANE_RESUME_STATE_KEYS: ", keys.status().message()));
+    }
+    options.resume_state_keys = *std::move(keys);
+  }
   options.build = build;
   return options;
 }
@@ -315,6 +346,17 @@ void LogStarted(Log& log, const lane::server::LaneServer& server,
   }
   fields.emplace_back("bearer_tokens", options.auth_tokens.size());
   fields.emplace_back("workers", options.workers);
+  if (!options.resume_state_keys) {
+    absl::StrAppend(&text,
+                    ", resume states sealed under a random key of this process (they resume "
+                    "only on this replica: give every replica --resume_state_key_file)");
+    fields.emplace_back("resume_state_key", "random");
+  } else {
+    absl::StrAppend(&text, ", shared resume-state key",
+                    options.resume_state_keys->previous() ? " (with a previous key)" : "");
+    fields.emplace_back("resume_state_key",
+                        options.resume_state_keys->previous() ? "shared+previous" : "shared");
+  }
   log.Info(text, "started", std::move(fields));
 }
 

@@ -140,6 +140,8 @@ LaneServer::LaneServer(const ServerOptions& options) : options_(options) {}
 
 LaneServer::~LaneServer() { Drain(); }
 
+bool LaneServer::random_resume_key() const { return !options_.resume_state_keys.has_value(); }
+
 absl::StatusOr<std::unique_ptr<LaneServer>> LaneServer::Start(
     const ServerOptions& options, std::shared_ptr<prometheus::Registry> registry) {
   // Fail fast on bad options, TLS files or default config, before anything
@@ -209,6 +211,8 @@ void LaneServer::BuildService() {
       static_cast<uint64_t>(options_.max_receive_message_bytes);
   service_options.auth_tokens = options_.auth_tokens;
   service_options.stream.resume_state_every = options_.resume_state_every;
+  service_options.resume_seal = std::make_shared<ResumeStateSeal>(
+      options_.resume_state_keys ? *options_.resume_state_keys : ResumeStateKeys::Random());
   service_options.stream.max_age = options_.max_connection_age;
   service_options.build = options_.build;
   service_ = std::make_unique<LaneServiceImpl>(service_options, *sessions_, *pool_, *metrics_);

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -21,6 +22,7 @@
 #include "http_endpoint.h"
 #include "lane_service.h"
 #include "metrics.h"
+#include "resume_seal.h"
 #include "session_registry.h"
 #include "worker_pool.h"
 
@@ -76,6 +78,10 @@ struct ServerOptions {
   // A tracked stream's responses carry the tracker's resume state every
   // this many frames (StreamOptions::resume_state_every); 0 = never.
   uint32_t resume_state_every = 15;
+  // The keys resume states are sealed and opened with (resume_seal.h), the
+  // same on every replica of a cluster (--resume_state_key_file). Unset: a
+  // random key made at start, so states resume only on this process.
+  std::optional<ResumeStateKeys> resume_state_keys;
   // Drain budget: streams get until this deadline to answer what they have
   // received, then Shutdown cancels whatever remains at the same deadline.
   absl::Duration shutdown_deadline = absl::Seconds(10);
@@ -134,6 +140,9 @@ class LaneServer {
   void Wait();
 
   int port() const { return port_; }
+  // Whether resume states are sealed under a random key of this process
+  // (no ServerOptions::resume_state_keys): they resume only here.
+  bool random_resume_key() const;
   // -1 without a metrics endpoint.
   int metrics_port() const { return metrics_port_; }
   SessionRegistry& sessions() { return *sessions_; }

@@ -49,4 +49,23 @@ CalibrationSnapshot Session::Calibration() const {
   return s;
 }
 
+uint64_t Session::epoch() const {
+  absl::MutexLock lock(&epoch_mu_);
+  return epoch_;
+}
+
+uint64_t Session::SealEpoch() {
+  absl::MutexLock lock(&epoch_mu_);
+  epoch_fixed_ = true;
+  return epoch_;
+}
+
+bool Session::ContinueEpoch(uint64_t epoch) {
+  absl::MutexLock lock(&epoch_mu_);
+  if (epoch_fixed_) return epoch == epoch_;
+  epoch_ = epoch;
+  epoch_fixed_ = true;
+  return true;
+}
+
 }  // namespace lane::server

@@ -23,6 +23,7 @@
 #include "lane/config/config.h"
 #include "lane/detector.h"
 #include "lane/track/frame_tracker.h"
+#include "resume_seal.h"
 
 namespace lane::server {
 
@@ -103,11 +104,13 @@ struct Session {
   Session(std::string camera_id_in, uint64_t version_in, lane::Config config_in,
           std::string config_json_in, StreamPolicy stream_in, DecodePolicy decode_in,
           lane::Detector detector_in, absl::Time create_time_in,
-          CalibrationPolicy calibration_in = {}, TrackingPolicy tracking_in = {})
+          CalibrationPolicy calibration_in = {}, TrackingPolicy tracking_in = {},
+          uint64_t epoch_in = 0)
       : camera_id(std::move(camera_id_in)),
         version(version_in),
         config(std::move(config_in)),
         config_json(std::move(config_json_in)),
+        config_fingerprint(ConfigFingerprint(config_json)),
         stream(stream_in),
         decode(decode_in),
         calibration(calibration_in),
@@ -115,7 +118,8 @@ struct Session {
         detector(std::move(detector_in)),
         create_time(create_time_in),
         tracker_(config.camera),
-        calibrator_(config.camera) {}
+        calibrator_(config.camera),
+        epoch_(epoch_in) {}
 
   const std::string camera_id;
   // Unique within the process; new on every create and replace.
@@ -123,6 +127,8 @@ struct Session {
   const lane::Config config;
   // lane::ConfigToJson(config): the canonical form compared by CreateSession.
   const std::string config_json;
+  // ConfigFingerprint(config_json): what resume states name of the config.
+  const std::string config_fingerprint;
   // Resolved: max_inflight_frames > 0.
   const StreamPolicy stream;
   const DecodePolicy decode;
@@ -151,12 +157,27 @@ struct Session {
   // order (Commit). Thread-safe.
   lane::FrameTracker& tracker() { return tracker_; }
 
+  // The session's epoch, which its resume states name (resume_seal.h):
+  // random, drawn at create and replace. A session whose epoch has not yet
+  // been sealed into a state nor taken from one continues the epoch of the
+  // first state it resumes (the same session, carried on from another
+  // replica); from then on the epoch is fixed.
+  uint64_t epoch() const;
+  // The epoch to seal a state with; fixes it.
+  uint64_t SealEpoch();
+  // Whether a state of `epoch` continues this session: the same epoch, or
+  // this session's epoch was not fixed yet (it takes `epoch` and fixes it).
+  bool ContinueEpoch(uint64_t epoch);
+
  private:
   lane::FrameTracker tracker_;
   mutable absl::Mutex refine_mu_;
   lane::OnlineCalibrator calibrator_ ABSL_GUARDED_BY(refine_mu_);
   std::shared_ptr<const lane::Detector> refined_ ABSL_GUARDED_BY(refine_mu_);
   uint64_t refine_generation_ ABSL_GUARDED_BY(refine_mu_) = 0;
+  mutable absl::Mutex epoch_mu_;
+  uint64_t epoch_ ABSL_GUARDED_BY(epoch_mu_);
+  bool epoch_fixed_ ABSL_GUARDED_BY(epoch_mu_) = false;
 };
 
 }  // namespace lane::server

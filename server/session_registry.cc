@@ -109,11 +109,14 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
   if (options_.max_session_memory_bytes > 0 && held + need > options_.max_session_memory_bytes) {
     return wire::SessionMemoryExhausted(need, held, options_.max_session_memory_bytes);
   }
-  if (old != sessions_.end()) replaced = std::move(old->second.session);
+  if (old != sessions_.end()) {
+    replaced = std::move(old->second.session);
+    RetireLocked(*replaced);
+  }
 
   auto session = std::make_shared<Session>(
       camera_id, next_version_++, spec.config, std::move(config_json), stream, spec.decode,
-      *std::move(detector), now, spec.calibration, spec.tracking);
+      *std::move(detector), now, spec.calibration, spec.tracking, epochs_());
   memory_bytes_ = held + SessionBytes(*session);
   const bool inserted = replaced == nullptr;
   sessions_.insert_or_assign(camera_id, Entry{session, now});
@@ -152,9 +155,25 @@ absl::Status SessionRegistry::Delete(absl::string_view camera_id) {
   if (it == sessions_.end()) return wire::SessionNotFound(camera_id);
   doomed = std::move(it->second.session);
   memory_bytes_ -= SessionBytes(*doomed);
+  RetireLocked(*doomed);
   sessions_.erase(it);
   NotifySizeLocked();
   return absl::OkStatus();
+}
+
+void SessionRegistry::RetireLocked(const Session& session) {
+  const uint64_t epoch = session.epoch();
+  if (!retired_.insert(epoch).second) return;
+  retired_order_.push_back(epoch);
+  if (retired_order_.size() > kMaxRetiredEpochs) {
+    retired_.erase(retired_order_.front());
+    retired_order_.pop_front();
+  }
+}
+
+bool SessionRegistry::EpochRetired(uint64_t epoch) const {
+  absl::MutexLock lock(&mu_);
+  return retired_.count(epoch) > 0;
 }
 
 size_t SessionRegistry::EvictIdle() {

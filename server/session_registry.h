@@ -7,10 +7,13 @@
 #define LANE_SERVER_SESSION_REGISTRY_H_
 
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <map>
 #include <memory>
+#include <random>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "absl/base/thread_annotations.h"
@@ -87,6 +90,14 @@ class SessionRegistry {
   uint64_t memory_bytes() const;
   const Options& options() const { return options_; }
 
+  // Whether `epoch` was the epoch (Session::epoch) of a session deleted or
+  // replaced on this server: a resume state of it must not be continued by
+  // the camera's new session. The last kMaxRetiredEpochs are remembered;
+  // sessions evicted for idleness are not retired (their camera's state
+  // still continues them).
+  bool EpochRetired(uint64_t epoch) const;
+  static constexpr size_t kMaxRetiredEpochs = 4096;
+
   // What a session counts against max_session_memory_bytes.
   static uint64_t SessionBytes(const Session& session);
   // Bytes of the largest request carrying a raw BGR frame of the camera.
@@ -108,6 +119,7 @@ class SessionRegistry {
       const std::string& camera_id, const std::string& config_json, const StreamPolicy& stream,
       const SessionSpec& spec, bool replace, absl::Time now) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   void NotifySizeLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  void RetireLocked(const Session& session) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
 
   const Options options_;
   mutable absl::Mutex mu_;
@@ -115,6 +127,11 @@ class SessionRegistry {
   uint64_t next_version_ ABSL_GUARDED_BY(mu_) = 1;
   // The sum of SessionBytes over sessions_.
   uint64_t memory_bytes_ ABSL_GUARDED_BY(mu_) = 0;
+  // Draws sessions' epochs: 64 random bits, so that replicas do not share one.
+  std::mt19937_64 epochs_ ABSL_GUARDED_BY(mu_){std::random_device{}()};
+  // EpochRetired's memory: the set, and its epochs oldest first.
+  std::unordered_set<uint64_t> retired_ ABSL_GUARDED_BY(mu_);
+  std::deque<uint64_t> retired_order_ ABSL_GUARDED_BY(mu_);
 };
 
 }  // namespace lane::server

@@ -164,10 +164,34 @@ std::string LatestState(const StreamResult& result, int* max_id) {
   return state;
 }
 
+// The key every "replica" of these tests shares (--resume_state_key_file).
+std::string SharedKey() { return std::string(ResumeStateKeys::kMinKeyBytes, 'k'); }
+
 ServerOptions ResumeOptions() {
   ServerOptions options = TestServer::DefaultOptions();
   options.resume_state_every = 5;
+  options.resume_state_keys = ResumeStateKeys(SharedKey());
   return options;
+}
+
+// A resume stream's first answer: refused, naming `what`, with the frame
+// itself processed.
+void ExpectRefused(const StreamResult& r, const std::string& what) {
+  ASSERT_TRUE(r.status.ok()) << what << ": " << r.status.error_message();
+  ASSERT_FALSE(r.responses.empty()) << what;
+  const v1::FrameResponse& answer = r.responses[0];
+  EXPECT_EQ(answer.status().code(), v1::FRAME_CODE_OK) << what;
+  EXPECT_EQ(answer.resume_status().code(), v1::FRAME_CODE_INVALID_ARGUMENT) << what;
+  EXPECT_NE(answer.resume_status().message().find(what), std::string::npos)
+      << what << ": " << answer.resume_status().message();
+}
+
+void DeleteSession(TestServer& server, const std::string& camera_id) {
+  grpc::ClientContext context;
+  v1::DeleteSessionRequest request;
+  request.set_camera_id(camera_id);
+  v1::DeleteSessionResponse deleted;
+  ASSERT_TRUE(server.stub().DeleteSession(&context, request, &deleted).ok());
 }
 
 TEST(ResumeTest, AnotherReplicaGoesOnWithTheSameIds) {
@@ -240,34 +264,49 @@ TEST(ResumeTest, BadStatesAreRefusedAndTheFramesGoOn) {
   const StreamResult first = RunStream(server.stub(), Slice("cam", model, 0, 4));
   ASSERT_TRUE(first.status.ok());
   int max_id = 0;
+  const std::string sealed = LatestState(first, &max_id);
+  // A state is opened only with the servers' key; sealing spoilt states
+  // with it, as only a holder of the key could, reaches the checks behind.
+  const ResumeStateSeal seal{ResumeStateKeys(SharedKey())};
+  absl::StatusOr<OpenedResumeState> opened = seal.Open(sealed);
+  ASSERT_TRUE(opened.ok()) << opened.status();
+  const ResumeBinding binding = opened->binding;
   v1::TrackerState good;
-  ASSERT_TRUE(good.ParseFromString(LatestState(first, &max_id)));
+  ASSERT_TRUE(good.ParseFromString(opened->tracker_state));
   ASSERT_FALSE(good.tracks().empty());
+  auto sealed_as = [&](const v1::TrackerState& state) {
+    return seal.Seal(binding, state.SerializeAsString());
+  };
 
   std::vector<std::pair<std::string, std::string>> cases;  // (bytes, what the error names)
-  cases.emplace_back("\xff\xff\xff garbage", "not a lane.v1.TrackerState");
+  cases.emplace_back("\xff\xff\xff garbage", "not a sealed state");
+  cases.emplace_back(good.SerializeAsString(), "not a sealed state");  // unsealed
   cases.emplace_back(std::string(5000, '\0'), "more than 4096");
+  cases.emplace_back(seal.Seal(binding, "\xff\xff\xff garbage"), "not a lane.v1.TrackerState");
+  std::string flipped = sealed;
+  flipped.back() = static_cast<char>(flipped.back() ^ 1);
+  cases.emplace_back(flipped, "tag");
   v1::TrackerState s = good;
   s.set_version(7);
-  cases.emplace_back(s.SerializeAsString(), "version");
+  cases.emplace_back(sealed_as(s), "version");
   s = good;
   s.mutable_tracks(0)->set_curve(0, std::numeric_limits<float>::quiet_NaN());
-  cases.emplace_back(s.SerializeAsString(), "curve");
+  cases.emplace_back(sealed_as(s), "curve");
   s = good;
   s.mutable_tracks(0)->set_covariance(0, -1.0f);
-  cases.emplace_back(s.SerializeAsString(), "covariance");
+  cases.emplace_back(sealed_as(s), "covariance");
   s = good;
   s.mutable_tracks(0)->set_id(s.next_id());
-  cases.emplace_back(s.SerializeAsString(), "id");
+  cases.emplace_back(sealed_as(s), "id");
   s = good;
   s.mutable_tracks(0)->mutable_votes()->RemoveLast();
-  cases.emplace_back(s.SerializeAsString(), "vote values");
+  cases.emplace_back(sealed_as(s), "vote values");
   s = good;
   for (int i = 0; i < 40; ++i) *s.add_tracks() = good.tracks(0);
-  cases.emplace_back(s.SerializeAsString(), "tracks");
+  cases.emplace_back(sealed_as(s), "tracks");
   s = good;
   s.mutable_tracks(0)->set_since_hit_frames(s.tracks(0).age_frames() + 1);
-  cases.emplace_back(s.SerializeAsString(), "age");
+  cases.emplace_back(sealed_as(s), "age");
 
   uint32_t min_id = static_cast<uint32_t>(max_id) + 1;
   for (const auto& [bytes, names] : cases) {
@@ -300,11 +339,97 @@ TEST(ResumeTest, BadStatesAreRefusedAndTheFramesGoOn) {
       static_cast<double>(cases.size()));
   // A state on a later request is ignored, with a word why.
   std::vector<v1::FrameRequest> late = Slice("cam", model, 7, 9);
-  late[1].set_resume_state(good.SerializeAsString());
+  late[1].set_resume_state(sealed);
   const StreamResult r = RunStream(server.stub(), late);
   ASSERT_TRUE(r.status.ok());
   EXPECT_EQ(r.responses[1].status().code(), v1::FRAME_CODE_OK);
   EXPECT_EQ(r.responses[1].resume_status().code(), v1::FRAME_CODE_INVALID_ARGUMENT);
+}
+
+// Issue 47: another camera's state is refused, and the camera reports none
+// of that camera's lanes: on frames without markings it reports none.
+TEST(ResumeTest, AStateBelongsToItsCamera) {
+  const lane::CameraModel model = ScaledCamera(0.5);
+  TestServer server(ResumeOptions());
+  server.CreateSession("front", SessionConfigFor(model));
+  server.CreateSession("side", SessionConfigFor(model));
+  const StreamResult front = RunStream(server.stub(), Slice("front", model, 0, 12));
+  ASSERT_TRUE(front.status.ok());
+  int max_id = 0;
+  const std::string state = LatestState(front, &max_id);
+  ASSERT_FALSE(state.empty());
+  ASSERT_GE(max_id, 2);
+
+  // Frames 12-15 of a road without markings, right after the state's time.
+  const std::vector<v1::FrameRequest> all_bare = Frames("side", model, {}, 16);
+  std::vector<v1::FrameRequest> bare(all_bare.begin() + 12, all_bare.end());
+  bare[0].set_resume_state(state);
+  const StreamResult side = RunStream(server.stub(), bare);
+  ExpectRefused(side, "camera");
+  for (const v1::FrameResponse& r : side.responses) {
+    EXPECT_EQ(r.status().code(), v1::FRAME_CODE_OK);
+    EXPECT_EQ(r.lanes_size(), 0) << "frame " << r.frame_id() << " reports another camera's lanes";
+  }
+  EXPECT_EQ(
+      MetricValue(server.registry(), "lanesvc_stream_resumes_total", {{"outcome", "refused"}}), 1);
+}
+
+// Issue 47: a state is refused by the same camera under another config, by
+// a session deleted and created again with the same config (a new epoch),
+// and by a replica that does not hold its key; a rotated key still opens it.
+TEST(ResumeTest, AStateBelongsToItsConfigEpochAndKey) {
+  const lane::CameraModel model = ScaledCamera(0.5);
+  TestServer a(ResumeOptions());
+  a.CreateSession("cam", SessionConfigFor(model));
+  const StreamResult first = RunStream(a.stub(), Slice("cam", model, 0, 12));
+  ASSERT_TRUE(first.status.ok());
+  int max_id = 0;
+  const std::string state = LatestState(first, &max_id);
+  ASSERT_FALSE(state.empty());
+  auto resumed = [&](const std::string& bytes) {
+    std::vector<v1::FrameRequest> requests = Slice("cam", model, 12, 14);
+    requests[0].set_resume_state(bytes);
+    return requests;
+  };
+
+  // Another replica with another camera geometry under the same id.
+  TestServer other_config(ResumeOptions());
+  other_config.CreateSession("cam", SessionConfigFor(ScaledCamera(0.5, 15.0)));
+  ExpectRefused(RunStream(other_config.stub(), resumed(state)), "config");
+
+  // Another replica without the shared key (a random key of its own).
+  TestServer no_key;
+  no_key.CreateSession("cam", SessionConfigFor(model));
+  ExpectRefused(RunStream(no_key.stub(), resumed(state)), "key");
+
+  // A replica whose key was rotated since: the old key is the previous one.
+  ServerOptions rotated_options = ResumeOptions();
+  rotated_options.resume_state_keys =
+      ResumeStateKeys(std::string(ResumeStateKeys::kMinKeyBytes, 'n'), SharedKey());
+  TestServer rotated(rotated_options);
+  rotated.CreateSession("cam", SessionConfigFor(model));
+  const StreamResult after_rotation = RunStream(rotated.stub(), resumed(state));
+  ASSERT_TRUE(after_rotation.status.ok());
+  EXPECT_EQ(after_rotation.responses[0].resume_status().code(), v1::FRAME_CODE_OK)
+      << after_rotation.responses[0].resume_status().message();
+  EXPECT_EQ(
+      MetricValue(rotated.registry(), "lanesvc_stream_resumes_total", {{"outcome", "restored"}}),
+      1);
+
+  // The same replica, after the session was deleted and created again with
+  // the very same config: a new epoch.
+  DeleteSession(a, "cam");
+  a.CreateSession("cam", SessionConfigFor(model));
+  const StreamResult recreated = RunStream(a.stub(), resumed(state));
+  ExpectRefused(recreated, "epoch");
+  for (const v1::Lane& lane : recreated.responses[0].lanes()) EXPECT_FALSE(lane.confirmed());
+  // Replaced by a stream's first request: both the config and the epoch
+  // changed; the config is named.
+  v1::SessionConfig moved = SessionConfigFor(ScaledCamera(0.5, 15.0));
+  std::vector<v1::FrameRequest> replacing = resumed(state);
+  *replacing[0].mutable_session_config() = moved;
+  replacing[0].set_replace_session(true);
+  ExpectRefused(RunStream(a.stub(), replacing), "config");
 }
 
 TEST(ResumeTest, AStreamOlderThanMaxConnectionAgeAnswersEverythingAndEnds) {
