@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "bench_frames.h"
 #include "lane/config/config.h"
 #include "lane/decode/detector_region.h"
@@ -132,12 +133,9 @@ void RunDetect(benchmark::State& state, const Detector& detector,
     auto r = detector.Detect(frames[i++ % frames.size()]);
     benchmark::DoNotOptimize(r);
     const auto& t = r->timings;
-    stage["ipm_ms"] += t.ipm_ms;
-    stage["filter_ms"] += t.filter_ms;
-    stage["threshold_ms"] += t.threshold_ms;
-    stage["lines_ms"] += t.lines_ms;
-    stage["splines_ms"] += t.splines_ms;
-    stage["postprocess_ms"] += t.postprocess_ms;
+    for (size_t k = 0; k < lane::DetectorStageCount(); ++k) {
+      if (t.ran[k]) stage[absl::StrCat(lane::DetectorStageName(k), "_ms")] += t.stage_ms[k];
+    }
     stage["lanes"] += r->lanes.size();
   }
   for (const auto& [k, v] : stage) state.counters[k] = v / state.iterations();

@@ -85,13 +85,9 @@ std::string DetectionJsonLine(const std::string& frame, int width, int height, l
   const lane::StageTimings& t = detection.timings;
   Json timing = Json::object();
   timing["decode"] = Round(decode_ms, 1e3);
-  timing["ipm"] = Round(t.ipm_ms, 1e3);
-  timing["filter"] = Round(t.filter_ms, 1e3);
-  timing["threshold"] = Round(t.threshold_ms, 1e3);
-  timing["refit"] = Round(t.refit_ms, 1e3);
-  timing["lines"] = Round(t.lines_ms, 1e3);
-  timing["splines"] = Round(t.splines_ms, 1e3);
-  timing["postprocess"] = Round(t.postprocess_ms, 1e3);
+  for (size_t i = 0; i < lane::DetectorStageCount(); ++i) {
+    timing[lane::DetectorStageName(i)] = Round(t.stage_ms[i], 1e3);
+  }
   timing["total"] = Round(t.total_ms, 1e3);
   out["timing_ms"] = std::move(timing);
   return Dump(out);

@@ -84,13 +84,10 @@ std::string ResponseJsonLine(const std::string& frame_name, const v1::FrameRespo
   Json timing = Json::object();
   timing["queue_wait"] = Round(t.queue_wait_ms(), 1e3);
   timing["decode"] = Round(t.decode_ms(), 1e3);
-  timing["ipm"] = Round(t.ipm_ms(), 1e3);
-  timing["filter"] = Round(t.filter_ms(), 1e3);
-  timing["threshold"] = Round(t.threshold_ms(), 1e3);
-  timing["refit"] = Round(t.refit_ms(), 1e3);
-  timing["lines"] = Round(t.lines_ms(), 1e3);
-  timing["splines"] = Round(t.splines_ms(), 1e3);
-  timing["postprocess"] = Round(t.postprocess_ms(), 1e3);
+  const lane::StageTimings stages = lane::wire::TimingsFromProto(t);
+  for (size_t i = 0; i < lane::DetectorStageCount(); ++i) {
+    timing[lane::DetectorStageName(i)] = Round(stages.stage_ms[i], 1e3);
+  }
   timing["detect"] = Round(t.detect_ms(), 1e3);
   out["timing_ms"] = std::move(timing);
   out["latency_ms"] = Round(latency_ms, 1e3);
@@ -123,14 +120,7 @@ lane::Detection DetectionFromResponse(const v1::FrameResponse& response) {
     detection.lanes.push_back(lane);
   }
   const v1::StageTimings& t = response.timings();
-  detection.timings.ipm_ms = t.ipm_ms();
-  detection.timings.filter_ms = t.filter_ms();
-  detection.timings.threshold_ms = t.threshold_ms();
-  detection.timings.refit_ms = t.refit_ms();
-  detection.timings.lines_ms = t.lines_ms();
-  detection.timings.splines_ms = t.splines_ms();
-  detection.timings.postprocess_ms = t.postprocess_ms();
-  detection.timings.total_ms = t.detect_ms();
+  detection.timings = lane::wire::TimingsFromProto(t);
   return detection;
 }
 

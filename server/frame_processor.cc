@@ -71,7 +71,7 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, Session& session,
     const SteadyTime decoded = std::chrono::steady_clock::now();
     const double decode_ms = MillisecondsBetween(start, decoded);
     timings->set_decode_ms(decode_ms);
-    metrics.ObserveStage(Stage::kDecode, decode_ms * 1e-3);
+    metrics.ObserveDecode(decode_ms * 1e-3);
     if (!frame.ok()) {
       status = frame.status();
     } else {

@@ -2,28 +2,6 @@
 
 namespace lane::server {
 
-const char* StageLabel(Stage stage) {
-  switch (stage) {
-    case Stage::kDecode:
-      return "decode";
-    case Stage::kIpm:
-      return "ipm";
-    case Stage::kFilter:
-      return "filter";
-    case Stage::kThreshold:
-      return "threshold";
-    case Stage::kRefit:
-      return "refit";
-    case Stage::kLines:
-      return "lines";
-    case Stage::kSplines:
-      return "splines";
-    case Stage::kPostprocess:
-      return "postprocess";
-  }
-  return "unknown";
-}
-
 prometheus::Histogram::BucketBoundaries Metrics::LatencyBuckets() {
   return {50e-6, 100e-6, 250e-6, 500e-6, 1e-3,   2.5e-3, 5e-3,
           10e-3, 25e-3,  50e-3,  100e-3, 250e-3, 500e-3, 1.0};
@@ -119,8 +97,9 @@ Metrics::Metrics(prometheus::Registry& registry, const BuildInfo& build, size_t 
                      .Name("lanesvc_stage_duration_seconds")
                      .Help("Time spent in each stage of a frame: decode, then the detector's.")
                      .Register(registry);
-  for (int i = 0; i < kNumStages; ++i) {
-    stages_[i] = &stages.Add({{"stage", StageLabel(static_cast<Stage>(i))}}, LatencyBuckets());
+  decode_stage_ = &stages.Add({{"stage", "decode"}}, LatencyBuckets());
+  for (size_t i = 0; i < lane::DetectorStageCount(); ++i) {
+    stages_[i] = &stages.Add({{"stage", lane::DetectorStageName(i)}}, LatencyBuckets());
   }
   auto& frames = prometheus::BuildCounter()
                      .Name("lanesvc_frames_total")
@@ -142,13 +121,9 @@ Metrics::Metrics(prometheus::Registry& registry, const BuildInfo& build, size_t 
 }
 
 void Metrics::ObserveDetectorStages(const lane::StageTimings& t) {
-  ObserveStage(Stage::kIpm, t.ipm_ms * 1e-3);
-  ObserveStage(Stage::kFilter, t.filter_ms * 1e-3);
-  ObserveStage(Stage::kThreshold, t.threshold_ms * 1e-3);
-  if (t.refit_ms > 0) ObserveStage(Stage::kRefit, t.refit_ms * 1e-3);
-  ObserveStage(Stage::kLines, t.lines_ms * 1e-3);
-  ObserveStage(Stage::kSplines, t.splines_ms * 1e-3);
-  ObserveStage(Stage::kPostprocess, t.postprocess_ms * 1e-3);
+  for (size_t i = 0; i < lane::DetectorStageCount(); ++i) {
+    if (t.ran[i]) stages_[i]->Observe(t.stage_ms[i] * 1e-3);
+  }
 }
 
 void Metrics::CountLanePaths(const lane::Detection& detection) {

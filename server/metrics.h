@@ -34,11 +34,6 @@ struct BuildInfo {
   std::string opencv_version;
 };
 
-// The stages of lanesvc_stage_duration_seconds{stage}.
-enum class Stage { kDecode, kIpm, kFilter, kThreshold, kRefit, kLines, kSplines, kPostprocess };
-inline constexpr int kNumStages = 8;
-const char* StageLabel(Stage stage);
-
 class Metrics {
  public:
   // 50 us .. 1 s in 1-2.5-5 steps.
@@ -51,11 +46,10 @@ class Metrics {
   // lanesvc_frame_latency_seconds: from receiving a frame to its response
   // being ready (every processed frame, whatever its status; not dropped ones).
   void ObserveFrameLatency(double seconds) { frame_latency_.Observe(seconds); }
-  // lanesvc_stage_duration_seconds{stage}.
-  void ObserveStage(Stage stage, double seconds) {
-    stages_[static_cast<int>(stage)]->Observe(seconds);
-  }
-  // The detector's stages, from its timings (milliseconds).
+  // lanesvc_stage_duration_seconds{stage="decode"}.
+  void ObserveDecode(double seconds) { decode_stage_->Observe(seconds); }
+  // lanesvc_stage_duration_seconds{stage}: each detector stage that ran, by
+  // its name (lane::DetectorStageName), from its timings (milliseconds).
   void ObserveDetectorStages(const lane::StageTimings& timings);
   // lanesvc_queue_wait_seconds: from receiving a frame to a worker starting it.
   void ObserveQueueWait(double seconds) { queue_wait_.Observe(seconds); }
@@ -107,7 +101,9 @@ class Metrics {
  private:
   prometheus::Histogram& frame_latency_;
   prometheus::Histogram& queue_wait_;
-  std::array<prometheus::Histogram*, kNumStages> stages_{};
+  prometheus::Histogram* decode_stage_ = nullptr;
+  // Indexed as the detector's stages.
+  std::array<prometheus::Histogram*, lane::StageTimings::kMaxStages> stages_{};
   std::array<prometheus::Counter*, 4> frames_{};
   prometheus::Counter& received_;
   prometheus::Gauge& inflight_;

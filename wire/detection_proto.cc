@@ -1,5 +1,9 @@
 #include "wire/detection_proto.h"
 
+#include <google/protobuf/descriptor.h>
+
+#include "absl/strings/str_cat.h"
+
 namespace lane::wire {
 namespace {
 
@@ -129,15 +133,39 @@ std::optional<lane::EgoLane> EgoFromProto(const v1::FrameResponse& response) {
   return ego;
 }
 
+const std::vector<const google::protobuf::FieldDescriptor*>& StageTimingFields() {
+  // Found once by name: the detector's stage table names the fields.
+  static const std::vector<const google::protobuf::FieldDescriptor*> fields = [] {
+    std::vector<const google::protobuf::FieldDescriptor*> out;
+    const google::protobuf::Descriptor* d = v1::StageTimings::descriptor();
+    for (size_t i = 0; i < lane::DetectorStageCount(); ++i) {
+      out.push_back(d->FindFieldByName(absl::StrCat(lane::DetectorStageName(i), "_ms")));
+    }
+    return out;
+  }();
+  return fields;
+}
+
 void TimingsToProto(const lane::StageTimings& timings, v1::StageTimings* out) {
-  out->set_ipm_ms(timings.ipm_ms);
-  out->set_filter_ms(timings.filter_ms);
-  out->set_threshold_ms(timings.threshold_ms);
-  out->set_refit_ms(timings.refit_ms);
-  out->set_lines_ms(timings.lines_ms);
-  out->set_splines_ms(timings.splines_ms);
-  out->set_postprocess_ms(timings.postprocess_ms);
+  const google::protobuf::Reflection* reflection = out->GetReflection();
+  const std::vector<const google::protobuf::FieldDescriptor*>& fields = StageTimingFields();
+  for (size_t i = 0; i < fields.size(); ++i) {
+    if (fields[i] != nullptr) reflection->SetDouble(out, fields[i], timings.stage_ms[i]);
+  }
   out->set_detect_ms(timings.total_ms);
+}
+
+lane::StageTimings TimingsFromProto(const v1::StageTimings& timings) {
+  lane::StageTimings out;
+  const google::protobuf::Reflection* reflection = timings.GetReflection();
+  const std::vector<const google::protobuf::FieldDescriptor*>& fields = StageTimingFields();
+  for (size_t i = 0; i < fields.size(); ++i) {
+    if (fields[i] == nullptr) continue;
+    out.stage_ms[i] = reflection->GetDouble(timings, fields[i]);
+    out.ran[i] = out.stage_ms[i] > 0;
+  }
+  out.total_ms = timings.detect_ms();
+  return out;
 }
 
 }  // namespace lane::wire

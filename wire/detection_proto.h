@@ -18,8 +18,14 @@ void LanesToProto(const lane::Detection& detection, v1::FrameResponse* out);
 std::vector<lane::Lane> LanesFromProto(const v1::FrameResponse& response);
 // The response's ego lane (none when it has none); ids 0 become -1.
 std::optional<lane::EgoLane> EgoFromProto(const v1::FrameResponse& response);
-// The detector's stage timings (milliseconds) into `out`.
+// The detector's stage timings (milliseconds) into `out`: each stage's into
+// the field `<name>_ms` (lane::DetectorStageName), the total into detect_ms.
 void TimingsToProto(const lane::StageTimings& timings, v1::StageTimings* out);
+// And back; a stage whose time is 0 did not run.
+lane::StageTimings TimingsFromProto(const v1::StageTimings& timings);
+// StageTimings' field of each detector stage, indexed as the stages; null
+// where the proto lacks one (a test holds every stage to have one).
+const std::vector<const google::protobuf::FieldDescriptor*>& StageTimingFields();
 
 }  // namespace lane::wire
 

@@ -437,13 +437,13 @@ TEST(ConfigTest, GroundViewIsValidated) {
 TEST(ConfigTest, NewDetectorOptionsRoundTripAndAreValidated) {
   const absl::StatusOr<Config> c = ParseConfig(R"({"detector": {"channel": "min_rg",
       "filter": {"bar_side_m": 0.2, "void_level": 5},
-      "postprocess": {"extend_geometric": false, "extend_search_m": 0.6, "extend_gap_m": 3,
+      "postprocess": {"extend_search_m": 0.6, "extend_gap_m": 3,
                       "extend_to_max_row": true, "clip_to_image": false}},
       "ipm": {"interpolation": "area"}})");
   ASSERT_TRUE(c.ok()) << c.status();
   EXPECT_EQ(c->detector.channel, Channel::kMinRedGreen);
   EXPECT_EQ(c->detector.filter.bar_side_m, 0.2);
-  EXPECT_FALSE(c->detector.postprocess.extend_geometric);
+  EXPECT_EQ(c->detector.postprocess.extend_search_m, 0.6);
   EXPECT_TRUE(c->detector.postprocess.extend_to_max_row);
   EXPECT_FALSE(c->detector.postprocess.clip_to_image);
   EXPECT_EQ(c->ipm.interpolation, Interpolation::kArea);

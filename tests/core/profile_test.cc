@@ -10,7 +10,8 @@
 #include <random>
 #include <vector>
 
-#include "lane/postprocess/postprocess.h"
+#include "lane/postprocess/profile.h"
+#include "lane/postprocess/spline_walk.h"
 
 namespace lane {
 namespace {

@@ -477,7 +477,7 @@ TEST(TrackingRefitTest, TrackedLanesAreRefittedAndAWrongWindowIsSearched) {
               std::abs(GroundXAt(searched->lanes[i], y_mid) - truth) + 0.03)
         << "lane " << i;
   }
-  EXPECT_GT(refitted->timings.refit_ms, 0.0);
+  EXPECT_GT(refitted->timings.Ms("refit"), 0.0);
 
   // The first window 1.8 m off, on bare asphalt: its refit fails, and its
   // lane is found by the search instead, once.

@@ -54,7 +54,10 @@ TEST(MetricsTest, Records) {
   metrics.ObserveFrameLatency(0.003);
   metrics.ObserveFrameLatency(0.004);
   lane::StageTimings timings;
-  timings.ipm_ms = 1;
+  const size_t ipm = lane::StageTimings::IndexOf("ipm");
+  ASSERT_LT(ipm, lane::DetectorStageCount());
+  timings.stage_ms[ipm] = 1;
+  timings.ran[ipm] = true;
   metrics.ObserveDetectorStages(timings);
   metrics.CountFrame(wire::FrameResult::kDropped);
   metrics.FrameReceived();
@@ -67,6 +70,8 @@ TEST(MetricsTest, Records) {
   metrics.ObserveFrameBytes(900'000);
   EXPECT_EQ(MetricValue(registry, "lanesvc_frame_latency_seconds"), 2);
   EXPECT_EQ(MetricValue(registry, "lanesvc_stage_duration_seconds", {{"stage", "ipm"}}), 1);
+  // A stage that did not run is not observed.
+  EXPECT_EQ(MetricValue(registry, "lanesvc_stage_duration_seconds", {{"stage", "refit"}}), 0);
   EXPECT_EQ(MetricValue(registry, "lanesvc_frames_total", {{"result", "dropped"}}), 1);
   EXPECT_EQ(MetricValue(registry, "lanesvc_frames_total", {{"result", "ok"}}), 0);
   EXPECT_EQ(MetricValue(registry, "lanesvc_frames_received_total"), 2);

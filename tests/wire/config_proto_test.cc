@@ -1,5 +1,6 @@
 #include "wire/config_proto.h"
 
+#include <google/protobuf/descriptor.h>
 #include <gtest/gtest.h>
 
 #include <functional>
@@ -160,6 +161,30 @@ TEST(ConvertTest, Lanes) {
   EXPECT_FALSE(l.inferred());
   EXPECT_TRUE(response.lanes(1).inferred());
   EXPECT_DOUBLE_EQ(response.timings().detect_ms(), 3);
+}
+
+// Every stage of the detector's table has its timing field in the proto
+// (StageTimings.<name>_ms), and the timings go there and come back by name.
+TEST(ConvertTest, EveryDetectorStageHasATimingField) {
+  ASSERT_GE(lane::DetectorStageCount(), 7u);
+  const std::vector<const google::protobuf::FieldDescriptor*>& fields = StageTimingFields();
+  ASSERT_EQ(fields.size(), lane::DetectorStageCount());
+  lane::StageTimings timings;
+  for (size_t i = 0; i < fields.size(); ++i) {
+    ASSERT_NE(fields[i], nullptr) << "lane.v1.StageTimings has no field "
+                                  << lane::DetectorStageName(i) << "_ms";
+    timings.stage_ms[i] = 1.5 + static_cast<double>(i);
+    timings.ran[i] = true;
+  }
+  v1::StageTimings proto;
+  TimingsToProto(timings, &proto);
+  EXPECT_DOUBLE_EQ(proto.ipm_ms(), timings.Ms("ipm"));
+  EXPECT_DOUBLE_EQ(proto.postprocess_ms(), timings.Ms("postprocess"));
+  const lane::StageTimings back = TimingsFromProto(proto);
+  for (size_t i = 0; i < fields.size(); ++i) {
+    EXPECT_DOUBLE_EQ(back.stage_ms[i], timings.stage_ms[i]) << lane::DetectorStageName(i);
+    EXPECT_TRUE(back.ran[i]);
+  }
 }
 
 }  // namespace

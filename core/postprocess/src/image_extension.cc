@@ -4,6 +4,8 @@
 #include <cmath>
 #include <vector>
 
+#include "lane/postprocess/profile.h"
+
 namespace lane {
 namespace {
 

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "lane/detector/stage_timings.h"
 #include "lane/geometry/bezier.h"
 #include "lane/geometry/camera.h"
 #include "lane/geometry/ground_curve.h"
@@ -121,18 +122,6 @@ struct EgoLane {
   // Time to line crossing below departure_tlc_s while moving towards that
   // line faster than departure_min_rate_mps.
   bool departing = false;
-};
-
-// Wall time of each stage, milliseconds.
-struct StageTimings {
-  double ipm_ms = 0;
-  double filter_ms = 0;
-  double threshold_ms = 0;
-  double refit_ms = 0;  // tracked lanes refitted in their windows (step 3b)
-  double lines_ms = 0;  // column-sum Hough and RANSAC lines
-  double splines_ms = 0;
-  double postprocess_ms = 0;
-  double total_ms = 0;
 };
 
 struct Intermediates {
@@ -250,76 +239,13 @@ class Detector {
   ChannelView ViewChannel(const cv::Mat& frame) const;
 
  private:
-  // The stages of Detect (detector.cc), in order.
+  // The stages themselves are the table of core/detector/src/pipeline.cc;
+  // Detect runs them in order over one frame.
   absl::Status CheckFrame(const cv::Mat& frame) const;
-  cv::Mat TopView(const ChannelView& channel, cv::Mat* void_mask) const;
-  cv::Mat Filter(const cv::Mat& top_view, const cv::Mat& void_mask) const;
-  cv::Mat Threshold(const cv::Mat& filtered, float* threshold) const;
-  // Top-view columns centre +- half (px).
-  struct ColumnSpan {
-    double centre = 0;
-    double half = 0;
-  };
-  // `skip`: the column peaks inside these spans are not searched (the
-  // refitted lanes').
-  std::vector<IpmLine> FindLines(const cv::Mat& thresholded, std::mt19937_64& rng,
-                                 std::vector<ColumnPeak>* peaks,
-                                 const std::vector<ColumnSpan>& skip) const;
-  // Lines in the prior's windows that `lines` does not already hold; the
-  // half width (px) of the spline window around each is appended to
-  // `half_widths_px`: its prior window, at most the usual spline window.
-  std::vector<IpmLine> FindPriorLines(const cv::Mat& thresholded, const DetectionPrior& prior,
-                                      const std::vector<IpmLine>& lines,
-                                      std::vector<double>* half_widths_px,
-                                      std::mt19937_64& rng) const;
-  // `half_widths_px`: each line's spline window (the prior's lines keep
-  // their narrower windows).
-  std::vector<SplineCandidate> FitSplines(const cv::Mat& thresholded,
-                                          const std::vector<IpmLine>& lines,
-                                          const std::vector<double>& half_widths_px,
-                                          std::mt19937_64& rng) const;
-  std::vector<Lane> ToLanes(const std::vector<SplineCandidate>& done) const;
-  // All-lanes mode: the road model's hidden boundaries (lane/road_model.h),
-  // added to `lanes` (sorted left to right) with `inferred` set.
-  void AddInferredLanes(std::vector<Lane>& lanes) const;
-  // All-lanes mode: windows (DetectionPrior form) for a second search, around
-  // where the road model puts a boundary that `lanes` lack: half-way across
-  // a two-lane gap (search_hidden) and one lane width outside the outermost
-  // (search_outer).
-  DetectionPrior RoadModelWindows(const std::vector<Lane>& lanes) const;
-  // `filtered` thresholded inside each window at the window's own quantile
-  // (and zero outside): a faint line between strong ones stands out there.
-  cv::Mat ThresholdInWindows(const cv::Mat& filtered, const DetectionPrior& windows,
-                             float frame_threshold) const;
-  // Step 3b: the lane of a refit window (DetectionPrior), or none.
-  std::optional<Lane> RefitWindow(const cv::Mat& thresholded,
-                                  const DetectionPrior::Window& window) const;
-  // Step 3b for all of `prior`'s windows.
-  struct Refitted {
-    std::vector<Lane> lanes;
-    std::vector<double> half_widths_m;  // each lane's window
-    std::vector<ColumnSpan> columns;    // where the Hough's peaks are theirs
-    DetectionPrior rest;                // the windows left to search
-    int failed = 0;                     // refits tried that failed
-  };
-  Refitted RefitTracked(const cv::Mat& thresholded, const DetectionPrior& prior) const;
-  // The search's `lanes` without those along a refitted lane, and the
-  // refitted lanes, sorted left to right.
-  void JoinRefitted(const Refitted& refitted, std::vector<Lane>& lanes) const;
-  // Step 7b: where the road model puts a boundary that `lanes` lack, line
-  // and spline RANSAC again inside the window, thresholded at the window's
-  // own quantile; what passes post-processing and fits the road is added.
-  void SearchRoadModelWindows(const cv::Mat& filtered, float threshold,
-                              const std::vector<IpmLine>& lines, const PostprocessFrame& images,
-                              std::mt19937_64& rng, std::vector<Lane>& lanes) const;
-  // A prior window's half width, metres: at least 5 cm, at most the line
-  // RANSAC's window.
-  double WindowHalfWidthM(const DetectionPrior::Window& w) const;
-  // The camera's column in the top view (x = 0 at its near edge).
-  double CameraColumn() const;
 
   Detector(IpmMapping ipm, DetectorOptions options, FilterKernels kernels)
       : ipm_(std::move(ipm)), options_(std::move(options)), kernels_(std::move(kernels)) {}
+  // The union of what the stages read of a frame.
   FrameNeeds ComputeNeeds() const;
 
   IpmMapping ipm_;

@@ -140,8 +140,6 @@ LANE_FIELDS(PostprocessOptions) {
   v.Field("extend_min_cos_down", s.extend_min_cos_down);
   v.Field("extend_min_row", s.extend_min_row);
   v.Field("extend_max_row", s.extend_max_row);
-  v.Field("extend_geometric", s.extend_geometric);
-  v.Field("localize_geometric", s.localize_geometric);
   v.Field("localize_search_m", s.localize_search_m);
   v.Field("localize_on_bars", s.localize_on_bars);
   v.Field("localize_only_coarse_top_view", s.localize_only_coarse_top_view);

@@ -15,7 +15,8 @@
 #include "lane/geometry/bezier.h"
 #include "lane/geometry/camera.h"
 #include "lane/geometry/ipm.h"
-#include "lane/postprocess/postprocess.h"
+#include "lane/geometry/channel_view.h"
+#include "lane/postprocess/postprocess_options.h"
 
 namespace lane {
 

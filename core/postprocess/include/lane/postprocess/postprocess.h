@@ -1,202 +1,21 @@
 // Stage 7: post-processing (paper section II-E): localisation along normals,
 // extension along the tangent, geometric checks with fallback to the RANSAC
-// line. Done in the top view and again in the image.
-#ifndef LANE_POSTPROCESS_H_
-#define LANE_POSTPROCESS_H_
+// line. Done in the top view and again in the image. The top of the
+// postprocess layer: PostprocessCandidates runs the steps and checks of the
+// headers below it (postprocess_options.h, spline_walk.h, profile.h,
+// candidate_checks.h, image_extension.h, marking_check.h, vehicle_check.h).
+#ifndef LANE_POSTPROCESS_POSTPROCESS_H_
+#define LANE_POSTPROCESS_POSTPROCESS_H_
 
-#include <algorithm>
-#include <cmath>
 #include <opencv2/core.hpp>
-#include <optional>
+#include <vector>
 
-#include "absl/status/status.h"
-#include "lane/geometry/bezier.h"
 #include "lane/geometry/channel_view.h"
 #include "lane/geometry/ipm.h"
-#include "lane/postprocess/profile.h"
-#include "lane/stages/line_fit.h"
+#include "lane/postprocess/postprocess_options.h"
+#include "lane/stages/spline_candidate.h"
 
 namespace lane {
-
-struct PostprocessOptions {
-  // --- checks in the top view ---
-  // Splines whose mean direction is further than this from vertical are
-  // dropped (reference: closer than 70 deg to horizontal), degrees.
-  double ipm_max_angle_from_vertical_deg = 20.0;
-  // Splines whose control polygon is less straight than this (mean cosine of
-  // its angles, 1 = straight) fall back to the RANSAC line.
-  double min_straightness = 0.85;
-  // Splines shorter than this fraction of the top view's height fall back to
-  // the RANSAC line.
-  double min_length_fraction = 0.25;
-  // Marking check (not in the paper): a painted marking is a bright bar, darker
-  // on BOTH sides, whereas a curb or the edge of the asphalt is a step that
-  // is dark on one side only, yet excites the second-derivative filter too.
-  // Along the top-view spline, the IPM intensity must exceed the intensity
-  // `side_offset_m` to the left and to the right by at least
-  // `min_side_contrast` (IPM intensity units, 1 = full scale) along at least
-  // `min_bar_fraction` of its length (so dashed markings pass).
-  // 0 disables the check. The paper lists curbs as its main source of false
-  // positives (section IV).
-  double side_offset_m = 0.3;
-  double min_side_contrast = 0.027;
-  // A dashed line is paint along a quarter of its length on US roads (3 m
-  // dashes, 9 m gaps; 2 m / 4 m, a third, on Chinese urban roads), and a
-  // top view about one dash cycle deep shows a dash cut by its edge as less.
-  // A quarter, the old fixed value, lost dashed lines on about half their
-  // frames; a fifth keeps them. The contrast above went up with it, from
-  // 0.015, to keep the false-positive rate (cordova1, docs/accuracy-log.md
-  // entry 35).
-  double min_bar_fraction = 0.2;
-  // Vertical objects (lane/vehicle_check.h): a top-view spline closer in
-  // direction to the ray from the camera's foot point through it than to the
-  // road's direction is dropped, where the two directions differ by at
-  // least this many degrees (twice the ~3 deg by which yaw and curvature
-  // tilt markings from the road's axis). 0 disables the test.
-  // The road's direction is the frame's median candidate direction; a
-  // candidate that bends by more than max_ray_bend_m from its straight line
-  // is a marking on a curve, not a (straight) ray.
-  double min_ray_angle_deg = 6.0;
-  // Bright neighbours (lane/vehicle_check.h): a top-view spline with a side,
-  // side_offset_m across, brighter than the road by more than half its own
-  // contrast along more than this fraction of its length is dropped: a
-  // marking has road on both sides. >= 1 disables it (the default: on the
-  // dev clips it cost more markings, beside double lines and bright curbs,
-  // than it removed false positives; docs/accuracy-log.md).
-  double max_bright_side_fraction = 1.0;
-  double max_ray_bend_m = 0.15;
-  // Extension in the top view: tangent step and normal half-search, IPM px.
-  double ipm_extend_step_px = 5.0;
-  double ipm_normal_search_px = 10.0;
-
-  // --- in the image (values for a 640 px wide image; scaled by width/640) ---
-  // Samples of the top-view spline mapped back to refit it in the image.
-  int backproject_samples = 11;
-  // Localisation: points sampled on the spline and half length of the normal
-  // segment searched for the brightest (Gaussian-smoothed) profile peak.
-  int localize_points = 21;
-  double localize_search_px = 20.0;
-  double profile_sigma_px = 2.0;
-  // A localised point is rejected when the direction to it from the previous
-  // point turns by more than acos(localize_min_cos) from the spline's.
-  double localize_min_cos = 0.9;
-  // Extension: tangent step and normal half-search, pixels.
-  double extend_step_px = 10.0;
-  double extend_search_px = 20.0;
-  // Stop when the profile contrast falls below this fraction of the mean
-  // contrast of the localised points.
-  double continuation_threshold = 0.35;
-  // Stop when the direction turns by more than acos(cos) from the spline's
-  // direction: looser going up (far, curves look sharper) than down.
-  double extend_min_cos_up = 0.86;
-  double extend_min_cos_down = 0.95;
-  // Extension stays between these image rows. Negative = derived from the
-  // camera: top = horizon + 0.15 * (ROI bottom - horizon), bottom = ROI bottom
-  // + 0.2 * (ROI bottom - horizon) (reference: rows 200..380 of the Caltech
-  // camera, whose horizon is at row 171 and ROI bottom at 350).
-  double extend_min_row = -1;
-  double extend_max_row = -1;
-  // Extension in the image along the road's geometry (lane/image_extension.h)
-  // instead of the reference's walk (stop at the first step without a
-  // profile peak): each step looks for a bright bar as wide as a marking
-  // across a normal `extend_search_m` metres long on the road (so the window
-  // follows the perspective: the reference's fixed 20 px are +-1.4 m at the
-  // Caltech camera's far rows and +-0.2 m at its near rows), walks through
-  // up to `extend_gap_m` metres without one (the gap between two dashes: 6
-  // to 9 m on US and Chinese roads; beyond that the lane is not followed),
-  // and, with `extend_to_max_row`, extrapolates the final straight segment
-  // down to `extend_max_row` (the road continues straight under the last
-  // evidence; lane labels such as CULane's run to the image bottom).
-  bool extend_geometric = true;
-  // Localisation in the image along the road's geometry (LocalizeInImage)
-  // instead of with the fixed pixel values above: the normal is searched
-  // +-localize_search_m on the road and the profile smoothed with
-  // localize_sigma_m on the road (at least profile_sigma_px), so the two
-  // lines of a double line merge into one peak at their centre (0.1 m: a
-  // marking's width; the lines of a double line are 10-15 cm apart).
-  bool localize_geometric = true;
-  double localize_search_m = 0.4;
-  // Localise on the strongest bar (brighter than both sides) rather than on
-  // the brightest point (LocalizeOptions::on_bars).
-  bool localize_on_bars = true;
-  double localize_sigma_m = 0.1;
-  double extend_search_m = 0.4;
-  double extend_gap_m = 6.0;
-  bool extend_to_max_row = false;
-  // The final image spline is cut to the part inside the image and on image
-  // content (not black: outside a lens's image circle). A top-view spline
-  // spans the whole top view, which extends beyond the image's sides where
-  // the ground rectangle does; a lane stops where the image does.
-  bool clip_to_image = true;
-  // The final image spline, mapped to the ground, must run within
-  // ipm_max_angle_from_vertical_deg of the road's direction, as the top-view
-  // spline had to (paper II-E.3: geometric checks after each step).
-  bool check_ground_angle = true;
-  // Colour (lane/marking_check.h): an image spline whose median redness
-  // (R - G) / R exceeds this is dropped. Yellow paint reads ~0.15, faded
-  // orange ~0.3, red curbs, red cars and tail lights 0.5-0.7; 0.4 lies
-  // between. >= 1 disables it. Grey frames are not checked.
-  double max_redness = 0.4;
-  // A final image spline shorter than this (pixels at 640 width) is replaced
-  // by the line.
-  double min_image_length_px = 40.0;
-  // Turn extension/localisation in the image on or off.
-  bool localize_in_image = true;
-  // Localise in the image only where the top view cannot place a marking
-  // itself: when its pixel across is wider than a marking
-  // (filter.marking_width_m). A finer top view (a ground view of a few cm per
-  // pixel) already puts the lane within a pixel of the marking, and the
-  // image's wider search then only finds other bars beside it: shadows'
-  // borders, curbs, vehicle edges (camera-only configs, 5 seeds:
-  // driver161-a, 0.0625 m/px, CULane F1 0.463 localised vs 0.48 not;
-  // cordova1's 0.114 m/px top view gains 0.06 from it).
-  bool localize_only_coarse_top_view = true;
-  bool extend_in_image = true;
-  bool extend_in_ipm = true;
-
-  absl::Status Validate() const;
-};
-
-// Localisation: moves `n` samples of the spline to the profile peak along
-// their normals, rejects points that turn too sharply, and refits. nullopt if
-// fewer than 4 points survive. `mean_contrast` receives the points' mean
-// contrast when not null.
-std::optional<Bezier> LocalizeSpline(const Bezier& spline, const ChannelView& image, int n,
-                                     double search_px, double sigma_px, double min_cos,
-                                     double* mean_contrast);
-
-// The (1 - bar_fraction) quantile over samples of `spline` of min(I(p) -
-// I(p - d n), I(p) - I(p + d n)) where n is the normal, d = side_offset_px
-// and I(p) is the brightest value within 1 px of p along n: how much
-// brighter the curve is than both of its sides along bar_fraction of its
-// length (a high quantile lets dashed markings pass).
-double BarContrast(const Bezier& spline, const ChannelView& image, double side_offset_px,
-                   double bar_fraction, int samples = 20);
-
-struct ExtendOptions {
-  double step_px = 10;
-  double search_px = 20;
-  double sigma_px = 2;
-  double min_contrast = 0;      // absolute contrast to continue
-  double min_cos_start = 0.95;  // going towards t=0
-  double min_cos_end = 0.86;    // going towards t=1
-  double min_row = 0;           // stay within these rows
-  double max_row = 1e9;
-  int max_steps = 60;
-};
-// Extension at both ends along the tangent, then a refit through the old
-// samples and the new points. Returns the input when nothing was added.
-Bezier ExtendSpline(const Bezier& spline, const ChannelView& image, const ExtendOptions& options);
-
-// ---- Stage 7 as a whole ------------------------------------------------------
-
-// A lane candidate through stages 6 to 8.
-struct SplineCandidate {
-  IpmLine line;  // the RANSAC line it was fitted around: the shape checks' fallback
-  Bezier ipm;    // top view, P0 the farther end
-  Bezier image;  // image, set by post-processing, P0 the upper end
-  double score = 0;
-};
 
 // One frame's images that post-processing reads.
 struct PostprocessFrame {
@@ -223,4 +42,4 @@ std::vector<SplineCandidate> PostprocessCandidates(const std::vector<SplineCandi
 
 }  // namespace lane
 
-#endif  // LANE_POSTPROCESS_H_
+#endif  // LANE_POSTPROCESS_POSTPROCESS_H_
