@@ -14,6 +14,7 @@ PACKAGES=(
   libabsl-dev            # absl::Status/StatusOr, flags, strings
   libcli11-dev           # command lines of lane and lane-client (header-only, CLI11 2.1)
   nlohmann-json3-dev     # config files and JSON Lines results
+  libssl-dev             # libcrypto's SHA-256: lane backfill's output trailers
   libgtest-dev libgmock-dev   # unit and integration tests
   libbenchmark-dev       # benchmarks
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler   # the service
