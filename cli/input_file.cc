@@ -56,19 +56,22 @@ absl::Status OpenErrorStatus(const std::string& path, int err) {
 // kind `want` (S_IFREG or S_IFDIR), on a real file system. O_NONBLOCK is
 // cleared again before the descriptor is handed out.
 absl::StatusOr<OpenedFile> OpenChecked(const std::string& path, int flags, unsigned want) {
-  // lstat-free: a symbolic link is followed, as every reader does; what
-  // counts is what the open gives, checked with fstat below. stat first only
-  // names a socket (open fails on one with ENXIO, which says little).
-  struct stat before;
-  if (::stat(path.c_str(), &before) == 0 && S_ISSOCK(before.st_mode)) {
-    return absl::FailedPreconditionError(absl::StrCat(
-        path, ": is a socket, not a ", want == S_IFDIR ? "directory" : "regular file"));
-  }
+  // A symbolic link is followed, as every reader does: what counts is what
+  // the open gives, checked with fstat below.
   int fd;
   do {
     fd = ::open(path.c_str(), flags | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
   } while (fd < 0 && errno == EINTR);
-  if (fd < 0) return OpenErrorStatus(path, errno);
+  if (fd < 0) {
+    const int err = errno;
+    // open fails on a socket with ENXIO, which says little: say what it is.
+    struct stat st;
+    if (err == ENXIO && ::stat(path.c_str(), &st) == 0 && S_ISSOCK(st.st_mode)) {
+      return absl::FailedPreconditionError(absl::StrCat(
+          path, ": is a socket, not ", want == S_IFDIR ? "a directory" : "a regular file"));
+    }
+    return OpenErrorStatus(path, err);
+  }
   OpenedFile file{ScopedFd(fd), 0};
   struct stat st;
   if (::fstat(fd, &st) != 0) {

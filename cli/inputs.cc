@@ -136,7 +136,9 @@ void ExpandInto(const std::string& path, const std::string& name, bool top_level
     std::vector<std::string> files;
     for (fs::directory_iterator it(path, ec), end; !ec && it != end; it.increment(ec)) {
       const std::string file = it->path().filename().string();
-      if (IsImageExtension(LowerExtension(file)) && !fs::is_directory(it->path())) {
+      // The entry's type from the listing (d_type): no stat per file.
+      std::error_code type_ec;
+      if (IsImageExtension(LowerExtension(file)) && !it->is_directory(type_ec)) {
         files.push_back(file);
       }
     }
