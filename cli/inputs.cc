@@ -114,6 +114,46 @@ FrameReader::~FrameReader() = default;
 
 namespace {
 
+// A list file's entries, each expanded as ExpandInto does. Opened without
+// blocking and read line by line within bounds: a list that is a FIFO, a
+// device or a /proc file, or that holds one endless line, is an error
+// entry, not a hang or all of memory.
+void ExpandListFile(const std::string& path, const std::string& name, int depth,
+                    std::vector<InputEntry>& entries) {
+  if (depth >= kMaxListDepth) {
+    entries.push_back({InputEntry::kError, path, name,
+                       absl::StrCat("lists nested too deeply", PathNote(path, name))});
+    return;
+  }
+  absl::StatusOr<OpenedFile> list = OpenRegularFile(path);
+  if (list.ok() && list->size > kMaxListFileBytes) {
+    list = absl::OutOfRangeError(absl::StrCat(path, ": ", list->size, " bytes, over the cap of ",
+                                              kMaxListFileBytes, " bytes for a list"));
+  }
+  if (!list.ok()) {
+    entries.push_back({InputEntry::kError, path, name,
+                       absl::StrCat("cannot read list ", list.status().message())});
+    return;
+  }
+  const fs::path folder = fs::path(path).parent_path();
+  BoundedLineReader lines(std::move(list->fd), kMaxListLineBytes);
+  for (;;) {
+    absl::StatusOr<std::optional<std::string>> line = lines.Next();
+    if (!line.ok()) {
+      entries.push_back({InputEntry::kError, path, name,
+                         absl::StrCat("cannot read list ", path, ": ", line.status().message())});
+      return;
+    }
+    if (!line->has_value()) break;
+    const std::string entry = std::string(absl::StripAsciiWhitespace(**line));
+    if (entry.empty() || entry[0] == '#') continue;
+    const fs::path entry_path(entry);
+    const std::string resolved =
+        entry_path.is_absolute() ? entry : (folder / entry_path).lexically_normal().string();
+    ExpandInto(resolved, entry, /*top_level=*/false, depth + 1, entries);
+  }
+}
+
 void ExpandInto(const std::string& path, const std::string& name, bool top_level, int depth,
                 std::vector<InputEntry>& entries) {
   if (const std::optional<LiveSource> live = ClassifyLiveSource(path)) {
@@ -162,41 +202,7 @@ void ExpandInto(const std::string& path, const std::string& name, bool top_level
   }
   const std::string ext = LowerExtension(path);
   if (ext == ".txt") {
-    if (depth >= kMaxListDepth) {
-      entries.push_back({InputEntry::kError, path, name,
-                         absl::StrCat("lists nested too deeply", PathNote(path, name))});
-      return;
-    }
-    // Opened without blocking and read line by line with bounds: a list
-    // that is a FIFO, a device or a /proc file, or that holds one endless
-    // line, is an error entry, not a hang or all of memory.
-    absl::StatusOr<OpenedFile> list = OpenRegularFile(path);
-    if (list.ok() && list->size > kMaxListFileBytes) {
-      list = absl::OutOfRangeError(absl::StrCat(path, ": ", list->size, " bytes, over the cap of ",
-                                                kMaxListFileBytes, " bytes for a list"));
-    }
-    if (!list.ok()) {
-      entries.push_back({InputEntry::kError, path, name,
-                         absl::StrCat("cannot read list ", list.status().message())});
-      return;
-    }
-    const fs::path folder = fs::path(path).parent_path();
-    BoundedLineReader lines(std::move(list->fd), kMaxListLineBytes);
-    for (;;) {
-      absl::StatusOr<std::optional<std::string>> line = lines.Next();
-      if (!line.ok()) {
-        entries.push_back({InputEntry::kError, path, name,
-                           absl::StrCat("cannot read list ", path, ": ", line.status().message())});
-        return;
-      }
-      if (!line->has_value()) break;
-      const std::string entry = std::string(absl::StripAsciiWhitespace(**line));
-      if (entry.empty() || entry[0] == '#') continue;
-      const fs::path entry_path(entry);
-      const std::string resolved =
-          entry_path.is_absolute() ? entry : (folder / entry_path).lexically_normal().string();
-      ExpandInto(resolved, entry, /*top_level=*/false, depth + 1, entries);
-    }
+    ExpandListFile(path, name, depth, entries);
     return;
   }
   entries.push_back(

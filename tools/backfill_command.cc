@@ -492,6 +492,106 @@ int RunVerify(const CLI::App& app, const BackfillFlags& flags, std::optional<Sha
   return missing + torn > 0 ? kExitFailure : kExitOk;
 }
 
+// The shard's recordings, in order, each processed (ProcessRecording);
+// those another process holds are left to it, then waited for at the end:
+// done by it (skipped here), or, if it died or failed, done here.
+std::vector<RecordingResult> RunShare(const std::vector<BackfillRecording>& mine,
+                                      const BackfillFlags& flags, ShardSpec shard, int jobs) {
+  std::vector<RecordingResult> results(mine.size());
+  const auto report = [&](size_t k) {
+    const RecordingResult& res = results[k];
+    if (!flags.quiet || res.status == "failed") {
+      std::fprintf(stderr, "lane backfill: shard %d/%d: %s: %s%s%s (%ld frames, %ld failed)%s\n",
+                   shard.index, shard.count, mine[k].output.c_str(), res.status.c_str(),
+                   res.error.empty() ? "" : ": ", res.error.c_str(), res.frames, res.failed_frames,
+                   res.claimed_elsewhere ? " (claimed by another process first)" : "");
+    }
+  };
+  Workers workers(jobs);
+  BackfillContext ctx;
+  ctx.out_dir = flags.output_dir;
+  ctx.workers = &workers;
+  ctx.max_image_bytes = flags.max_image_bytes;
+  ctx.partials = ListPartialOutputs(flags.output_dir);
+  std::vector<size_t> deferred;
+  for (size_t k = 0; k < mine.size(); ++k) {
+    results[k] = ProcessRecording(mine[k], ctx, /*wait=*/false);
+    if (results[k].status == "claimed_elsewhere") {
+      deferred.push_back(k);
+      continue;
+    }
+    report(k);
+  }
+  for (size_t k : deferred) {
+    if (!flags.quiet) {
+      std::fprintf(stderr,
+                   "lane backfill: shard %d/%d: %s: claimed by another process; waiting for it\n",
+                   shard.index, shard.count, mine[k].output.c_str());
+    }
+    results[k] = ProcessRecording(mine[k], ctx, /*wait=*/true);
+    results[k].claimed_elsewhere = true;
+    report(k);
+  }
+  return results;
+}
+
+// OUTPUT-DIR/summary-shard-I-of-N.json's content.
+Json ShardSummary(const std::vector<BackfillRecording>& mine,
+                  const std::vector<RecordingResult>& results, const BackfillFlags& flags,
+                  ShardSpec shard, int jobs, double wall_s) {
+  Json summary = Json::object();
+  summary["schema"] = 1;
+  summary["shard"] = shard.index;
+  summary["shards"] = shard.count;
+  summary["manifest"] = flags.manifest;
+  summary["jobs"] = jobs;
+  summary["version"] = VersionString();
+  Json list = Json::array();
+  long frames = 0, failed_frames = 0, lanes = 0;
+  int failed = 0, done = 0, redone = 0, skipped = 0, claimed = 0;
+  const auto per_frame = [](long n, long frames_, long failed_) {
+    return frames_ > failed_ ? static_cast<double>(n) / static_cast<double>(frames_ - failed_)
+                             : 0.0;
+  };
+  for (size_t k = 0; k < mine.size(); ++k) {
+    const RecordingResult& res = results[k];
+    Json e = Json::object();
+    e["output"] = mine[k].output;
+    e["recording"] = mine[k].recording;
+    e["status"] = res.status;
+    if (!res.error.empty()) e["error"] = res.error;
+    if (!res.redo_reason.empty()) e["redone_because"] = res.redo_reason;
+    if (res.claimed_elsewhere) e["claimed_elsewhere"] = true;
+    if (res.removed_partials > 0) e["removed_partials"] = res.removed_partials;
+    e["frames"] = res.frames;
+    e["failed_frames"] = res.failed_frames;
+    e["lanes_per_frame"] = per_frame(res.lanes, res.frames, res.failed_frames);
+    e["wall_s"] = res.wall_s;
+    e["bytes"] = mine[k].bytes;
+    list.push_back(e);
+    frames += res.frames;
+    failed_frames += res.failed_frames;
+    lanes += res.lanes;
+    failed += res.status == "failed" ? 1 : 0;
+    done += res.status == "done" ? 1 : 0;
+    redone += res.status == "redone" ? 1 : 0;
+    skipped += res.status == "skipped" ? 1 : 0;
+    claimed += res.claimed_elsewhere ? 1 : 0;
+  }
+  summary["recordings"] = list;
+  summary["done"] = done;
+  summary["redone"] = redone;
+  summary["skipped"] = skipped;
+  summary["failed"] = failed;
+  summary["claimed_elsewhere"] = claimed;
+  summary["frames"] = frames;
+  summary["failed_frames"] = failed_frames;
+  summary["lanes_per_frame"] = per_frame(lanes, frames, failed_frames);
+  summary["wall_s"] = wall_s;
+  summary["frames_per_s"] = wall_s > 0 ? static_cast<double>(frames) / wall_s : 0.0;
+  return summary;
+}
+
 int RunBackfill(const CLI::App& app, const BackfillFlags& flags) {
   absl::StatusOr<ShardSpec> shard = ParseShardSpec(flags.shard);
   if (!shard.ok()) return UsageError(app, std::string(shard.status().message()));
@@ -521,118 +621,31 @@ int RunBackfill(const CLI::App& app, const BackfillFlags& flags) {
   mallopt(M_MMAP_THRESHOLD, 64 << 20);
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
   const std::vector<BackfillRecording> mine = ShareOfShard(*all, *shard);
-  const int index = shard->index, shards = shard->count;
   const auto start = Clock::now();
-  std::vector<RecordingResult> results(mine.size());
-  const auto report = [&](size_t k) {
-    const RecordingResult& res = results[k];
-    if (!flags.quiet || res.status == "failed") {
-      std::fprintf(stderr, "lane backfill: shard %d/%d: %s: %s%s%s (%ld frames, %ld failed)%s\n",
-                   index, shards, mine[k].output.c_str(), res.status.c_str(),
-                   res.error.empty() ? "" : ": ", res.error.c_str(), res.frames, res.failed_frames,
-                   res.claimed_elsewhere ? " (claimed by another process first)" : "");
-    }
-  };
-  {
-    Workers workers(jobs);
-    BackfillContext ctx;
-    ctx.out_dir = flags.output_dir;
-    ctx.workers = &workers;
-    ctx.max_image_bytes = flags.max_image_bytes;
-    ctx.partials = ListPartialOutputs(flags.output_dir);
-    // Recordings another process holds are left to it, then waited for at
-    // the end: done by it (skipped here), or, if it died or failed, done
-    // here.
-    std::vector<size_t> deferred;
-    for (size_t k = 0; k < mine.size(); ++k) {
-      results[k] = ProcessRecording(mine[k], ctx, /*wait=*/false);
-      if (results[k].status == "claimed_elsewhere") {
-        deferred.push_back(k);
-        continue;
-      }
-      report(k);
-    }
-    for (size_t k : deferred) {
-      if (!flags.quiet) {
-        std::fprintf(stderr,
-                     "lane backfill: shard %d/%d: %s: claimed by another process; waiting "
-                     "for it\n",
-                     index, shards, mine[k].output.c_str());
-      }
-      results[k] = ProcessRecording(mine[k], ctx, /*wait=*/true);
-      results[k].claimed_elsewhere = true;
-      report(k);
-    }
-  }
-  Json summary = Json::object();
-  summary["schema"] = 1;
-  summary["shard"] = index;
-  summary["shards"] = shards;
-  summary["manifest"] = flags.manifest;
-  summary["jobs"] = jobs;
-  summary["version"] = VersionString();
-  Json list = Json::array();
-  long frames = 0, failed_frames = 0, lanes = 0;
-  int failed = 0, done = 0, redone = 0, skipped = 0, claimed = 0;
-  for (size_t k = 0; k < mine.size(); ++k) {
-    const BackfillRecording& r = mine[k];
-    const RecordingResult& res = results[k];
-    Json e = Json::object();
-    e["output"] = r.output;
-    e["recording"] = r.recording;
-    e["status"] = res.status;
-    if (!res.error.empty()) e["error"] = res.error;
-    if (!res.redo_reason.empty()) e["redone_because"] = res.redo_reason;
-    if (res.claimed_elsewhere) e["claimed_elsewhere"] = true;
-    if (res.removed_partials > 0) e["removed_partials"] = res.removed_partials;
-    e["frames"] = res.frames;
-    e["failed_frames"] = res.failed_frames;
-    e["lanes_per_frame"] =
-        res.frames > res.failed_frames
-            ? static_cast<double>(res.lanes) / static_cast<double>(res.frames - res.failed_frames)
-            : 0.0;
-    e["wall_s"] = res.wall_s;
-    e["bytes"] = r.bytes;
-    list.push_back(e);
-    frames += res.frames;
-    failed_frames += res.failed_frames;
-    lanes += res.lanes;
-    failed += res.status == "failed" ? 1 : 0;
-    done += res.status == "done" ? 1 : 0;
-    redone += res.status == "redone" ? 1 : 0;
-    skipped += res.status == "skipped" ? 1 : 0;
-    claimed += res.claimed_elsewhere ? 1 : 0;
-  }
-  const double wall_s = SecondsSince(start);
-  summary["recordings"] = list;
-  summary["done"] = done;
-  summary["redone"] = redone;
-  summary["skipped"] = skipped;
-  summary["failed"] = failed;
-  summary["claimed_elsewhere"] = claimed;
-  summary["frames"] = frames;
-  summary["failed_frames"] = failed_frames;
-  summary["lanes_per_frame"] =
-      frames > failed_frames ? static_cast<double>(lanes) / (frames - failed_frames) : 0.0;
-  summary["wall_s"] = wall_s;
-  summary["frames_per_s"] = wall_s > 0 ? frames / wall_s : 0.0;
-  const std::string name = absl::StrCat("summary-shard-", index, "-of-", shards, ".json");
+  const std::vector<RecordingResult> results = RunShare(mine, flags, *shard, jobs);
+  const Json summary = ShardSummary(mine, results, flags, *shard, jobs, SecondsSince(start));
+  const std::string name =
+      absl::StrCat("summary-shard-", shard->index, "-of-", shard->count, ".json");
   // Through a temporary file of this process's own: two processes of one
   // shard each write theirs whole, the last one stays.
   if (absl::Status s = ReplaceFileDurably(flags.output_dir, name, summary.dump(2) + "\n");
       !s.ok()) {
     return Failure("backfill", std::string(s.message()));
   }
-  const std::string path = (fs::path(flags.output_dir) / name).string();
   if (!flags.quiet) {
+    const std::string path = (fs::path(flags.output_dir) / name).string();
     std::fprintf(stderr,
                  "lane backfill: shard %d/%d: %zu recordings (%d done, %d redone, %d skipped, %d "
                  "failed; %d claimed by another process first), %ld frames (%ld failed) in "
                  "%.1f s; %s\n",
-                 index, shards, mine.size(), done, redone, skipped, failed, claimed, frames,
-                 failed_frames, wall_s, path.c_str());
+                 shard->index, shard->count, mine.size(), summary["done"].get<int>(),
+                 summary["redone"].get<int>(), summary["skipped"].get<int>(),
+                 summary["failed"].get<int>(), summary["claimed_elsewhere"].get<int>(),
+                 summary["frames"].get<long>(), summary["failed_frames"].get<long>(),
+                 summary["wall_s"].get<double>(), path.c_str());
   }
-  return failed > 0 || failed_frames > 0 ? kExitFailure : kExitOk;
+  return summary["failed"].get<int>() > 0 || summary["failed_frames"].get<long>() > 0 ? kExitFailure
+                                                                                      : kExitOk;
 }
 
 }  // namespace
