@@ -402,7 +402,8 @@ RecordingResult ProcessRecording(const BackfillRecording& r, BackfillContext& ct
     return result;
   }
   // Claimed: any partial file of this output is a dead process's.
-  if (auto found = ctx.partials.find(r.output); found != ctx.partials.end()) {
+  if (auto found = ctx.partials.find(r.output);
+      found != ctx.partials.end() && (*claim)->exclusive()) {
     for (const std::string& stale : found->second) {
       if (::unlink(stale.c_str()) == 0) ++result.removed_partials;
     }
@@ -671,10 +672,9 @@ Command AddBackfillCommand(CLI::App& lane) {
                   "at most 8)")
       ->type_name("J");
   app->add_option("--max-image-bytes", flags->max_image_bytes,
-                  absl::StrCat("an image file larger than this fails before it is read, and one "
-                               "declaring a frame of more than this many bytes as BGR "
-                               "(width x height x 3) before it is decoded (default ",
-                               kDefaultMaxImageBytes, ", 64 MiB: a 16-megapixel frame is 48 MiB)"))
+                  "an image file larger than this fails before it is read, and one declaring a "
+                  "frame of more than this many bytes as BGR (width x height x 3) before it is "
+                  "decoded (64 MiB: a 16-megapixel frame is 48 MiB)")
       ->type_name("BYTES")
       ->check(CLI::PositiveNumber);
   app->add_flag("--verify", flags->verify,

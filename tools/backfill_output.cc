@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <utility>
@@ -215,7 +216,21 @@ absl::StatusOr<std::optional<OutputClaim>> OutputClaim::Acquire(const std::strin
       r = ::flock(fd.get(), wait ? LOCK_EX : LOCK_EX | LOCK_NB);
     } while (r != 0 && errno == EINTR);
     if (r != 0) {
-      if (errno == EWOULDBLOCK) return std::optional<OutputClaim>();
+      const int err = errno;
+      if (err == EWOULDBLOCK) return std::optional<OutputClaim>();
+      if (err == ENOLCK || err == EOPNOTSUPP || err == ENOSYS || err == EINVAL) {
+        // A file system without locks: the claim guards nothing, so its
+        // holder must not take other processes' partial files for stale.
+        static std::once_flag warned;
+        std::call_once(warned, [&path, err] {
+          std::fprintf(stderr,
+                       "lane backfill: warning: %s: no flock here (%s): two processes on one "
+                       "shard are not safe on this file system\n",
+                       path.c_str(), std::strerror(err));
+        });
+        return std::optional<OutputClaim>(OutputClaim(path, std::move(fd), /*exclusive=*/false));
+      }
+      errno = err;
       return OutputErrno("cannot lock", path);
     }
     // The holder before us removes the lock file as it releases it: a lock
@@ -223,7 +238,7 @@ absl::StatusOr<std::optional<OutputClaim>> OutputClaim::Acquire(const std::strin
     struct stat held, now;
     if (::fstat(fd.get(), &held) != 0) return OutputErrno("cannot stat", path);
     if (::stat(path.c_str(), &now) == 0 && now.st_dev == held.st_dev && now.st_ino == held.st_ino) {
-      return std::optional<OutputClaim>(OutputClaim(path, std::move(fd)));
+      return std::optional<OutputClaim>(OutputClaim(path, std::move(fd), /*exclusive=*/true));
     }
   }
 }

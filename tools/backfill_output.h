@@ -56,10 +56,17 @@ class OutputClaim {
   OutputClaim& operator=(OutputClaim&&) = default;
   ~OutputClaim();
 
+  // False on a file system without flock (ENOLCK, EOPNOTSUPP: a warning is
+  // printed once): the claim then excludes no one, and its holder must not
+  // remove partial files as stale.
+  bool exclusive() const { return exclusive_; }
+
  private:
-  OutputClaim(std::string path, ScopedFd fd) : path_(std::move(path)), fd_(std::move(fd)) {}
+  OutputClaim(std::string path, ScopedFd fd, bool exclusive)
+      : path_(std::move(path)), fd_(std::move(fd)), exclusive_(exclusive) {}
   std::string path_;
   ScopedFd fd_;
+  bool exclusive_ = true;
 };
 
 // Stale partial outputs in `dir` (.NAME.jsonl.partial.PID.RANDOM, and the
