@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
@@ -230,6 +231,11 @@ void FrameReader::ReadImage(const InputEntry& entry, InputFrame* frame) const {
   const std::string& bytes = *read;
   if (bytes.empty()) {
     frame->error = absl::StrCat("empty image file", PathNote(entry.path, entry.name));
+    return;
+  }
+  if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max())) {
+    // Only with a cap raised past 2 GiB: OpenCV's buffers are int-sized.
+    frame->error = absl::StrCat("image file over 2 GiB", PathNote(entry.path, entry.name));
     return;
   }
   const absl::StatusOr<lane::decode::EncodedHeader> header = lane::decode::ReadEncodedHeader(bytes);
