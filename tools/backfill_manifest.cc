@@ -81,9 +81,8 @@ absl::StatusOr<std::vector<BackfillRecording>> ReadBackfillManifest(const std::s
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     const auto where = absl::StrCat(path, ":", lines.line_number(), ": ");
     if (const int depth = JsonNestingDepth(line); depth > kMaxManifestDepth) {
-      return absl::InvalidArgumentError(absl::StrCat(where, "nested ", depth,
-                                                     " deep; a manifest line may nest at most ",
-                                                     kMaxManifestDepth));
+      return absl::InvalidArgumentError(absl::StrCat(
+          where, "nested ", depth, " deep; a manifest line may nest at most ", kMaxManifestDepth));
     }
     const Json j = Json::parse(line, nullptr, /*allow_exceptions=*/false);
     if (j.is_discarded() || !j.is_object()) {
