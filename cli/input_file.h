@@ -20,9 +20,10 @@ namespace lane_tools {
 // from one (width x height x 3 bytes, as BGR): 64 MiB. A 16-megapixel frame
 // is 48 MiB raw (3 bytes a pixel); even stored without compression, a PNG of
 // it is that plus under 0.1% (a filter byte a row, deflate's block headers,
-// the chunks' framing), and a JPEG of it is smaller still; 64 MiB leaves a
-// third again for metadata and margin. `lane backfill --max-image-bytes`
-// changes it.
+// the chunks' framing); 64 MiB leaves a third again for metadata and margin.
+// (A camera's JPEG of it is a fraction of that; only pure noise at quality
+// 100 without chroma subsampling exceeds the raw size, at 1.4x.)
+// `lane backfill --max-image-bytes` changes it.
 inline constexpr int64_t kDefaultMaxImageBytes = int64_t{64} << 20;
 
 // The largest list file (.txt, one path a line) read: 64 MiB, about 600,000
