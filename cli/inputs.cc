@@ -6,14 +6,17 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
+#include <limits>
 #include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <system_error>
+#include <utility>
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/time/time.h"
+#include "cli/input_file.h"
 #include "lane/decode/detector_region.h"
 
 namespace lane_tools {
@@ -23,6 +26,8 @@ namespace fs = std::filesystem;
 
 // Lists may name lists; this stops a list that names itself.
 constexpr int kMaxListDepth = 8;
+// A list file's line: a path (PATH_MAX is 4096).
+constexpr size_t kMaxListLineBytes = 4096;
 
 double MillisecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
@@ -104,11 +109,51 @@ std::string UniqueStem(const std::string& stem, std::set<std::string>& used) {
 }
 
 FrameReader::FrameReader(const std::vector<std::string>& inputs, ReadOptions options)
-    : entries_(ExpandInputs(inputs)), gate_(options) {}
+    : entries_(ExpandInputs(inputs)), max_image_bytes_(options.max_image_bytes), gate_(options) {}
 
 FrameReader::~FrameReader() = default;
 
 namespace {
+
+// A list file's entries, each expanded as ExpandInto does. Opened without
+// blocking and read line by line within bounds: a list that is a FIFO, a
+// device or a /proc file, or that holds one endless line, is an error
+// entry, not a hang or all of memory.
+void ExpandListFile(const std::string& path, const std::string& name, int depth,
+                    std::vector<InputEntry>& entries) {
+  if (depth >= kMaxListDepth) {
+    entries.push_back({InputEntry::kError, path, name,
+                       absl::StrCat("lists nested too deeply", PathNote(path, name))});
+    return;
+  }
+  absl::StatusOr<OpenedFile> list = OpenRegularFile(path);
+  if (list.ok() && list->size > kMaxListFileBytes) {
+    list = absl::OutOfRangeError(absl::StrCat(path, ": ", list->size, " bytes, over the cap of ",
+                                              kMaxListFileBytes, " bytes for a list"));
+  }
+  if (!list.ok()) {
+    entries.push_back({InputEntry::kError, path, name,
+                       absl::StrCat("cannot read list ", list.status().message())});
+    return;
+  }
+  const fs::path folder = fs::path(path).parent_path();
+  BoundedLineReader lines(std::move(list->fd), kMaxListLineBytes);
+  for (;;) {
+    absl::StatusOr<std::optional<std::string>> line = lines.Next();
+    if (!line.ok()) {
+      entries.push_back({InputEntry::kError, path, name,
+                         absl::StrCat("cannot read list ", path, ": ", line.status().message())});
+      return;
+    }
+    if (!line->has_value()) break;
+    const std::string entry = std::string(absl::StripAsciiWhitespace(**line));
+    if (entry.empty() || entry[0] == '#') continue;
+    const fs::path entry_path(entry);
+    const std::string resolved =
+        entry_path.is_absolute() ? entry : (folder / entry_path).lexically_normal().string();
+    ExpandInto(resolved, entry, /*top_level=*/false, depth + 1, entries);
+  }
+}
 
 void ExpandInto(const std::string& path, const std::string& name, bool top_level, int depth,
                 std::vector<InputEntry>& entries) {
@@ -132,7 +177,9 @@ void ExpandInto(const std::string& path, const std::string& name, bool top_level
     std::vector<std::string> files;
     for (fs::directory_iterator it(path, ec), end; !ec && it != end; it.increment(ec)) {
       const std::string file = it->path().filename().string();
-      if (IsImageExtension(LowerExtension(file)) && !fs::is_directory(it->path())) {
+      // The entry's type from the listing (d_type): no stat per file.
+      std::error_code type_ec;
+      if (IsImageExtension(LowerExtension(file)) && !it->is_directory(type_ec)) {
         files.push_back(file);
       }
     }
@@ -156,27 +203,7 @@ void ExpandInto(const std::string& path, const std::string& name, bool top_level
   }
   const std::string ext = LowerExtension(path);
   if (ext == ".txt") {
-    if (depth >= kMaxListDepth) {
-      entries.push_back({InputEntry::kError, path, name,
-                         absl::StrCat("lists nested too deeply", PathNote(path, name))});
-      return;
-    }
-    std::ifstream in(path);
-    if (!in) {
-      entries.push_back(
-          {InputEntry::kError, path, name, absl::StrCat("cannot read list", PathNote(path, name))});
-      return;
-    }
-    const fs::path folder = fs::path(path).parent_path();
-    std::string line;
-    while (std::getline(in, line)) {
-      const std::string entry = std::string(absl::StripAsciiWhitespace(line));
-      if (entry.empty() || entry[0] == '#') continue;
-      const fs::path entry_path(entry);
-      const std::string resolved =
-          entry_path.is_absolute() ? entry : (folder / entry_path).lexically_normal().string();
-      ExpandInto(resolved, entry, /*top_level=*/false, depth + 1, entries);
-    }
+    ExpandListFile(path, name, depth, entries);
     return;
   }
   entries.push_back(
@@ -193,34 +220,62 @@ void FrameReader::DecodeOnly(const lane::FrameNeeds& needs, int width, int heigh
 
 void FrameReader::ReadImage(const InputEntry& entry, InputFrame* frame) const {
   const auto start = std::chrono::steady_clock::now();
-  if (needs_) {
-    std::ifstream in(entry.path, std::ios::binary);
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    const absl::StatusOr<lane::decode::EncodedHeader> header =
-        lane::decode::ReadEncodedHeader(bytes);
-    // JPEG only: lane/decode's PNG reader (libpng's push reader, which bounds
-    // decompression bombs for the service) must inflate every row above the
-    // region anyway, and is slower than cv::imread's (2026-12-02, cordova1's
-    // 640x480 PNGs: 11-12 against 8.5-9 ms).
-    if (header.ok() && header->format == lane::decode::EncodedFormat::kJpeg &&
-        header->width == width_ && header->height == height_) {
-      lane::decode::DecodeOptions options;
-      options.width = width_;
-      options.height = height_;
-      options.max_pixels = int64_t{width_} * height_;
-      options.cpu_budget = absl::InfiniteDuration();  // a file on disk, not a client
-      options.accept_damaged = true;                  // as cv::imread does
-      absl::StatusOr<cv::Mat> decoded = lane::decode::DecodeForDetector(bytes, options, *needs_);
-      frame->decode_ms = MillisecondsSince(start);
-      if (decoded.ok()) {
-        frame->bgr = *std::move(decoded);
-      } else {
-        frame->error = absl::StrCat(decoded.status().message(), PathNote(entry.path, entry.name));
-      }
-      return;
-    }
+  // Every image is read here, within bounds, and decoded from memory: a
+  // FIFO, a device or a /proc file fails without blocking, a file over the
+  // cap before it is read (cli/input_file.h).
+  absl::StatusOr<std::string> read = ReadRegularFile(entry.path, max_image_bytes_);
+  if (!read.ok()) {
+    frame->error = absl::StrCat("cannot read image ", read.status().message());
+    return;
   }
-  frame->bgr = cv::imread(entry.path, cv::IMREAD_COLOR);
+  const std::string& bytes = *read;
+  if (bytes.empty()) {
+    frame->error = absl::StrCat("empty image file", PathNote(entry.path, entry.name));
+    return;
+  }
+  if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max())) {
+    // Only with a cap raised past 2 GiB: OpenCV's buffers are int-sized.
+    frame->error = absl::StrCat("image file over 2 GiB", PathNote(entry.path, entry.name));
+    return;
+  }
+  const absl::StatusOr<lane::decode::EncodedHeader> header = lane::decode::ReadEncodedHeader(bytes);
+  // A frame bigger than the cap decoded is refused before it is decoded (a
+  // small PNG can declare a huge frame).
+  if (header.ok() && int64_t{header->width} * header->height * 3 > max_image_bytes_) {
+    frame->error = absl::StrCat("image of ", header->width, "x", header->height,
+                                " pixels: over the cap of ", max_image_bytes_,
+                                " bytes decoded (3 a pixel)", PathNote(entry.path, entry.name));
+    return;
+  }
+  // JPEG only: lane/decode's PNG reader (libpng's push reader, which bounds
+  // decompression bombs for the service) must inflate every row above the
+  // region anyway, and is slower than OpenCV's (2026-12-02, cordova1's
+  // 640x480 PNGs: 11-12 against 8.5-9 ms).
+  if (needs_ && header.ok() && header->format == lane::decode::EncodedFormat::kJpeg &&
+      header->width == width_ && header->height == height_) {
+    lane::decode::DecodeOptions options;
+    options.width = width_;
+    options.height = height_;
+    options.max_pixels = int64_t{width_} * height_;
+    options.cpu_budget = absl::InfiniteDuration();  // a file on disk, not a client
+    options.accept_damaged = true;                  // as cv::imread does
+    absl::StatusOr<cv::Mat> decoded = lane::decode::DecodeForDetector(bytes, options, *needs_);
+    frame->decode_ms = MillisecondsSince(start);
+    if (decoded.ok()) {
+      frame->bgr = *std::move(decoded);
+    } else {
+      frame->error = absl::StrCat(decoded.status().message(), PathNote(entry.path, entry.name));
+    }
+    return;
+  }
+  try {
+    // Wraps the bytes without copying them (imdecode only reads them).
+    const cv::Mat encoded(1, static_cast<int>(bytes.size()), CV_8UC1,
+                          const_cast<char*>(bytes.data()));
+    frame->bgr = cv::imdecode(encoded, cv::IMREAD_COLOR);
+  } catch (const cv::Exception&) {
+    frame->bgr.release();  // e.g. a size over OpenCV's own pixel limit
+  }
   frame->decode_ms = MillisecondsSince(start);
   if (frame->bgr.empty()) {
     frame->error = absl::StrCat("cannot decode image", PathNote(entry.path, entry.name));
@@ -261,6 +316,15 @@ bool FrameReader::NextUnpaced(InputFrame* frame, double* source_fps) {
         return true;
       case InputEntry::kVideo: {
         const char* what = entry.live ? "cannot open live source" : "cannot open video";
+        if (!video_ && !entry.live) {
+          // OpenCV's backends block on a FIFO and read a device or /proc file
+          // as if it were a video: only a regular file goes to them.
+          if (absl::Status file = OpenRegularFile(entry.path).status(); !file.ok()) {
+            frame->error = absl::StrCat(what, " ", file.message());
+            ++next_;
+            return true;
+          }
+        }
         if (!video_) {
           video_ = VideoInput::Open(entry.path, entry.api);
           if (!video_) {

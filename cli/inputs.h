@@ -3,6 +3,7 @@
 #ifndef LANE_CLI_INPUTS_H_
 #define LANE_CLI_INPUTS_H_
 
+#include <cstdint>
 #include <fstream>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/input_file.h"
 #include "cli/pacer.h"
 #include "cli/video_input.h"
 #include "lane/detector.h"
@@ -42,6 +44,10 @@ struct ReadOptions {
   long long max_frames = 0;
   // --fps / --realtime (cli/pacer.h).
   Pacer pacer;
+  // An image file larger than this fails before it is read, and one whose
+  // header declares a frame of more than this many bytes as BGR (width x
+  // height x 3) before it is decoded (cli/input_file.h).
+  int64_t max_image_bytes = kDefaultMaxImageBytes;
 };
 
 // One input after expansion: an image file, a video, or an error to report.
@@ -106,6 +112,13 @@ std::string UniqueStem(const std::string& stem, std::set<std::string>& used);
 // A missing path, an unreadable list or video, or an undecodable image
 // becomes an InputFrame with `error` set, so the caller reports it and goes
 // on. Frames are decoded one at a time.
+//
+// Image files, list files and video files must be regular files
+// (cli/input_file.h): a FIFO, a socket, a device or a /proc file is that
+// frame's error, found without blocking and without reading it. An image
+// file over ReadOptions::max_image_bytes fails before it is read, an empty
+// one fails without decoding; a list file may hold at most
+// kMaxListFileBytes, and lines of at most 4096 bytes.
 class FrameReader {
  public:
   explicit FrameReader(const std::vector<std::string>& inputs, ReadOptions options = {});
@@ -125,14 +138,17 @@ class FrameReader {
   void DecodeOnly(const lane::FrameNeeds& needs, int width, int height);
 
  private:
-  // An image file: decoded through lane/decode's region decoding when asked
-  // to and it is a JPEG or PNG of the camera's size, else with cv::imread.
+  // An image file: read whole (at most max_image_bytes), then decoded
+  // through lane/decode's region decoding when asked to and it is a JPEG of
+  // the camera's size, else with cv::imdecode (what cv::imread does with the
+  // file's bytes).
   void ReadImage(const InputEntry& entry, InputFrame* frame) const;
 
   // The next frame, before the limit and pacing.
   bool NextUnpaced(InputFrame* frame, double* source_fps);
 
   std::vector<InputEntry> entries_;
+  int64_t max_image_bytes_;
   ReadGate gate_;
   std::optional<lane::FrameNeeds> needs_;
   int width_ = 0, height_ = 0;

@@ -38,7 +38,8 @@ for ((i = 0; i < shards; i++)); do
     python3 - "$summary" <<'PY' || true
 import json, sys
 s = json.load(open(sys.argv[1]))
-print(f"backfill-local: shard {s['shard']}/{s['shards']}: {s['done']} done, {s['skipped']} skipped, "
+print(f"backfill-local: shard {s['shard']}/{s['shards']}: {s['done']} done, "
+      f"{s.get('redone', 0)} redone, {s['skipped']} skipped, "
       f"{s['failed']} failed; {s['frames']} frames ({s['failed_frames']} failed), "
       f"{s['frames_per_s']:.1f} frames/s")
 PY

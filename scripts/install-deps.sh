@@ -21,7 +21,7 @@ PACKAGES=(
   libcivetweb-dev        # the metrics port's HTTP server: /metrics, /healthz, /readyz
   prometheus             # tests: a real scrape; promtool checks the scrape and the alert rules
   libmatio-dev           # Caltech Lanes .ccvl label files (MAT v5)
-  libssl-dev             # libcrypto: HMAC-SHA-256 sealing of the service's resume states; SHA-256 checksums
+  libssl-dev             # libcrypto: HMAC-SHA-256 sealing of the service's resume states; SHA-256 of lane backfill's output trailers
   clang-format
   clang libclang-rt-14-dev   # fuzz/: libFuzzer targets (scripts/fuzz.sh, a step of the test command)
   openssl                # tests/server/security_test: a test CA made at test time

@@ -17,6 +17,11 @@ absl::StatusOr<std::vector<FrameResult>> ParseResultsJsonl(absl::string_view tex
   std::vector<FrameResult> out;
   const absl::Status status = ForEachJsonObjectLine(
       text, source, [&](const Json& j, const LineError& error) -> absl::Status {
+        // `lane backfill`'s outputs end with a trailer (docs/results-format.md):
+        // not a frame.
+        if (!j.contains("schema") && j.contains("trailer") && j["trailer"].is_object()) {
+          return absl::OkStatus();
+        }
         if (!j.contains("schema") || !j["schema"].is_number_integer()) {
           return error("no \"schema\": not a lane detect results record");
         }

@@ -67,13 +67,16 @@ else
   echo "note: ../shared/data is absent: rendered drives only"
 fi
 
-# stripped DIR: each output without its timings, into DIR.stripped/.
+# stripped DIR: each output without its timings and its trailer (whose
+# SHA-256 covers the timings), into DIR.stripped/.
 stripped() {
   mkdir -p "$1.stripped"
   for f in "$1"/*.jsonl; do
     python3 -c '
 import json, sys
-for line in open(sys.argv[1]):
+lines = open(sys.argv[1]).read().splitlines()
+assert "trailer" in json.loads(lines[-1]), sys.argv[1] + ": no trailer"
+for line in lines[:-1]:
     j = json.loads(line)
     j.pop("timing_ms", None)
     print(json.dumps(j, sort_keys=True))' "$f" >"$1.stripped/$(basename "$f")"
@@ -108,7 +111,8 @@ for name in $good; do
   [ "$n" -ge 30 ] && [ "$ids" -ge 15 ] || fail "$name: $n frames, $ids with tracked lane ids"
 done
 [ ! -e "$dir/all/corrupt.jsonl" ] && [ ! -e "$dir/all/missing.jsonl" ] || fail "output of a failed recording"
-[ -z "$(find "$dir/all" -maxdepth 1 -name '.*.partial')" ] || fail "partial files left"
+[ -z "$(find "$dir/all" -maxdepth 1 -name '.*.partial*' -o -name '.*.lock')" ] ||
+  fail "partial or lock files left"
 stripped "$dir/all"
 
 # 2. Four shards.
@@ -144,7 +148,7 @@ count() { find "$dir/kill" -maxdepth 1 -name "$1" 2>/dev/null | wc -l; }
   2>/dev/null &
 bg=$!
 for _ in $(seq 1 2000); do
-  [ "$(count '*.jsonl')" -ge 1 ] && [ "$(count '.*.partial')" -ge 1 ] && break
+  [ "$(count '*.jsonl')" -ge 1 ] && [ "$(count '.*.partial.*')" -ge 1 ] && break
   sleep 0.005
 done
 kill -9 "$bg" 2>/dev/null || true
@@ -153,7 +157,7 @@ bg=
 finished=$(count '*.jsonl')
 total=$((6 + real))
 [ "$finished" -ge 1 ] && [ "$finished" -lt "$total" ] || fail "the kill came at a bad time: $finished finished"
-[ "$(count '.*.partial')" -eq 1 ] || fail "no partial output at the kill"
+[ "$(count '.*.partial.*')" -eq 1 ] || fail "no partial output at the kill"
 (cd "$dir/kill" && stat -c '%n %Y.%y' ./*.jsonl) >"$dir/before.txt"
 sleep 1.1
 status=0
@@ -168,9 +172,12 @@ import json, sys
 s = json.load(open(sys.argv[1]))
 assert s["skipped"] == int(sys.argv[2]) and s["done"] == int(sys.argv[3]) - int(sys.argv[2]), s
 assert [r for r in s["recordings"] if r["output"] == "long"][0]["frames"] in (0, 400), s
+# The killed run's partial file, removed by the run that claimed its recording.
+assert sum(r.get("removed_partials", 0) for r in s["recordings"]) == 1, s
 PY
-[ "$(count '.*.partial')" -eq 0 ] || fail "partial files left after the resumed run"
-[ "$(grep -c . "$dir/kill/long.jsonl")" -eq 400 ] || fail "long.jsonl is not 400 lines"
+[ "$(count '.*.partial*')" -eq 0 ] || fail "partial files left after the resumed run"
+[ "$(count '.*.lock')" -eq 0 ] || fail "lock files left after the resumed run"
+[ "$(grep -c '"frame"' "$dir/kill/long.jsonl")" -eq 400 ] || fail "long.jsonl is not 400 frames"
 stripped "$dir/kill"
 for name in $good; do
   cmp -s "$dir/all.stripped/$name.jsonl" "$dir/kill.stripped/$name.jsonl" ||

@@ -175,6 +175,19 @@ TEST(ResultsJsonlReaderTest, ParsesDetectionsAndErrors) {
   EXPECT_EQ((*results)[1].width, 0);
 }
 
+// `lane backfill`'s outputs end with a trailer line: skipped, not a frame.
+TEST(ResultsJsonlReaderTest, SkipsTheBackfillTrailer) {
+  const auto results = ParseResultsJsonl(
+      R"({"schema":1,"frame":"a.jpg","mode":"all","error":"cannot decode image"})"
+      "\n"
+      R"({"trailer":{"schema":1,"frames":1,"failed_frames":1,"sha256":"00","version":"x"}})"
+      "\n",
+      "out.jsonl");
+  ASSERT_TRUE(results.ok()) << results.status();
+  ASSERT_EQ(results->size(), 1u);
+  EXPECT_EQ((*results)[0].frame, "a.jpg");
+}
+
 TEST(ResultsJsonlReaderTest, MalformedLinesNameFileAndLine) {
   struct Case {
     const char* text;

@@ -15,7 +15,8 @@ namespace lane::eval {
 // One FrameResult per non-blank line: frame, width, height, mode, lanes
 // (each lane's "image" Bezier and "score"; "ipm" and "ground" are not
 // needed) or error. INVALID_ARGUMENT "SOURCE:LINE: ..." for a line that is
-// not a schema 1 record.
+// not a schema 1 record. A trailer line ({"trailer": {...}}, the last line of
+// a `lane backfill` output) is skipped.
 absl::StatusOr<std::vector<FrameResult>> ParseResultsJsonl(absl::string_view text,
                                                            absl::string_view source);
 absl::StatusOr<std::vector<FrameResult>> ReadResultsJsonl(const std::string& path);
