@@ -1,17 +1,24 @@
-// How long a stream engine waits before it reconnects after a failed call:
-// one policy for `stream` (Streamer) and the cameras of `bench`.
+// How long a stream engine waits before it reconnects after a failed call,
+// and when it stops reconnecting: one policy for `stream` (Streamer) and the
+// cameras of `bench`.
 //
 // The first wait is `initial`; each further failure without progress doubles
 // it, up to `max`; every wait is multiplied by a random factor in
 // [1 - jitter, 1 + jitter], so cameras cut off together do not come back
 // together. Once a call makes progress (a frame answered), the schedule
 // starts again from `initial`.
+//
+// RetryBudget says when to stop: after too many failures in a row with the
+// same status, or too long without progress (docs/client.md, "Reconnection").
 #ifndef LANE_CLIENT_RECONNECT_BACKOFF_H_
 #define LANE_CLIENT_RECONNECT_BACKOFF_H_
 
 #include <cstdint>
+#include <optional>
 #include <random>
+#include <string>
 
+#include "absl/status/status.h"
 #include "absl/time/time.h"
 
 namespace lane_client {
@@ -42,6 +49,57 @@ class ReconnectBackoff {
   int failures_ = 0;
   std::mt19937_64 rng_;
 };
+
+// The default of `--max-reconnects`: 10 reconnections in a row after the same
+// failure, i.e. 11 attempts over about 13 s of backoff (0.1 + 0.2 + 0.4 + 0.8
+// + 1.6 + 5 x 2 s, +-20 %). That outlasts a server's restart (lane-server is
+// listening again within a second or two) and a proxy's failover, whose
+// failures change as they go (GOAWAY, connection refused, then answers); a
+// failure that repeats word for word 11 times without a frame answered is
+// deterministic (a proxy refusing the request, a header too large) and ends
+// the run in ~13 s instead of the 60 s of the time budget.
+inline constexpr int kDefaultMaxReconnects = 10;
+
+struct RetryLimits {
+  // Reconnections in a row after failures with the same status (code and
+  // message) and no progress in between; nullopt: no limit. 0: give up at
+  // the first failure.
+  std::optional<int> max_reconnects = kDefaultMaxReconnects;
+  // Give up when a failure comes this long after the last progress (or the
+  // start).
+  absl::Duration give_up_after = absl::InfiniteDuration();
+};
+
+class RetryBudget {
+ public:
+  RetryBudget(RetryLimits limits, absl::Time start);
+
+  // A call made progress (a frame answered): both budgets start again.
+  void Progress(absl::Time now);
+  // A failed attempt (a call, or the session step before it) ended with
+  // `failure` (not OK) at `now`: OK when it may be retried; else the status
+  // to give up with, with failure's own code and a message naming it and
+  // what ran out (the attempts in a row, or the time without progress).
+  absl::Status Failed(const absl::Status& failure, absl::Time now);
+
+  // Failures in a row with the status of the last one, since the last progress.
+  int repeats() const { return repeats_; }
+  const RetryLimits& limits() const { return limits_; }
+
+ private:
+  RetryLimits limits_;
+  absl::Time last_progress_;
+  absl::StatusCode last_code_ = absl::StatusCode::kOk;
+  std::string last_message_;
+  int repeats_ = 0;
+};
+
+// The steady clock as an absl::Time, for RetryBudget: a change of the
+// system's clock neither ends a budget early nor stretches it.
+absl::Time MonotonicNow();
+
+// "UNAVAILABLE: Socket closed" (gRPC's names of the codes).
+std::string FailureText(const absl::Status& status);
 
 }  // namespace lane_client
 
