@@ -52,12 +52,15 @@ class ReconnectBackoff {
 
 // The default of `--max-reconnects`: 10 reconnections in a row after the same
 // failure, i.e. 11 attempts over about 13 s of backoff (0.1 + 0.2 + 0.4 + 0.8
-// + 1.6 + 5 x 2 s, +-20 %). That outlasts a server's restart (lane-server is
-// listening again within a second or two) and a proxy's failover, whose
-// failures change as they go (GOAWAY, connection refused, then answers); a
-// failure that repeats word for word 11 times without a frame answered is
-// deterministic (a proxy refusing the request, a header too large) and ends
-// the run in ~13 s instead of the 60 s of the time budget.
+// + 1.6 + 5 x 2 s, +-20 %). A restart repeats one failure for less than that:
+// the old server answers "the server is draining" for at most its
+// --shutdown_deadline (10 s by default), then the connection is refused
+// until the new one listens (lane-server listens about 0.1 s after it
+// starts), and each change of message starts the count again; a proxy's
+// failover changes its failures as it goes too. A failure that repeats word
+// for word 11 times with no frame answered is deterministic (a proxy refusing
+// the call, a header too large) and ends the run in ~13 s instead of the
+// 60 s of the time budget.
 inline constexpr int kDefaultMaxReconnects = 10;
 
 struct RetryLimits {

@@ -429,9 +429,9 @@ Command AddStreamCommand(CLI::App& client) {
   app->add_option("--max-reconnects", flags->max_reconnects,
                   "give up when the same failure (status code and message) comes back after N "
                   "reconnections in a row with no frame answered; 0: at the first failure. 10 "
-                  "takes about 13 s of backoff: longer than a server restart or a proxy failover, "
-                  "whose failures change as they go, and much shorter than --retry-timeout for a "
-                  "failure that repeats (a proxy refusing the call)")
+                  "is about 13 s of backoff: longer than a restart of lane-server or a proxy's "
+                  "failover, much shorter than --retry-timeout for a failure that repeats (a "
+                  "proxy refusing the call)")
       ->type_name("N")
       ->check(lane_tools::Between(0, 1000000));
   lane_tools::AddDuration(app, "--stall-timeout", &flags->stall_timeout,

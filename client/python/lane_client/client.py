@@ -276,9 +276,10 @@ class LaneClient:
             same failure (status code and message) comes back after
             max_reconnects reconnections in a row with no frame answered
             (None: no such limit; 0: at the first failure). The default, 10,
-            is about 13 s of backoff: longer than a server's restart, whose
-            failures change as it goes, and far shorter than give_up_after
-            for a failure that repeats (a proxy refusing the call).
+            is about 13 s of backoff: longer than a restart repeats one
+            failure (a drain's "the server is draining", then "connection
+            refused"), and far shorter than give_up_after for a failure that
+            repeats (a proxy refusing the call).
         stall_timeout: a call with frames in flight that gets no response
             for this long is cancelled and retried (None: never).
 

@@ -62,11 +62,12 @@ BACKOFF_JITTER = 0.2
 
 # Reconnections in a row after the same failure, by default (as lane-client's
 # --max-reconnects): 11 attempts over about 13 s of backoff (0.1 + 0.2 + 0.4 +
-# 0.8 + 1.6 + 5 x 2 s). A server's restart or a proxy's failover is over by
-# then, and their failures change as they go (GOAWAY, connection refused);
-# a failure that repeats word for word with no frame answered is
-# deterministic (a proxy refusing the call) and ends the stream in ~13 s
-# instead of give_up_after's 60.
+# 0.8 + 1.6 + 5 x 2 s). A restart repeats one failure for less than that
+# ("the server is draining" for at most the server's --shutdown_deadline, 10 s
+# by default, then "connection refused" until the new one listens), and each
+# change of message starts the count again; a failure that repeats word for
+# word with no frame answered is deterministic (a proxy refusing the call)
+# and ends the stream in ~13 s instead of give_up_after's 60.
 DEFAULT_MAX_RECONNECTS = 10
 
 
