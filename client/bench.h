@@ -100,7 +100,7 @@ struct LoadSpec {
   const std::vector<BenchFrame>* frames = nullptr;
   ProgressFn progress;  // about every 0.5 s, from the calling thread
   // A camera stops reconnecting after this many reconnections in a row that
-  // failed with the same status and no frame answered (reconnect_backoff.h);
+  // failed with the same status code and no frame answered (reconnect_backoff.h);
   // nullopt: never. When every camera has stopped, the run ends early.
   std::optional<int> max_reconnects = kDefaultMaxReconnects;
 };

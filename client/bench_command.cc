@@ -342,8 +342,8 @@ void AddLoadOptions(CLI::App* app, BenchFlags* flags) {
                           "wait for the last answers this long", "10s")
       ->group(group);
   app->add_option("--max-reconnects", flags->max_reconnects,
-                  "a camera stops reconnecting when the same failure (status code and message) "
-                  "comes back after N reconnections in a row with no frame answered, as in "
+                  "a camera stops reconnecting when the same status code comes back after N "
+                  "reconnections in a row with no frame answered, as in "
                   "`stream`; the run ends early when every camera has stopped, and the exit "
                   "status is 1")
       ->type_name("N")

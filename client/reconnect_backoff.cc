@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 
 namespace lane_client {
@@ -33,16 +34,18 @@ void RetryBudget::Progress(absl::Time now) {
   last_progress_ = now;
   repeats_ = 0;
   last_code_ = absl::StatusCode::kOk;
-  last_message_.clear();
+  first_message_.clear();
 }
 
 absl::Status RetryBudget::Failed(const absl::Status& failure, absl::Time now) {
-  if (repeats_ > 0 && failure.code() == last_code_ && failure.message() == last_message_) {
+  if (IsServerChangingState(failure)) {
+    repeats_ = 0;  // the server is there: only the time budget counts
+  } else if (repeats_ > 0 && failure.code() == last_code_) {
     ++repeats_;
   } else {
     repeats_ = 1;
     last_code_ = failure.code();
-    last_message_ = std::string(failure.message());
+    first_message_ = std::string(failure.message());
   }
   if (limits_.max_reconnects && repeats_ > *limits_.max_reconnects) {
     const int allowed = *limits_.max_reconnects;
@@ -51,10 +54,14 @@ absl::Status RetryBudget::Failed(const absl::Status& failure, absl::Time now) {
                                                        "; gave up at the first failure (no "
                                                        "reconnection allowed)"));
     }
-    return absl::Status(failure.code(),
-                        absl::StrCat(FailureText(failure), "; the same failure on ", repeats_,
-                                     " attempts in a row with no frame answered: gave up (at most ",
-                                     allowed, " reconnection(s) after the same failure)"));
+    return absl::Status(
+        failure.code(),
+        absl::StrCat(FailureText(failure), "; ", absl::StatusCodeToString(failure.code()), " on ",
+                     repeats_, " attempts in a row with no frame answered: gave up (at most ",
+                     allowed, " reconnection(s) after the same failure)",
+                     first_message_ == failure.message()
+                         ? std::string()
+                         : absl::StrCat("; the first of them: ", first_message_)));
   }
   if (now - last_progress_ > limits_.give_up_after) {
     return absl::Status(failure.code(), absl::StrCat("no frame answered for ",
@@ -62,6 +69,15 @@ absl::Status RetryBudget::Failed(const absl::Status& failure, absl::Time now) {
                                                      "; last error: ", FailureText(failure)));
   }
   return absl::OkStatus();
+}
+
+bool IsServerChangingState(const absl::Status& status) {
+  // The beginnings of wire::ServerStarting() and wire::ServerDraining()
+  // (reconnect_backoff_test checks them), which a proxy may pass on with more
+  // after them.
+  return status.code() == absl::StatusCode::kUnavailable &&
+         (absl::StartsWith(status.message(), "the server is starting") ||
+          absl::StartsWith(status.message(), "the server is draining"));
 }
 
 absl::Time MonotonicNow() {

@@ -50,23 +50,26 @@ class ReconnectBackoff {
   std::mt19937_64 rng_;
 };
 
-// The default of `--max-reconnects`: 10 reconnections in a row after the same
-// failure, i.e. 11 attempts over about 13 s of backoff (0.1 + 0.2 + 0.4 + 0.8
-// + 1.6 + 5 x 2 s, +-20 %). A restart repeats one failure for less than that:
-// the old server answers "the server is draining" for at most its
-// --shutdown_deadline (10 s by default), then the connection is refused
-// until the new one listens (lane-server listens about 0.1 s after it
-// starts), and each change of message starts the count again; a proxy's
-// failover changes its failures as it goes too. A failure that repeats word
-// for word 11 times with no frame answered is deterministic (a proxy refusing
-// the call, a header too large) and ends the run in ~13 s instead of the
-// 60 s of the time budget.
+// The default of `--max-reconnects`: 10 reconnections in a row after failures
+// with the same status code, i.e. 11 attempts over about 13 s of backoff
+// (0.1 + 0.2 + 0.4 + 0.8 + 1.6 + 5 x 2 s, +-20 %). That outlasts a restart:
+// lane-server's own "the server is draining" and "the server is starting"
+// never count (the server is there, changing state), and the connection is
+// refused only until the new process listens, about 0.1 s after it starts;
+// a proxy fails over to another replica within seconds. A code that comes
+// back 11 times with nothing answered is a failure that repeats (a proxy
+// refusing every call, a header too large, a server that stays away) and
+// ends the run in ~13 s instead of the 60 s of the time budget.
+//
+// The code, not the message, is compared: gRPC words one transport failure
+// in many ways (through nginx, a refused call reads "Socket closed", then
+// "connections to all backends failing; ... tcp handshaker shutdown", then
+// "... timed out before receiving SETTINGS frame", in turn).
 inline constexpr int kDefaultMaxReconnects = 10;
 
 struct RetryLimits {
-  // Reconnections in a row after failures with the same status (code and
-  // message) and no progress in between; nullopt: no limit. 0: give up at
-  // the first failure.
+  // Reconnections in a row after failures with the same status code and no
+  // progress in between; nullopt: no limit. 0: give up at the first failure.
   std::optional<int> max_reconnects = kDefaultMaxReconnects;
   // Give up when a failure comes this long after the last progress (or the
   // start).
@@ -81,11 +84,13 @@ class RetryBudget {
   void Progress(absl::Time now);
   // A failed attempt (a call, or the session step before it) ended with
   // `failure` (not OK) at `now`: OK when it may be retried; else the status
-  // to give up with, with failure's own code and a message naming it and
-  // what ran out (the attempts in a row, or the time without progress).
+  // to give up with, with failure's own code and a message naming it, the
+  // attempts, and the first failure of the run when its message differs
+  // (or the time without progress).
   absl::Status Failed(const absl::Status& failure, absl::Time now);
 
-  // Failures in a row with the status of the last one, since the last progress.
+  // Failures in a row with the code of the last one, since the last
+  // progress (0 after a status of a server changing state).
   int repeats() const { return repeats_; }
   const RetryLimits& limits() const { return limits_; }
 
@@ -93,9 +98,14 @@ class RetryBudget {
   RetryLimits limits_;
   absl::Time last_progress_;
   absl::StatusCode last_code_ = absl::StatusCode::kOk;
-  std::string last_message_;
+  std::string first_message_;  // of the failures in a row
   int repeats_ = 0;
 };
+
+// UNAVAILABLE "the server is starting" or "the server is draining ..."
+// (wire/status_map.h): a server that is there and changing state, which an
+// attempts budget does not count.
+bool IsServerChangingState(const absl::Status& status);
 
 // The steady clock as an absl::Time, for RetryBudget: a change of the
 // system's clock neither ends a budget early nor stretches it.

@@ -47,7 +47,7 @@ constexpr char kStreamDescription[] =
     "If the stream breaks (server restart, UNAVAILABLE, lost connection), the\n"
     "client reconnects with backoff, re-creates the session and resends every\n"
     "unanswered frame: each frame appears exactly once in the output. It gives\n"
-    "up, with the failure's own status, when the same failure repeats past\n"
+    "up, with the failure's own status, when the same status code repeats past\n"
     "--max-reconnects reconnections or no frame is answered for --retry-timeout.";
 
 constexpr char kStreamFooter[] =
@@ -427,11 +427,11 @@ Command AddStreamCommand(CLI::App& client) {
   lane_tools::AddDuration(app, "--retry-timeout", &flags->retry_timeout,
                           "give up when no frame is answered for D", "60s");
   app->add_option("--max-reconnects", flags->max_reconnects,
-                  "give up when the same failure (status code and message) comes back after N "
-                  "reconnections in a row with no frame answered; 0: at the first failure. 10 "
-                  "is about 13 s of backoff: longer than a restart of lane-server or a proxy's "
-                  "failover, much shorter than --retry-timeout for a failure that repeats (a "
-                  "proxy refusing the call)")
+                  "give up when the same status code comes back after N reconnections in a row "
+                  "with no frame answered (the server's own 'starting' and 'draining' never "
+                  "count); 0: at the first failure. 10 is about 13 s of backoff: longer than a "
+                  "restart of lane-server or a proxy's failover, much shorter than "
+                  "--retry-timeout for a failure that repeats (a proxy refusing the call)")
       ->type_name("N")
       ->check(lane_tools::Between(0, 1000000));
   lane_tools::AddDuration(app, "--stall-timeout", &flags->stall_timeout,

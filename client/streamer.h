@@ -8,7 +8,7 @@
 // connection, a stalled stream, a session gone missing), the streamer backs
 // off, re-creates the session with CreateSession (idempotent: UNCHANGED when
 // it exists), opens a new call and resends every frame that was not answered;
-// within a budget: it gives up when the same failure repeats past
+// within a budget: it gives up when the same status code repeats past
 // max_reconnects reconnections, or no frame is answered for give_up_after.
 // Responses already received are never asked for again, so no frame is
 // answered twice.
@@ -74,8 +74,8 @@ struct StreamerOptions {
   // (the time budget) ...
   absl::Duration give_up_after = absl::Seconds(60);
   // ... or after this many reconnections in a row following failures with
-  // the same status and no frame answered (the attempts budget; nullopt: no
-  // limit, 0: none). reconnect_backoff.h says why 10.
+  // the same status code and no frame answered (the attempts budget;
+  // nullopt: no limit, 0: none). reconnect_backoff.h says why 10.
   std::optional<int> max_reconnects = kDefaultMaxReconnects;
   // A call with frames in flight and no response for this long is cancelled
   // and retried.
@@ -112,7 +112,7 @@ class Streamer {
 
   // OK when every frame of the source has been handed to the sink. Otherwise
   // the error that stopped it, with the failed call's own code: not
-  // transient, the same failure past max_reconnects reconnections, or no
+  // transient, the same code past max_reconnects reconnections, or no
   // progress for give_up_after (RetryBudget). INVALID_ARGUMENT at once, before
   // any call, for a camera id the server would refuse (wire/camera_id.h).
   // Frames handed to the sink before stay handed.

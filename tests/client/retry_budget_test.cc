@@ -26,6 +26,7 @@
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "reconnect_backoff.h"
 #include "streamer.h"
+#include "wire/status_map.h"
 
 namespace lane_client {
 namespace {
@@ -35,12 +36,16 @@ namespace v1 = lane::v1;
 constexpr char kClosedMessage[] = "closed by the test server";
 
 // Answers the session calls (or fails them with `session_status`), ends
-// every StreamFrames call at once with `stream_status`; counts the calls.
+// every StreamFrames call at once with `stream_status` (its message followed
+// by " (call N)" when `number_calls`: a failure worded anew every time, as
+// gRPC's transport failures are); counts the calls.
 class ClosingLaneService final : public v1::LaneService::Service {
  public:
   explicit ClosingLaneService(grpc::Status stream_status,
                               grpc::Status session_status = grpc::Status::OK)
       : stream_status_(std::move(stream_status)), session_status_(std::move(session_status)) {}
+
+  std::atomic<bool> number_calls{false};
 
   grpc::Status CreateSession(grpc::ServerContext* /*context*/,
                              const v1::CreateSessionRequest* request,
@@ -62,8 +67,10 @@ class ClosingLaneService final : public v1::LaneService::Service {
   grpc::Status StreamFrames(
       grpc::ServerContext* /*context*/,
       grpc::ServerReaderWriter<v1::FrameResponse, v1::FrameRequest>* /*stream*/) override {
-    ++stream_calls;
-    return stream_status_;
+    const int call = ++stream_calls;
+    if (!number_calls) return stream_status_;
+    return grpc::Status(stream_status_.error_code(),
+                        absl::StrCat(stream_status_.error_message(), " (call ", call, ")"));
   }
 
   std::atomic<int> session_calls{0};
@@ -164,20 +171,60 @@ TEST(RetryBudgetTest, KeepsTheFailuresOwnCode) {
   EXPECT_EQ(budget.Failed(full, kT0).code(), absl::StatusCode::kResourceExhausted);
 }
 
-TEST(RetryBudgetTest, ADifferentFailureOrProgressStartsTheCountAgain) {
+TEST(RetryBudgetTest, TheCodeCountsNotTheWording) {
+  RetryBudget budget({2, absl::InfiniteDuration()}, kT0);
+  EXPECT_TRUE(budget.Failed(absl::UnavailableError("Socket closed"), kT0).ok());
+  EXPECT_TRUE(
+      budget.Failed(absl::UnavailableError("connections to all backends failing"), kT0).ok());
+  const absl::Status end = budget.Failed(absl::UnavailableError("tcp handshaker shutdown"), kT0);
+  EXPECT_EQ(end.code(), absl::StatusCode::kUnavailable);
+  EXPECT_NE(end.message().find("UNAVAILABLE: tcp handshaker shutdown; UNAVAILABLE on 3 attempts"),
+            absl::string_view::npos)
+      << end;
+  EXPECT_NE(end.message().find("the first of them: Socket closed"), absl::string_view::npos) << end;
+}
+
+TEST(RetryBudgetTest, ADifferentCodeOrProgressStartsTheCountAgain) {
   RetryBudget budget({2, absl::InfiniteDuration()}, kT0);
   const absl::Status refused = absl::UnavailableError("Connection refused");
-  const absl::Status draining = absl::UnavailableError("the server is draining");
+  const absl::Status cancelled = absl::CancelledError("stalled");
   EXPECT_TRUE(budget.Failed(refused, kT0).ok());
   EXPECT_TRUE(budget.Failed(refused, kT0).ok());
-  EXPECT_TRUE(budget.Failed(draining, kT0).ok());  // same code, another message
+  EXPECT_TRUE(budget.Failed(cancelled, kT0).ok());
   EXPECT_EQ(budget.repeats(), 1);
-  EXPECT_TRUE(budget.Failed(draining, kT0).ok());
+  EXPECT_TRUE(budget.Failed(refused, kT0).ok());
+  EXPECT_TRUE(budget.Failed(refused, kT0).ok());
   budget.Progress(kT0);
   EXPECT_EQ(budget.repeats(), 0);
-  EXPECT_TRUE(budget.Failed(draining, kT0).ok());
-  EXPECT_TRUE(budget.Failed(draining, kT0).ok());
-  EXPECT_FALSE(budget.Failed(draining, kT0).ok());
+  EXPECT_TRUE(budget.Failed(refused, kT0).ok());
+  EXPECT_TRUE(budget.Failed(refused, kT0).ok());
+  const absl::Status end = budget.Failed(refused, kT0);
+  EXPECT_FALSE(end.ok());
+  // One wording throughout: no "first of them".
+  EXPECT_EQ(end.message().find("first of them"), absl::string_view::npos) << end;
+}
+
+TEST(RetryBudgetTest, AServerChangingStateIsNotCounted) {
+  EXPECT_TRUE(IsServerChangingState(lane::wire::ServerStarting()));
+  EXPECT_TRUE(IsServerChangingState(lane::wire::ServerDraining()));
+  EXPECT_FALSE(IsServerChangingState(absl::UnavailableError("Socket closed")));
+  EXPECT_FALSE(IsServerChangingState(absl::InternalError("the server is draining")));
+  // A restart: refused, the old server draining, refused, the new one starting.
+  RetryBudget budget({1, absl::Seconds(60)}, kT0);
+  const absl::Status refused = absl::UnavailableError("Connection refused");
+  EXPECT_TRUE(budget.Failed(refused, kT0).ok());
+  for (int i = 0; i < 20; ++i) {
+    ASSERT_TRUE(budget.Failed(lane::wire::ServerDraining(), kT0 + absl::Seconds(i)).ok()) << i;
+  }
+  EXPECT_TRUE(budget.Failed(refused, kT0 + absl::Seconds(21)).ok());
+  EXPECT_TRUE(budget.Failed(lane::wire::ServerStarting(), kT0 + absl::Seconds(22)).ok());
+  EXPECT_TRUE(budget.Failed(refused, kT0 + absl::Seconds(23)).ok());
+  EXPECT_FALSE(budget.Failed(refused, kT0 + absl::Seconds(24)).ok());
+  // The time budget still counts them.
+  RetryBudget timed({1, absl::Seconds(60)}, kT0);
+  EXPECT_TRUE(timed.Failed(lane::wire::ServerDraining(), kT0 + absl::Seconds(59)).ok());
+  EXPECT_EQ(timed.Failed(lane::wire::ServerDraining(), kT0 + absl::Seconds(61)).code(),
+            absl::StatusCode::kUnavailable);
 }
 
 TEST(RetryBudgetTest, ZeroGivesUpAtTheFirstFailureAndNulloptNever) {
@@ -226,6 +273,42 @@ TEST(RetryBudgetStreamTest, StreamerGivesUpOnAFailureThatRepeats) {
   EXPECT_EQ(fake.service.stream_calls.load(), 4);
   EXPECT_EQ(answered, 0);
   EXPECT_LT(seconds, 5.0);
+}
+
+TEST(RetryBudgetStreamTest, StreamerGivesUpOnACodeThatRepeatsInOtherWords) {
+  ClosingServer fake(grpc::Status(grpc::StatusCode::UNAVAILABLE, kClosedMessage));
+  ASSERT_NE(fake.server, nullptr);
+  fake.service.number_calls = true;
+  StreamerOptions options = FastOptions();
+  options.max_reconnects = 3;
+  Streamer streamer(MakeChannel(fake.target()), options);
+  const absl::Status status =
+      streamer.Run(FakeFrames(2), [](const StreamItem&, const v1::FrameResponse*, double) {});
+  EXPECT_EQ(status.code(), absl::StatusCode::kUnavailable) << status;
+  EXPECT_NE(status.message().find("(call 4); UNAVAILABLE on 4 attempts in a row"),
+            absl::string_view::npos)
+      << status;
+  EXPECT_NE(status.message().find(absl::StrCat("the first of them: ", kClosedMessage, " (call 1)")),
+            absl::string_view::npos)
+      << status;
+  EXPECT_EQ(fake.service.stream_calls.load(), 4);
+}
+
+TEST(RetryBudgetStreamTest, StreamerWaitsOutADrainingServer) {
+  // lane-server's own "the server is draining": only the time budget ends it.
+  ClosingServer fake(grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                                  std::string(lane::wire::ServerDraining().message())));
+  ASSERT_NE(fake.server, nullptr);
+  StreamerOptions options = FastOptions();
+  options.max_reconnects = 1;
+  options.give_up_after = absl::Milliseconds(300);
+  Streamer streamer(MakeChannel(fake.target()), options);
+  const absl::Status status =
+      streamer.Run(FakeFrames(2), [](const StreamItem&, const v1::FrameResponse*, double) {});
+  EXPECT_EQ(status.code(), absl::StatusCode::kUnavailable) << status;
+  EXPECT_NE(status.message().find("no frame answered for 300ms"), absl::string_view::npos)
+      << status;
+  EXPECT_GT(fake.service.stream_calls.load(), 2);
 }
 
 TEST(RetryBudgetStreamTest, StreamerKeepsTheCodeOfAFailingSessionStep) {

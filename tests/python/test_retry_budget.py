@@ -71,10 +71,14 @@ def tearDownModule():
 class ClosingServer:
     """lane.v1.LaneService on a free loopback port: session calls answer
     (or end with session_status), StreamFrames ends at once with
-    stream_status; `calls` counts the calls by method."""
+    stream_status (its message followed by " (call N)" with number_calls: a
+    failure worded anew every time, as gRPC's transport failures are);
+    `calls` counts the calls by method."""
 
-    def __init__(self, stream_status=(grpc.StatusCode.UNAVAILABLE, CLOSED), session_status=None):
+    def __init__(self, stream_status=(grpc.StatusCode.UNAVAILABLE, CLOSED), session_status=None,
+                 number_calls=False):
         self.calls = {"CreateSession": 0, "GetSession": 0, "StreamFrames": 0}
+        self._number_calls = number_calls
         self._lock = threading.Lock()
         self._stream_status = stream_status
         self._session_status = session_status
@@ -105,6 +109,7 @@ class ClosingServer:
     def _count(self, method):
         with self._lock:
             self.calls[method] += 1
+            return self.calls[method]
 
     def _fail(self, context, status):
         context.set_code(status[0])
@@ -127,8 +132,9 @@ class ClosingServer:
         return pb2.Session(camera_id=request.camera_id)
 
     def _stream(self, requests, context):
-        self._count("StreamFrames")
-        self._fail(context, self._stream_status)
+        call = self._count("StreamFrames")
+        code, message = self._stream_status
+        self._fail(context, (code, f"{message} (call {call})" if self._number_calls else message))
         return iter(())
 
 
@@ -217,6 +223,38 @@ class SyncBudgetTest(unittest.TestCase):
         self.assertEqual(done.returncode, 2, done.stderr)
         self.assertIn("1 to 128 characters, got 200", done.stderr)
         self.assertEqual(sum(self.server.calls.values()), 0)
+
+
+class WordingTest(unittest.TestCase):
+    """The code counts, not the wording; the server's own 'draining' never counts."""
+
+    def test_a_code_that_repeats_in_other_words(self):
+        server = ClosingServer(number_calls=True)
+        try:
+            with lane_client.LaneClient(server.target, token="") as client:
+                with self.assertRaises(lane_client.StreamError) as caught:
+                    list(client.stream("cam", FRAMES, config=CONFIG, max_reconnects=3))
+        finally:
+            server.stop()
+        message = str(caught.exception)
+        self.assertEqual(caught.exception.code, grpc.StatusCode.UNAVAILABLE)
+        self.assertEqual(caught.exception.details, f"{CLOSED} (call 4)")
+        self.assertIn("UNAVAILABLE on 4 attempts in a row", message)
+        self.assertIn(f"the first of them: UNAVAILABLE: {CLOSED} (call 1)", message)
+        self.assertEqual(server.calls["StreamFrames"], 4)
+
+    def test_a_draining_server_is_waited_out(self):
+        server = ClosingServer(stream_status=(grpc.StatusCode.UNAVAILABLE,
+                                              "the server is draining (shutting down)"))
+        try:
+            with lane_client.LaneClient(server.target, token="") as client:
+                with self.assertRaises(lane_client.StreamError) as caught:
+                    list(client.stream("cam", FRAMES, config=CONFIG, max_reconnects=1,
+                                       give_up_after=1.0))
+        finally:
+            server.stop()
+        self.assertIn("no frame answered for 1 s", str(caught.exception))
+        self.assertGreaterEqual(server.calls["StreamFrames"], 4)
 
 
 class SessionStepTest(unittest.TestCase):

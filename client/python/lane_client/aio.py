@@ -18,8 +18,8 @@ to its loop). The stream keeps lane-client's contract (streaming.py): at
 most `window` frames in flight, each frame answered exactly once and in
 order; on a transient failure it waits (0.1 s doubling to 2 s, +-20 %),
 re-creates or confirms the session, reconnects and resends what was not
-answered, and gives up (StreamError) as FrameStream does: the same failure
-after max_reconnects reconnections in a row, or no frame answered for
+answered, and gives up (StreamError) as FrameStream does: the same status
+code after max_reconnects reconnections in a row, or no frame answered for
 give_up_after seconds. A source may be a plain iterable (read between writes: keep it
 quick) or an async iterable (a camera read without blocking the loop).
 """

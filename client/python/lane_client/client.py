@@ -273,13 +273,13 @@ class LaneClient:
         give_up_after, max_reconnects: the stream gives up with StreamError,
             whose .code and .details are the failed call's own status, when
             no frame has been answered for give_up_after seconds, or when the
-            same failure (status code and message) comes back after
-            max_reconnects reconnections in a row with no frame answered
-            (None: no such limit; 0: at the first failure). The default, 10,
-            is about 13 s of backoff: longer than a restart repeats one
-            failure (a drain's "the server is draining", then "connection
-            refused"), and far shorter than give_up_after for a failure that
-            repeats (a proxy refusing the call).
+            same status code comes back after max_reconnects reconnections
+            in a row with no frame answered (None: no such limit; 0: at the
+            first failure; the server's own "starting" and "draining" never
+            count). The default, 10, is about 13 s of backoff: longer than a
+            restart keeps the connection refused, and far shorter than
+            give_up_after for a failure that repeats (a proxy refusing the
+            call).
         stall_timeout: a call with frames in flight that gets no response
             for this long is cancelled and retried (None: never).
 

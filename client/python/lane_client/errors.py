@@ -35,7 +35,7 @@ class UnauthenticatedError(LaneError):
 
 
 class StreamError(LaneError):
-    """stream(): the stream gave up: a permanent status, the same failure
+    """stream(): the stream gave up: a permanent status, the same status code
     after max_reconnects reconnections in a row, or no frame answered within
     give_up_after seconds. `.code` and `.details` are the status code and
     message of the last failure (UNAVAILABLE and "Socket closed", say, not a

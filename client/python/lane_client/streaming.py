@@ -20,9 +20,9 @@ How it works (the same contract as lane-client's Streamer, client/streamer.h):
     once; frames are taken from the source once.
   * Within two budgets (_Reconnect): the stream gives up with StreamError,
     carrying the failure's own status code and message, when the same
-    failure (code and message) comes back after `max_reconnects`
-    reconnections in a row with no frame answered, or when no frame has
-    been answered for `give_up_after` seconds.
+    status code comes back after `max_reconnects` reconnections in a row
+    with no frame answered, or when no frame has been answered for
+    `give_up_after` seconds.
   * Tracking survives the reconnection (docs/deployment.md): the stream
     keeps the latest resume state the server sent and the largest lane id
     it has seen (_Tracking), and the first request of every later call
@@ -60,15 +60,25 @@ BACKOFF_INITIAL = 0.1
 BACKOFF_MAX = 2.0
 BACKOFF_JITTER = 0.2
 
-# Reconnections in a row after the same failure, by default (as lane-client's
-# --max-reconnects): 11 attempts over about 13 s of backoff (0.1 + 0.2 + 0.4 +
-# 0.8 + 1.6 + 5 x 2 s). A restart repeats one failure for less than that
-# ("the server is draining" for at most the server's --shutdown_deadline, 10 s
-# by default, then "connection refused" until the new one listens), and each
-# change of message starts the count again; a failure that repeats word for
-# word with no frame answered is deterministic (a proxy refusing the call)
-# and ends the stream in ~13 s instead of give_up_after's 60.
+# Reconnections in a row after failures with the same status code, by default
+# (as lane-client's --max-reconnects): 11 attempts over about 13 s of backoff
+# (0.1 + 0.2 + 0.4 + 0.8 + 1.6 + 5 x 2 s). That outlasts a restart: the
+# server's own "the server is draining" and "the server is starting" never
+# count (it is there, changing state), and the connection is refused only
+# until the new process listens. A code that comes back 11 times with no
+# frame answered is a failure that repeats (a proxy refusing every call, a
+# server that stays away) and ends the stream in ~13 s instead of
+# give_up_after's 60. The code, not the message, is compared: gRPC words one
+# transport failure in many ways.
 DEFAULT_MAX_RECONNECTS = 10
+
+# The beginnings of lane-server's UNAVAILABLE messages while it starts or
+# drains (wire/status_map.cc).
+_SERVER_CHANGING_STATE = ("the server is starting", "the server is draining")
+
+
+def _server_changing_state(code, details):
+    return code == grpc.StatusCode.UNAVAILABLE and details.startswith(_SERVER_CHANGING_STATE)
 
 
 class _Pending:
@@ -85,11 +95,11 @@ class _Reconnect:
     """What a stream does after a failed call or session step, the same for
     FrameStream and aio.AsyncFrameStream: record why; give up (StreamError,
     with the failure's code and message) when reconnection is off, when the
-    same failure (code and message) comes back after max_reconnects
-    reconnections in a row with no frame answered (None: no limit), or when
-    no frame was answered for give_up_after seconds; else wait 0.1 s
-    doubling to 2 s (+-20 %). A call that answered frames starts both the
-    wait and the budgets again."""
+    same status code comes back after max_reconnects reconnections in a row
+    with no frame answered (None: no limit; the server's own "starting" and
+    "draining" never count), or when no frame was answered for
+    give_up_after seconds; else wait 0.1 s doubling to 2 s (+-20 %). A call
+    that answered frames starts both the wait and the budgets again."""
 
     def __init__(self, camera_id, reconnect, give_up_after, failures,
                  max_reconnects=DEFAULT_MAX_RECONNECTS):
@@ -100,22 +110,23 @@ class _Reconnect:
         self._failures = failures  # the stream's public list, appended to
         self._backoff = BACKOFF_INITIAL
         self._last_progress = time.monotonic()
-        self._last = None          # (code, details) of the last failure
-        self.repeats = 0           # failures in a row with that status, since progress
+        self._code = None          # of the failures in a row
+        self._first = ""           # the first of them, as reported
+        self.repeats = 0           # failures in a row with that code, since progress
 
     def after(self, failure, progressed, unanswered):
         """Seconds to wait before the next call; raises StreamError to give up."""
         if progressed:
             self._backoff = BACKOFF_INITIAL
             self._last_progress = time.monotonic()
-            self._last = None
-            self.repeats = 0
+            self._code, self._first, self.repeats = None, "", 0
         self._failures.append(failure.text)
-        key = (failure.code, failure.details)
-        if key == self._last:
+        if _server_changing_state(failure.code, failure.details):
+            self._code, self._first, self.repeats = None, "", 0
+        elif self.repeats and failure.code == self._code:
             self.repeats += 1
         else:
-            self._last, self.repeats = key, 1
+            self._code, self._first, self.repeats = failure.code, failure.text, 1
 
         def give_up(message):
             return StreamError(message, failure.code, failure.details, failures=self._failures)
@@ -127,9 +138,10 @@ class _Reconnect:
             if limit == 0:
                 raise give_up(f"StreamFrames: {failure.text}; gave up at the first failure "
                               "(max_reconnects=0)")
-            raise give_up(f"StreamFrames: {failure.text}; the same failure on {self.repeats} "
+            first = "" if self._first == failure.text else f"; the first of them: {self._first}"
+            raise give_up(f"StreamFrames: {failure.text}; {failure.code.name} on {self.repeats} "
                           "attempts in a row with no frame answered: gave up (at most "
-                          f"max_reconnects={limit} reconnections after the same failure)")
+                          f"max_reconnects={limit} reconnections after the same failure){first}")
         if time.monotonic() - self._last_progress > self._give_up_after:
             raise give_up(f"StreamFrames: no frame answered for {self._give_up_after:g} s; "
                           f"last error: {failure.text}")
@@ -197,8 +209,8 @@ class _Tracking:
 
 class _Retry(Exception):
     """A call or session step failed in a way that may be retried: its
-    status code, its message (`details`: what tells one failure from
-    another) and how it is reported (`text`)."""
+    status code, its message (`details`, as the server or gRPC said it) and
+    how it is reported (`text`)."""
 
     def __init__(self, code, text, details=None):
         super().__init__(text)
