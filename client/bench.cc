@@ -53,6 +53,13 @@ absl::Status CreateSessions(const LoadSpec& spec) {
   return absl::OkStatus();
 }
 
+// How a camera's call ended, as a failure for the retry budget: a call that
+// ended with OK during the run ended early all the same.
+absl::Status CallFailure(const grpc::Status& status) {
+  if (status.ok()) return absl::UnknownError("the call ended before the run did");
+  return absl::Status(static_cast<absl::StatusCode>(status.error_code()), status.error_message());
+}
+
 // One run of RunLoad: its cameras, the open loop's scheduler, and the
 // supervision (progress, reconnection, drain) on the calling thread.
 class LoadRun {
@@ -142,8 +149,9 @@ class LoadRun {
   }
 
   // Until the end of the measurement: progress, and reconnection of cameras
-  // whose call failed (the shared reconnect policy; its schedule starts again
-  // after a call that was answered).
+  // whose call failed (the shared reconnect policy; its schedule and its
+  // attempts budget start again after a call that was answered). Ends early
+  // when every camera has given up.
   void Supervise() {
     bool cpu_sampled = false;
     while (true) {
@@ -154,17 +162,35 @@ class LoadRun {
         cpu_start_ = ServerCpuSeconds();
         cpu_sampled = true;
       }
+      size_t gave_up = 0;
       for (auto& camera : cameras_) {
+        if (!camera->gave_up.ok()) {
+          ++gave_up;
+          continue;
+        }
         CameraStream* stream = camera->current();
         if (stream == nullptr || !stream->done()) continue;
         if (camera->retry_at == Clock::time_point{}) {
-          if (stream->answered_any()) camera->backoff.Reset();
+          if (stream->answered_any()) {
+            camera->backoff.Reset();
+            camera->budget.Progress(MonotonicNow());
+          }
+          // A deterministic failure (the same status, call after call, and
+          // nothing answered) is not retried for the rest of the run.
+          if (absl::Status s =
+                  camera->budget.Failed(CallFailure(stream->final_status()), MonotonicNow());
+              !s.ok()) {
+            camera->gave_up = std::move(s);
+            ++gave_up;
+            continue;
+          }
           camera->retry_at = now + absl::ToChronoNanoseconds(camera->backoff.Next());
         } else if (now >= camera->retry_at) {
           camera->retry_at = Clock::time_point{};
           camera->OpenStream();
         }
       }
+      if (gave_up == cameras_.size()) break;  // nothing left to measure
       if (spec_.progress && now - last_progress_ >= std::chrono::milliseconds(500)) {
         ReportProgress(now < run_.measure_start ? "warm-up" : "run");
       }
@@ -274,6 +300,9 @@ class LoadRun {
       result.max_send_lag_ms = std::max(result.max_send_lag_ms, s.max_send_lag_ms);
       result.stream_failures += s.stream_failures;
       result.ok_by_target[camera->target()] += s.ok;
+      if (!camera->gave_up.ok()) {
+        result.gave_up.push_back(absl::StrCat(camera->id(), ": ", camera->gave_up.message()));
+      }
     }
     // At least the measurement window: a run that answered everything early
     // still lasted that long.

@@ -17,6 +17,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,7 @@
 #include "absl/time/time.h"
 #include "lane/config/config.h"
 #include "lane/v1/lane_service.pb.h"
+#include "reconnect_backoff.h"
 
 namespace lane_client {
 
@@ -97,6 +99,10 @@ struct LoadSpec {
   absl::Duration timeline_interval = absl::ZeroDuration();
   const std::vector<BenchFrame>* frames = nullptr;
   ProgressFn progress;  // about every 0.5 s, from the calling thread
+  // A camera stops reconnecting after this many reconnections in a row that
+  // failed with the same status code and no frame answered (reconnect_backoff.h);
+  // nullopt: never. When every camera has stopped, the run ends early.
+  std::optional<int> max_reconnects = kDefaultMaxReconnects;
 };
 
 // One interval of a run's timeline: the frames whose answer arrived in
@@ -134,6 +140,9 @@ struct LoadResult {
   LatencyHistogram latency_histogram;      // of latency_ms
   double max_send_lag_ms = 0;              // open loop: the latest a frame was handed to gRPC
   uint64_t stream_failures = 0;
+  // "CAMERA: why" for each camera that gave up reconnecting
+  // (LoadSpec::max_reconnects), in camera order.
+  std::vector<std::string> gave_up;
   std::map<std::string, uint64_t> ok_by_target;
   std::vector<TimelinePoint> timeline;  // empty unless LoadSpec::timeline_interval > 0
   // The servers' CPU time over the measured window and the drain (their

@@ -127,6 +127,7 @@ void CameraStream::OnDone(const grpc::Status& status) {
   uint64_t lost = 0;
   {
     absl::MutexLock lock(&mu_);
+    final_status_ = status;
     for (const auto& entry : inflight_) {
       if (entry.second.measured) ++lost;
     }

@@ -136,6 +136,11 @@ class CameraStream final : public grpc::ClientBidiReactor<grpc::ByteBuffer, grpc
     absl::MutexLock lock(&mu_);
     return inflight_.size();
   }
+  // How the call ended (OK until it has).
+  grpc::Status final_status() {
+    absl::MutexLock lock(&mu_);
+    return final_status_;
+  }
 
   void OnWriteDone(bool ok) override {
     {
@@ -194,13 +199,15 @@ class CameraStream final : public grpc::ClientBidiReactor<grpc::ByteBuffer, grpc
   bool hold_released_ ABSL_GUARDED_BY(mu_) = false;
   bool done_ ABSL_GUARDED_BY(mu_) = false;
   bool answered_any_ ABSL_GUARDED_BY(mu_) = false;
+  grpc::Status final_status_ ABSL_GUARDED_BY(mu_);
 };
 
 class Camera {
  public:
   Camera(int index, std::string id, grpc::GenericStub* stub, std::string target, RunState* run,
          absl::Mutex* done_mu, absl::CondVar* done_cv)
-      : id_(std::move(id)),
+      : budget({run->spec->max_reconnects, absl::InfiniteDuration()}, MonotonicNow()),
+        id_(std::move(id)),
         stub_(stub),
         target_(std::move(target)),
         run_(run),
@@ -209,6 +216,7 @@ class Camera {
     next_frame_ = static_cast<size_t>(index) * 7 % run_->spec->frames->size();
   }
 
+  const std::string& id() const { return id_; }
   const std::string& target() const { return target_; }
   const RunState& run() const { return *run_; }
 
@@ -297,9 +305,13 @@ class Camera {
   }
 
   // Reconnection of the supervisor: when the next call is due (zero: not
-  // scheduled), and the shared reconnect policy.
+  // scheduled), the shared reconnect policy, and its attempts budget (the
+  // run's duration is the time budget); gave_up: not OK once the budget ran
+  // out, and the camera no longer reconnects.
   Clock::time_point retry_at{};
   ReconnectBackoff backoff;
+  RetryBudget budget;
+  absl::Status gave_up;
 
  private:
   // Queues the camera's next frame on `stream` and writes it. Frame ids are

@@ -19,6 +19,7 @@
 #include "common.h"
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "session_config.h"
+#include "wire/camera_id.h"
 #include "wire/config_proto.h"
 
 namespace lane_client {
@@ -35,8 +36,9 @@ constexpr char kBenchDescription[] =
 
 constexpr char kBenchFooter[] =
     "A progress line is shown on stderr when it is a terminal.\n"
-    "Exit status: 0, 1 on an error (no session, no frames), 2 for a bad command\n"
-    "line, 3 when --slo-p99-ms is breached.";
+    "Exit status: 0, 1 on an error (no session, no frames, a camera that gave up\n"
+    "reconnecting: the report is written first), 2 for a bad command line, 3 when\n"
+    "--slo-p99-ms is breached.";
 
 struct BenchFlags {
   // Load.
@@ -48,6 +50,7 @@ struct BenchFlags {
   std::optional<absl::Duration> duration;
   std::optional<absl::Duration> drain_timeout;
   std::optional<absl::Duration> timeline;
+  int max_reconnects = kDefaultMaxReconnects;
   // Frames.
   int synthetic = 50;
   int jpeg_quality = 90;
@@ -98,6 +101,15 @@ std::string FlagsError(const BenchFlags& flags) {
   if (flags.fps && *flags.fps <= 0) return "--fps must be > 0";
   if (flags.duration && *flags.duration <= absl::ZeroDuration()) return "--duration must be > 0";
   if (flags.timeline && *flags.timeline <= absl::ZeroDuration()) return "--timeline must be > 0";
+  // The largest camera id: what the server would refuse is refused here.
+  const int most_cameras = flags.sweep.empty()
+                               ? flags.cameras
+                               : *std::max_element(flags.sweep.begin(), flags.sweep.end());
+  if (const absl::Status id = lane::wire::ValidateCameraId(
+          absl::StrCat(flags.camera_prefix, std::max(0, most_cameras - 1)));
+      !id.ok()) {
+    return absl::StrCat("--camera-prefix: ", id.message());
+  }
   return "";
 }
 
@@ -131,6 +143,7 @@ LoadSpec MakeLoadSpec(const BenchFlags& flags, const std::vector<std::string>& t
   spec.timeline_interval = flags.timeline.value_or(
       absl::Milliseconds(500) * std::max<int64_t>(1, absl::ToInt64Seconds(spec.duration) / 60));
   spec.frames = frames;
+  spec.max_reconnects = flags.max_reconnects;
   return spec;
 }
 
@@ -194,7 +207,8 @@ absl::StatusOr<InprocessResult> RunReference(const BenchFlags& flags, const Load
 }
 
 // One run per camera count of `sweep`; the sessions are deleted at the end
-// unless --keep-sessions.
+// unless --keep-sessions. The sweep stops after a run in which a camera gave
+// up reconnecting: a failure that repeats would repeat in the next run too.
 absl::Status RunSweep(const BenchFlags& flags, const std::vector<int>& sweep, LoadSpec& spec,
                       ProgressLine& progress, Report* report) {
   int max_cameras = 0;
@@ -209,6 +223,7 @@ absl::Status RunSweep(const BenchFlags& flags, const std::vector<int>& sweep, Lo
       return result.status();
     }
     report->runs.push_back(*std::move(result));
+    if (!report->runs.back().gave_up.empty()) break;
   }
   if (!flags.keep_sessions) DeleteSessions(spec, max_cameras);
   return absl::OkStatus();
@@ -275,6 +290,17 @@ int RunBench(const CLI::App& app, const BenchFlags& flags) {
   if (const absl::Status s = RunSweep(flags, sweep, spec, progress, &report); !s.ok()) {
     return Failure("bench", std::string(s.message()));
   }
+  const std::vector<std::string>& gave_up = report.runs.back().gave_up;
+  if (!gave_up.empty()) {
+    // The report says what was measured until then; the status is the failure's.
+    const int written = WriteReport(flags, report);
+    if (written == kExitFailure) return written;
+    return Failure(
+        "bench", absl::StrCat("camera ", gave_up.front(),
+                              gave_up.size() > 1
+                                  ? absl::StrCat(" (and ", gave_up.size() - 1, " other camera(s))")
+                                  : std::string()));
+  }
   if (first_half) {
     absl::StatusOr<InprocessResult> half =
         RunReference(flags, spec, server_info, after, "in-process (2/2)", progress);
@@ -314,6 +340,14 @@ void AddLoadOptions(CLI::App* app, BenchFlags* flags) {
       ->group(group);
   lane_tools::AddDuration(app, "--drain-timeout", &flags->drain_timeout,
                           "wait for the last answers this long", "10s")
+      ->group(group);
+  app->add_option("--max-reconnects", flags->max_reconnects,
+                  "a camera stops reconnecting when the same status code comes back after N "
+                  "reconnections in a row with no frame answered, as in "
+                  "`stream`; the run ends early when every camera has stopped, and the exit "
+                  "status is 1")
+      ->type_name("N")
+      ->check(lane_tools::Between(0, 1000000))
       ->group(group);
   lane_tools::AddDuration(app, "--timeline", &flags->timeline,
                           "also report each interval D of the measured time: answers, errors and "

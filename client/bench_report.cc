@@ -102,6 +102,12 @@ RunMetadata LocalMetadata() {
 
 std::vector<std::string> Warnings(const Report& r, const LoadResult& run) {
   std::vector<std::string> out;
+  if (!run.gave_up.empty()) {
+    out.push_back(absl::StrCat(
+        run.gave_up.size(), " of ", run.cameras, " camera(s) gave up reconnecting",
+        run.gave_up.size() == static_cast<size_t>(run.cameras) ? " and the run ended early" : "",
+        ", so the load was not what was asked; ", run.gave_up.front()));
+  }
   if (const std::optional<double> ratio = r.Ratio(run); ratio && *ratio > 1.0) {
     out.push_back(absl::StrFormat(
         "service/in-process is %.0f %%, over 100 %%: the in-process reference ran slower than the "

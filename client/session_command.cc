@@ -11,6 +11,7 @@
 #include "common.h"
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "session_config.h"
+#include "wire/camera_id.h"
 
 namespace lane_client {
 namespace {
@@ -86,6 +87,13 @@ int RunSession(const CLI::App& app, const SessionFlags& flags) {
   const std::string command = "session " + app.get_name();
   const absl::StatusOr<CallSetup> setup = ParseCallSetup(flags.call, absl::Seconds(10));
   if (!setup.ok()) return lane_tools::UsageError(app, std::string(setup.status().message()));
+  if (flags.action != Action::kList) {
+    // The server's rule, checked before the id goes out (and into the
+    // x-camera-id header a proxy reads).
+    if (const absl::Status id = lane::wire::ValidateCameraId(flags.camera); !id.ok()) {
+      return lane_tools::UsageError(app, absl::StrCat("--camera: ", id.message()));
+    }
+  }
   std::optional<v1::SessionConfig> config;
   if (flags.action == Action::kCreate) {
     absl::StatusOr<std::optional<v1::SessionConfig>> parsed =

@@ -29,6 +29,7 @@
 #include "results.h"
 #include "session_config.h"
 #include "streamer.h"
+#include "wire/camera_id.h"
 #include "wire/config_proto.h"
 
 namespace lane_client {
@@ -45,13 +46,16 @@ constexpr char kStreamDescription[] =
     "\n"
     "If the stream breaks (server restart, UNAVAILABLE, lost connection), the\n"
     "client reconnects with backoff, re-creates the session and resends every\n"
-    "unanswered frame: each frame appears exactly once in the output.";
+    "unanswered frame: each frame appears exactly once in the output. It gives\n"
+    "up, with the failure's own status, when the same status code repeats past\n"
+    "--max-reconnects reconnections or no frame is answered for --retry-timeout.";
 
 constexpr char kStreamFooter[] =
     "Without --config the camera's session must exist on the server; its config\n"
     "is read once and used to re-create it after a restart.\n"
-    "Exit status: 0 when every frame was answered OK, 1 otherwise, 2 for a bad\n"
-    "command line.";
+    "Exit status: 0 when every frame was answered OK, 1 otherwise (also when the\n"
+    "client gave up reconnecting), 2 for a bad command line (also a --camera id\n"
+    "the server would refuse).";
 
 struct StreamFlags {
   std::string target;
@@ -64,6 +68,7 @@ struct StreamFlags {
   std::optional<std::string> overlay_video;
   size_t window = StreamerOptions().window;
   std::optional<absl::Duration> retry_timeout;
+  int max_reconnects = kDefaultMaxReconnects;
   std::optional<absl::Duration> stall_timeout;
   lane_tools::ReadFlags read;
   bool quiet = false;
@@ -279,6 +284,7 @@ StreamerOptions StreamerOptionsFrom(const StreamFlags& flags,
   options.replace = flags.replace;
   options.window = flags.window;
   if (flags.retry_timeout) options.give_up_after = *flags.retry_timeout;
+  options.max_reconnects = flags.max_reconnects;
   if (flags.stall_timeout) options.stall_timeout = *flags.stall_timeout;
   return options;
 }
@@ -337,6 +343,11 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
   if (!targets.ok()) return lane_tools::UsageError(app, std::string(targets.status().message()));
   if (targets->size() != 1) {
     return lane_tools::UsageError(app, "stream takes one --target (use a dns:/// name to balance)");
+  }
+  // Checked here, not by the server: an id it refuses, or a header a proxy
+  // refuses (UNAVAILABLE), must not become a retry loop.
+  if (const absl::Status id = lane::wire::ValidateCameraId(flags.camera); !id.ok()) {
+    return lane_tools::UsageError(app, absl::StrCat("--camera: ", id.message()));
   }
   absl::StatusOr<std::optional<v1::SessionConfig>> session =
       SessionConfigFromFlags(flags.session, false);
@@ -415,6 +426,14 @@ Command AddStreamCommand(CLI::App& client) {
       ->check(lane_tools::Between(1, 4096));
   lane_tools::AddDuration(app, "--retry-timeout", &flags->retry_timeout,
                           "give up when no frame is answered for D", "60s");
+  app->add_option("--max-reconnects", flags->max_reconnects,
+                  "give up when the same status code comes back after N reconnections in a row "
+                  "with no frame answered (the server's own 'starting' and 'draining' never "
+                  "count); 0: at the first failure. 10 is about 13 s of backoff: longer than a "
+                  "restart of lane-server or a proxy's failover, much shorter than "
+                  "--retry-timeout for a failure that repeats (a proxy refusing the call)")
+      ->type_name("N")
+      ->check(lane_tools::Between(0, 1000000));
   lane_tools::AddDuration(app, "--stall-timeout", &flags->stall_timeout,
                           "reconnect when frames are in flight and nothing comes back for D",
                           "30s");

@@ -7,6 +7,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "common.h"
+#include "wire/camera_id.h"
 
 namespace lane_client {
 namespace {
@@ -85,8 +86,11 @@ grpc::Status Streamer::PrepareSession(bool first_connection) {
 }
 
 absl::Status Streamer::Run(const Source& source, const Sink& sink) {
+  // A bad id would be refused by the server (INVALID_ARGUMENT), or before
+  // that by a proxy as a header it will not take (UNAVAILABLE, retried).
+  if (absl::Status id = lane::wire::ValidateCameraId(options_.camera_id); !id.ok()) return id;
   ReconnectBackoff backoff(options_.reconnect);
-  auto last_progress = Clock::now();
+  RetryBudget budget({options_.max_reconnects, options_.give_up_after}, MonotonicNow());
   bool first_connection = true;
   while (true) {
     {
@@ -109,16 +113,15 @@ absl::Status Streamer::Run(const Source& source, const Sink& sink) {
     }
     if (progress) {
       backoff.Reset();
-      last_progress = Clock::now();
+      budget.Progress(MonotonicNow());
     }
+    const absl::Status failure(static_cast<absl::StatusCode>(status.error_code()),
+                               status.error_message());
     const std::string why = StatusText(status);
-    if (!IsTransient(status.error_code())) {
-      return absl::Status(static_cast<absl::StatusCode>(status.error_code()), why);
-    }
-    if (Clock::now() - last_progress > absl::ToChronoNanoseconds(options_.give_up_after)) {
-      return absl::UnavailableError(absl::StrCat("no frame answered for ",
-                                                 absl::FormatDuration(options_.give_up_after),
-                                                 "; last error: ", why));
+    if (!IsTransient(status.error_code())) return absl::Status(failure.code(), why);
+    // The status the run ends with keeps the failure's own code.
+    if (absl::Status give_up = budget.Failed(failure, MonotonicNow()); !give_up.ok()) {
+      return give_up;
     }
     stats_.failures.push_back(why);
     size_t unanswered = 0;

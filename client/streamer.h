@@ -7,7 +7,9 @@
 // When the call fails with a transient status (UNAVAILABLE, a broken
 // connection, a stalled stream, a session gone missing), the streamer backs
 // off, re-creates the session with CreateSession (idempotent: UNCHANGED when
-// it exists), opens a new call and resends every frame that was not answered.
+// it exists), opens a new call and resends every frame that was not answered;
+// within a budget: it gives up when the same status code repeats past
+// max_reconnects reconnections, or no frame is answered for give_up_after.
 // Responses already received are never asked for again, so no frame is
 // answered twice.
 //
@@ -68,8 +70,13 @@ struct StreamerOptions {
   // Reconnection backoff (reconnect_backoff.h): doubles from 100 ms to 2 s,
   // +-20 % jitter, from the start again once a frame is answered.
   ReconnectSchedule reconnect;
-  // Give up when no frame has been answered for this long across failures.
+  // Give up when no frame has been answered for this long across failures
+  // (the time budget) ...
   absl::Duration give_up_after = absl::Seconds(60);
+  // ... or after this many reconnections in a row following failures with
+  // the same status code and no frame answered (the attempts budget;
+  // nullopt: no limit, 0: none). reconnect_backoff.h says why 10.
+  std::optional<int> max_reconnects = kDefaultMaxReconnects;
   // A call with frames in flight and no response for this long is cancelled
   // and retried.
   absl::Duration stall_timeout = absl::Seconds(30);
@@ -104,8 +111,11 @@ class Streamer {
   Streamer(std::shared_ptr<grpc::Channel> channel, StreamerOptions options, Logger log = nullptr);
 
   // OK when every frame of the source has been handed to the sink. Otherwise
-  // the error that stopped it (not transient, or no progress for
-  // give_up_after); frames handed to the sink before stay handed.
+  // the error that stopped it, with the failed call's own code: not
+  // transient, the same code past max_reconnects reconnections, or no
+  // progress for give_up_after (RetryBudget). INVALID_ARGUMENT at once, before
+  // any call, for a camera id the server would refuse (wire/camera_id.h).
+  // Frames handed to the sink before stay handed.
   absl::Status Run(const Source& source, const Sink& sink);
 
   const StreamerStats& stats() const { return stats_; }

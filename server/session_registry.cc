@@ -4,7 +4,7 @@
 #include <utility>
 
 #include "absl/strings/str_cat.h"
-#include "lane/base/excerpt.h"
+#include "wire/camera_id.h"
 #include "wire/status_map.h"
 
 namespace lane::server {
@@ -12,19 +12,8 @@ namespace lane::server {
 SessionRegistry::SessionRegistry(Options options) : options_(std::move(options)) {}
 
 absl::Status SessionRegistry::ValidateCameraId(absl::string_view camera_id) {
-  if (camera_id.empty() || camera_id.size() > kMaxCameraIdBytes) {
-    return wire::InvalidRequest(absl::StrCat("camera_id must have 1 to ", kMaxCameraIdBytes,
-                                             " characters, got ", camera_id.size()));
-  }
-  for (const char c : camera_id) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                    c == '.' || c == '_' || c == ':' || c == '/' || c == '-';
-    if (!ok) {
-      return wire::InvalidRequest(absl::StrCat("camera_id '", lane::Excerpt(camera_id),
-                                               "' has a character outside [A-Za-z0-9._:/-]"));
-    }
-  }
-  return absl::OkStatus();
+  // The rule the clients check too (wire/camera_id.h).
+  return wire::ValidateCameraId(camera_id);
 }
 
 absl::Status SessionRegistry::CheckSpec(const SessionSpec& spec) const {

@@ -22,6 +22,7 @@
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "session.h"
+#include "wire/camera_id.h"
 
 namespace lane::server {
 
@@ -103,9 +104,10 @@ class SessionRegistry {
   // Bytes of the largest request carrying a raw BGR frame of the camera.
   static uint64_t RawFrameRequestBytes(const lane::CameraModel& camera);
 
-  // OK or INVALID_ARGUMENT: 1 to 128 characters of [A-Za-z0-9._:/-].
-  // Checked before any message quotes an id.
-  static constexpr size_t kMaxCameraIdBytes = 128;
+  // OK or INVALID_ARGUMENT: 1 to 128 characters of [A-Za-z0-9._:/-]
+  // (wire/camera_id.h, the rule the clients check too). Checked before any
+  // message quotes an id.
+  static constexpr size_t kMaxCameraIdBytes = wire::kMaxCameraIdBytes;
   static absl::Status ValidateCameraId(absl::string_view camera_id);
 
  private:

@@ -6,7 +6,9 @@
     python3 -m lane_client detect  CAMERA FRAME [--config CONFIG]
 
 Answers are printed as JSON (the messages' proto3 JSON form). Exit 0 on
-success, 1 when the call failed (the reason on stderr), 2 for a usage error.
+success, 1 when the call failed (the reason on stderr), 2 for a usage error
+(also a CAMERA the server would refuse: 1 to 128 characters of
+[A-Za-z0-9._:/-]).
 The token comes from --token-file or $LANE_TOKEN, as for lane-client.
 """
 
@@ -16,6 +18,7 @@ import sys
 from typing import List, Optional
 
 from . import __version__
+from .camera_id import check_camera_id
 from .errors import LaneError
 
 HEALTH_CHECK = "/grpc.health.v1.Health/Check"
@@ -78,6 +81,12 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: Optional[List[str]] = None) -> int:
     args = _parser().parse_args(argv)
+    if getattr(args, "camera", None) is not None:
+        try:
+            check_camera_id(args.camera)
+        except ValueError as e:
+            print(f"lane_client {args.command}: {e}", file=sys.stderr)
+            return 2
     token = None
     if args.token_file:
         try:

@@ -18,7 +18,9 @@ to its loop). The stream keeps lane-client's contract (streaming.py): at
 most `window` frames in flight, each frame answered exactly once and in
 order; on a transient failure it waits (0.1 s doubling to 2 s, +-20 %),
 re-creates or confirms the session, reconnects and resends what was not
-answered. A source may be a plain iterable (read between writes: keep it
+answered, and gives up (StreamError) as FrameStream does: the same status
+code after max_reconnects reconnections in a row, or no frame answered for
+give_up_after seconds. A source may be a plain iterable (read between writes: keep it
 quick) or an async iterable (a camera read without blocking the loop).
 """
 
@@ -35,9 +37,11 @@ import grpc.aio
 from . import _stubs
 from .client import (_CHANNEL_OPTIONS, Config, Image, bearer_metadata, camera_metadata,
                      channel_credentials, session_config)
+from .camera_id import check_camera_id
 from .errors import LaneError, SessionNotFoundError, from_rpc_error
 from .frames import fill_image
-from .streaming import TRANSIENT, _Pending, _Reconnect, _Retry, _Tracking
+from .streaming import (DEFAULT_MAX_RECONNECTS, TRANSIENT, _check_max_reconnects, _Pending,
+                        _Reconnect, _Retry, _Tracking)
 
 log = logging.getLogger("lane_client")
 
@@ -87,6 +91,8 @@ class AsyncLaneClient:
     async def _call(self, name: str, request: Any, timeout: Optional[float] = None,
                     camera_id: Optional[str] = None) -> Any:
         method = getattr(self._stub, name)
+        if camera_id is not None:
+            check_camera_id(camera_id)
         try:
             return await method(request, timeout=self.timeout if timeout is None else timeout,
                                 metadata=camera_metadata(self._metadata, camera_id))
@@ -140,13 +146,14 @@ class AsyncLaneClient:
     def stream(self, camera_id: str, frames: Frames, *, config: Optional[Config] = None,
                replace: bool = False, window: int = 8, first_frame_id: int = 0,
                rgb: bool = False, reconnect: bool = True, give_up_after: float = 60.0,
-               stall_timeout: Optional[float] = 30.0) -> "AsyncFrameStream":
+               stall_timeout: Optional[float] = 30.0,
+               max_reconnects: Optional[int] = DEFAULT_MAX_RECONNECTS) -> "AsyncFrameStream":
         """An AsyncFrameStream: `async for response in client.stream(...)`
         (arguments as LaneClient.stream)."""
         return AsyncFrameStream(self, camera_id, frames, config=config, replace=replace,
                                 window=window, first_frame_id=first_frame_id, rgb=rgb,
                                 reconnect=reconnect, give_up_after=give_up_after,
-                                stall_timeout=stall_timeout)
+                                stall_timeout=stall_timeout, max_reconnects=max_reconnects)
 
     def _stream_call(self, camera_id: str) -> Any:
         return self._stub.StreamFrames(metadata=camera_metadata(self._metadata, camera_id))
@@ -162,9 +169,12 @@ class AsyncFrameStream:
     def __init__(self, client: AsyncLaneClient, camera_id: str, frames: Frames, *,
                  config: Optional[Config] = None, replace: bool = False, window: int = 8,
                  first_frame_id: int = 0, rgb: bool = False, reconnect: bool = True,
-                 give_up_after: float = 60.0, stall_timeout: Optional[float] = 30.0) -> None:
+                 give_up_after: float = 60.0, stall_timeout: Optional[float] = 30.0,
+                 max_reconnects: Optional[int] = DEFAULT_MAX_RECONNECTS) -> None:
         if window < 1:
             raise ValueError("window must be at least 1")
+        check_camera_id(camera_id)
+        self._max_reconnects = _check_max_reconnects(max_reconnects)
         self._client = client
         self._pb2 = client.pb2
         self.camera_id = camera_id
@@ -287,7 +297,7 @@ class AsyncFrameStream:
                     "with create_session(), or pass config= to stream()",
                     e.code, e.details) from e
             if e.code in TRANSIENT:
-                raise _Retry(e.code, str(e)) from e
+                raise _Retry(e.code, str(e), e.details) from e
             raise
         if not first and response.outcome != self._pb2.CREATE_OUTCOME_UNCHANGED:
             log.warning("lane_client: session of camera '%s' re-created (version %d)",
@@ -346,7 +356,8 @@ class AsyncFrameStream:
                 raise
             code = e.code()
             if code in TRANSIENT:
-                raise _Retry(code, f"{code.name}: {e.details() or ''}".rstrip(": ")) from e
+                details = e.details() or ""
+                raise _Retry(code, f"{code.name}: {details}".rstrip(": "), details) from e
             raise from_rpc_error(e, "StreamFrames") from e
         finally:
             call.cancel()  # no-op when the call is over
@@ -360,7 +371,8 @@ class AsyncFrameStream:
 
     async def _run(self) -> AsyncIterator[Any]:
         first = True
-        policy = _Reconnect(self.camera_id, self._reconnect, self._give_up_after, self.failures)
+        policy = _Reconnect(self.camera_id, self._reconnect, self._give_up_after, self.failures,
+                            self._max_reconnects)
         while not (self._source_done and not self._pending):
             self._progress = False
             try:
@@ -377,7 +389,8 @@ class AsyncFrameStream:
                 if self._source_done and not self._pending:
                     break
                 raise _Retry(grpc.StatusCode.UNKNOWN, f"the call ended with OK and "
-                             f"{len(self._pending)} frames unanswered")
+                             f"{len(self._pending)} frames unanswered",
+                             "the call ended with OK and frames unanswered")
             except _Retry as retry:
                 failure = retry
             await asyncio.sleep(policy.after(failure, self._progress, len(self._pending)))

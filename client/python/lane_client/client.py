@@ -7,9 +7,10 @@ from typing import Any, Iterable, List, Optional, Sequence, Tuple, Union
 import grpc
 
 from . import _stubs
+from .camera_id import check_camera_id
 from .errors import LaneError, from_rpc_error
 from .frames import fill_image
-from .streaming import FrameStream
+from .streaming import DEFAULT_MAX_RECONNECTS, FrameStream
 
 # As lane-client (client/common.cc): reconnect quickly after a server restart
 # (gRPC's own default waits 1 s, then up to 120 s), and keepalive pings during
@@ -168,6 +169,8 @@ class LaneClient:
 
     def _call(self, name, request, timeout=None, camera_id=None):
         method = getattr(self._stub, name)
+        if camera_id is not None:
+            check_camera_id(camera_id)  # ValueError: never sent
         try:
             return method(request, timeout=self.timeout if timeout is None else timeout,
                           metadata=camera_metadata(self._metadata, camera_id))
@@ -246,7 +249,8 @@ class LaneClient:
     def stream(self, camera_id: str, frames: Iterable[Any], *, config: Optional[Config] = None,
                replace: bool = False, window: int = 8, first_frame_id: int = 0,
                rgb: bool = False, reconnect: bool = True, give_up_after: float = 60.0,
-               stall_timeout: Optional[float] = 30.0) -> FrameStream:
+               stall_timeout: Optional[float] = 30.0,
+               max_reconnects: Optional[int] = DEFAULT_MAX_RECONNECTS) -> FrameStream:
         """Streams frames (StreamFrames) and returns a FrameStream: an
         iterator of FrameResponse, one per frame, in the frames' order.
 
@@ -265,10 +269,23 @@ class LaneClient:
             and resend every frame not yet answered. Every frame is answered
             exactly once, in order. Tracking goes on across the reconnection:
             the new call carries the server's latest resume state, so lane
-            ids continue on whichever replica answers. Gives up with StreamError when no frame has
-            been answered for give_up_after seconds.
+            ids continue on whichever replica answers.
+        give_up_after, max_reconnects: the stream gives up with StreamError,
+            whose .code and .details are the failed call's own status, when
+            no frame has been answered for give_up_after seconds, or when the
+            same status code comes back after max_reconnects reconnections
+            in a row with no frame answered (None: no such limit; 0: at the
+            first failure; the server's own "starting" and "draining" never
+            count). The default, 10, is about 13 s of backoff: longer than a
+            restart keeps the connection refused, and far shorter than
+            give_up_after for a failure that repeats (a proxy refusing the
+            call).
         stall_timeout: a call with frames in flight that gets no response
             for this long is cancelled and retried (None: never).
+
+        camera_id must be 1 to 128 characters of [A-Za-z0-9._:/-], as the
+        server wants: any other raises ValueError before anything is sent
+        (every call that takes a camera id checks it).
 
         A frame the server cannot use is answered with its own status
         (e.g. response.status.code == FRAME_CODE_INVALID_ARGUMENT) and the
@@ -278,7 +295,7 @@ class LaneClient:
         return FrameStream(self, camera_id, frames, config=config, replace=replace,
                            window=window, first_frame_id=first_frame_id, rgb=rgb,
                            reconnect=reconnect, give_up_after=give_up_after,
-                           stall_timeout=stall_timeout)
+                           stall_timeout=stall_timeout, max_reconnects=max_reconnects)
 
     # used by FrameStream
     def _stream_call(self, requests, camera_id):

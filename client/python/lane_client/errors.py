@@ -35,8 +35,11 @@ class UnauthenticatedError(LaneError):
 
 
 class StreamError(LaneError):
-    """stream(): the stream gave up (a permanent status, or no frame answered
-    within give_up_after seconds). `.failures` lists why each call ended."""
+    """stream(): the stream gave up: a permanent status, the same status code
+    after max_reconnects reconnections in a row, or no frame answered within
+    give_up_after seconds. `.code` and `.details` are the status code and
+    message of the last failure (UNAVAILABLE and "Socket closed", say, not a
+    code of the client's own); `.failures` lists why each call ended."""
 
     def __init__(self, message, code=None, details="", failures=()):
         super().__init__(message, code, details)

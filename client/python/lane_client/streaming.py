@@ -18,6 +18,11 @@ How it works (the same contract as lane-client's Streamer, client/streamer.h):
     session), on which every pending frame is written again. A response is
     never asked for again once received, so each frame is answered exactly
     once; frames are taken from the source once.
+  * Within two budgets (_Reconnect): the stream gives up with StreamError,
+    carrying the failure's own status code and message, when the same
+    status code comes back after `max_reconnects` reconnections in a row
+    with no frame answered, or when no frame has been answered for
+    `give_up_after` seconds.
   * Tracking survives the reconnection (docs/deployment.md): the stream
     keeps the latest resume state the server sent and the largest lane id
     it has seen (_Tracking), and the first request of every later call
@@ -34,6 +39,7 @@ import time
 
 import grpc
 
+from .camera_id import check_camera_id
 from .errors import LaneError, SessionNotFoundError, StreamError, from_rpc_error
 
 log = logging.getLogger("lane_client")
@@ -54,6 +60,26 @@ BACKOFF_INITIAL = 0.1
 BACKOFF_MAX = 2.0
 BACKOFF_JITTER = 0.2
 
+# Reconnections in a row after failures with the same status code, by default
+# (as lane-client's --max-reconnects): 11 attempts over about 13 s of backoff
+# (0.1 + 0.2 + 0.4 + 0.8 + 1.6 + 5 x 2 s). That outlasts a restart: the
+# server's own "the server is draining" and "the server is starting" never
+# count (it is there, changing state), and the connection is refused only
+# until the new process listens. A code that comes back 11 times with no
+# frame answered is a failure that repeats (a proxy refusing every call, a
+# server that stays away) and ends the stream in ~13 s instead of
+# give_up_after's 60. The code, not the message, is compared: gRPC words one
+# transport failure in many ways.
+DEFAULT_MAX_RECONNECTS = 10
+
+# The beginnings of lane-server's UNAVAILABLE messages while it starts or
+# drains (wire/status_map.cc).
+_SERVER_CHANGING_STATE = ("the server is starting", "the server is draining")
+
+
+def _server_changing_state(code, details):
+    return code == grpc.StatusCode.UNAVAILABLE and details.startswith(_SERVER_CHANGING_STATE)
+
 
 class _Pending:
     __slots__ = ("frame_id", "request", "attempts", "sent_at")
@@ -67,38 +93,74 @@ class _Pending:
 
 class _Reconnect:
     """What a stream does after a failed call or session step, the same for
-    FrameStream and aio.AsyncFrameStream: record why, give up (StreamError)
-    when reconnection is off or no frame was answered for give_up_after
-    seconds, else wait 0.1 s doubling to 2 s (+-20 %), from 0.1 s again
-    after a call that answered frames."""
+    FrameStream and aio.AsyncFrameStream: record why; give up (StreamError,
+    with the failure's code and message) when reconnection is off, when the
+    same status code comes back after max_reconnects reconnections in a row
+    with no frame answered (None: no limit; the server's own "starting" and
+    "draining" never count), or when no frame was answered for
+    give_up_after seconds; else wait 0.1 s doubling to 2 s (+-20 %). A call
+    that answered frames starts both the wait and the budgets again."""
 
-    def __init__(self, camera_id, reconnect, give_up_after, failures):
+    def __init__(self, camera_id, reconnect, give_up_after, failures,
+                 max_reconnects=DEFAULT_MAX_RECONNECTS):
         self._camera_id = camera_id
         self._reconnect = reconnect
         self._give_up_after = give_up_after
+        self._max_reconnects = max_reconnects
         self._failures = failures  # the stream's public list, appended to
         self._backoff = BACKOFF_INITIAL
         self._last_progress = time.monotonic()
+        self._code = None          # of the failures in a row
+        self._first = ""           # the first of them, as reported
+        self.repeats = 0           # failures in a row with that code, since progress
 
     def after(self, failure, progressed, unanswered):
         """Seconds to wait before the next call; raises StreamError to give up."""
         if progressed:
             self._backoff = BACKOFF_INITIAL
             self._last_progress = time.monotonic()
+            self._code, self._first, self.repeats = None, "", 0
         self._failures.append(failure.text)
+        if _server_changing_state(failure.code, failure.details):
+            self._code, self._first, self.repeats = None, "", 0
+        elif self.repeats and failure.code == self._code:
+            self.repeats += 1
+        else:
+            self._code, self._first, self.repeats = failure.code, failure.text, 1
+
+        def give_up(message):
+            return StreamError(message, failure.code, failure.details, failures=self._failures)
+
         if not self._reconnect:
-            raise StreamError(f"StreamFrames: {failure.text}", failure.code,
-                              failures=self._failures)
+            raise give_up(f"StreamFrames: {failure.text}")
+        limit = self._max_reconnects
+        if limit is not None and self.repeats > limit:
+            if limit == 0:
+                raise give_up(f"StreamFrames: {failure.text}; gave up at the first failure "
+                              "(max_reconnects=0)")
+            first = "" if self._first == failure.text else f"; the first of them: {self._first}"
+            raise give_up(f"StreamFrames: {failure.text}; {failure.code.name} on {self.repeats} "
+                          "attempts in a row with no frame answered: gave up (at most "
+                          f"max_reconnects={limit} reconnections after the same failure){first}")
         if time.monotonic() - self._last_progress > self._give_up_after:
-            raise StreamError(
-                f"StreamFrames: no frame answered for {self._give_up_after:g} s; "
-                f"last error: {failure.text}", failure.code, failures=self._failures)
+            raise give_up(f"StreamFrames: no frame answered for {self._give_up_after:g} s; "
+                          f"last error: {failure.text}")
         wait = self._backoff * random.uniform(1 - BACKOFF_JITTER, 1 + BACKOFF_JITTER)
         self._backoff = min(self._backoff * 2, BACKOFF_MAX)
         log.warning("lane_client: camera '%s': %s; reconnecting in %.0f ms "
                     "(%d frames to resend)", self._camera_id, failure.text, wait * 1000,
                     unanswered)
         return wait
+
+
+def _check_max_reconnects(max_reconnects):
+    """max_reconnects as given: None or an int >= 0 (ValueError otherwise)."""
+    if max_reconnects is None:
+        return None
+    if isinstance(max_reconnects, bool) or not isinstance(max_reconnects, int) \
+            or max_reconnects < 0:
+        raise ValueError(f"max_reconnects must be None or an int >= 0, not {max_reconnects!r}")
+    return max_reconnects
 
 
 class _Tracking:
@@ -146,12 +208,15 @@ class _Tracking:
 
 
 class _Retry(Exception):
-    """A call or session step failed in a way that may be retried."""
+    """A call or session step failed in a way that may be retried: its
+    status code, its message (`details`, as the server or gRPC said it) and
+    how it is reported (`text`)."""
 
-    def __init__(self, code, text):
+    def __init__(self, code, text, details=None):
         super().__init__(text)
         self.code = code
         self.text = text
+        self.details = text if details is None else details
 
 
 class FrameStream:
@@ -168,9 +233,11 @@ class FrameStream:
 
     def __init__(self, client, camera_id, frames, *, config=None, replace=False, window=8,
                  first_frame_id=0, rgb=False, reconnect=True, give_up_after=60.0,
-                 stall_timeout=30.0):
+                 stall_timeout=30.0, max_reconnects=DEFAULT_MAX_RECONNECTS):
         if window < 1:
             raise ValueError("window must be at least 1")
+        check_camera_id(camera_id)
+        self._max_reconnects = _check_max_reconnects(max_reconnects)
         self._client = client
         self._pb2 = client.pb2
         self.camera_id = camera_id
@@ -311,7 +378,7 @@ class FrameStream:
                     "with create_session(), or pass config= to stream()",
                     e.code, e.details) from e
             if e.code in TRANSIENT:
-                raise _Retry(e.code, str(e)) from e
+                raise _Retry(e.code, str(e), e.details) from e
             raise
         if not first and response.outcome != self._pb2.CREATE_OUTCOME_UNCHANGED:
             log.warning("lane_client: session of camera '%s' re-created (version %d)",
@@ -387,10 +454,12 @@ class FrameStream:
             if self._stalled:
                 text = (f"stalled: no response for {self._stall_timeout:g} s "
                         "with frames in flight")
+                details = text
             else:
-                text = f"{code.name}: {e.details() or ''}".rstrip(": ")
+                details = e.details() or ""
+                text = f"{code.name}: {details}".rstrip(": ")
             if code in TRANSIENT:
-                raise _Retry(code, text) from e
+                raise _Retry(code, text, details) from e
             raise from_rpc_error(e, "StreamFrames") from e
         finally:
             with cond:
@@ -400,7 +469,8 @@ class FrameStream:
 
     def _run(self):
         first = True
-        policy = _Reconnect(self.camera_id, self._reconnect, self._give_up_after, self.failures)
+        policy = _Reconnect(self.camera_id, self._reconnect, self._give_up_after, self.failures,
+                            self._max_reconnects)
         while True:
             with self._cond:
                 if self._source_done and not self._pending:
@@ -415,7 +485,8 @@ class FrameStream:
                         break
                     unanswered = len(self._pending)
                 raise _Retry(grpc.StatusCode.UNKNOWN,
-                             f"the call ended with OK and {unanswered} frames unanswered")
+                             f"the call ended with OK and {unanswered} frames unanswered",
+                             "the call ended with OK and frames unanswered")
             except _Retry as retry:
                 failure = retry
             with self._cond:
