@@ -565,7 +565,9 @@ class ReconnectTest(unittest.TestCase):
     """The stream survives the server's restart on the same port."""
 
     def setUp(self):
-        self.server = Server().start()
+        # The restarted process is another replica: like the replicas of a
+        # deployment, it holds the same resume-state key.
+        self.server = Server(env={"LANE_RESUME_STATE_KEYS": "5a" * 32}).start()
         self.client = lane_client.LaneClient(self.server.target, token="")
 
     def tearDown(self):
