@@ -6,7 +6,8 @@ Selenium against a real lane-server streamed to by a real lane-client.
      a Bearer token, and without the token every page answers 401.
   2. Camera ids that would be script are refused by CreateSession; one that
      looks like a path (`../../etc/passwd`) is a session like any other.
-  3. The browser logs in (/login), sees the cameras on `/`, opens
+  3. The browser opens the URL `lane-client view` prints (the login form),
+     logs in with the token, sees the cameras on `/`, opens
      `/cameras/cam0` and watches while `lane-client stream` sends the frames.
   4. The frame picture decodes at the stream's size, the top view too, and
      the lanes table is the last response the client wrote (--output).
@@ -169,11 +170,25 @@ def main():
         print("ok: script-like camera ids are refused")
 
         # 3. Log in, see the cameras, watch cam0 while the client streams.
+        # `lane-client view` prints the URL (with a token: the login page).
+        def view_url(*camera):
+            run = subprocess.run([client, "view", "--target", target, "--no-open"] +
+                                 (["--camera", camera[0]] if camera else []),
+                                 env=client_env, capture_output=True, text=True)
+            if run.returncode != 0:
+                fail("lane-client view failed: " + run.stderr)
+            return run.stdout.strip()
+        if view_url("cam0") != base + "/login?next=%2Fcameras%2Fcam0":
+            fail("lane-client view printed " + view_url("cam0"))
+        index_url = view_url()
+        if index_url != base + "/login?next=%2F":
+            fail("lane-client view printed " + index_url)
         driver = make_browser(work)
         driver.set_page_load_timeout(20)
-        driver.get(base + "/login?token=" + token + "&next=%2F")
-        if driver.current_url != base + "/":
-            fail("the login went to " + driver.current_url)
+        driver.get(index_url)
+        driver.find_element("name", "token").send_keys(token)
+        driver.find_element("css selector", "form button[type=submit]").click()
+        wait_for("the login", lambda: driver.current_url == base + "/")
         if token in driver.current_url:
             fail("the token stayed in the URL")
         wait_for("cam0 on /", lambda: driver.execute_script(
