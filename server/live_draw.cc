@@ -67,7 +67,7 @@ void ShadeBetween(cv::Mat& canvas, const std::vector<cv::Point>& left,
   cv::addWeighted(layer, alpha, canvas, 1.0 - alpha, 0.0, canvas);
 }
 
-void Label(cv::Mat& canvas, const std::string& text, cv::Point at, const cv::Scalar& colour) {
+void DrawTag(cv::Mat& canvas, const std::string& text, cv::Point at, const cv::Scalar& colour) {
   const double scale = std::max(0.4, 0.45 * canvas.cols / 640.0);
   int baseline = 0;
   const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
@@ -174,7 +174,7 @@ LiveDrawing DrawLiveSample(const LiveSample& sample, const lane::Detector& detec
   out.frame = FrameCanvas(frame);
   cv::Mat& canvas = out.frame;
   if (frame.top > 0 || frame.top + frame.rows.rows < frame.height) {
-    Label(canvas,
+    DrawTag(canvas,
           absl::StrCat("decoded: rows ", frame.top, "-", frame.top + frame.rows.rows - 1,
                        " (what the detector reads)"),
           {4, 20}, cv::Scalar(200, 200, 200));
@@ -194,7 +194,7 @@ LiveDrawing DrawLiveSample(const LiveSample& sample, const lane::Detector& detec
     for (int x = 0; x < canvas.cols; x += 14) {
       cv::line(canvas, {x, y}, {std::min(x + 7, canvas.cols - 1), y}, cv::Scalar(220, 220, 220), 1);
     }
-    Label(canvas, "horizon", {4, y - 4}, cv::Scalar(220, 220, 220));
+    DrawTag(canvas, "horizon", {4, y - 4}, cv::Scalar(220, 220, 220));
   }
   const Eigen::Vector2d vp = camera.VanishingPoint();
   if (Drawable(vp)) {
@@ -214,13 +214,13 @@ LiveDrawing DrawLiveSample(const LiveSample& sample, const lane::Detector& detec
       const Eigen::Vector2d& low =
           lane.image[0].y() > lane.image[3].y() ? lane.image[0] : lane.image[3];
       if (Drawable(low)) {
-        Label(canvas, absl::StrCat("#", lane.id),
+        DrawTag(canvas, absl::StrCat("#", lane.id),
               {static_cast<int>(low.x()) - 12, static_cast<int>(low.y()) - canvas.rows / 10},
               colour);
       }
     }
   }
-  Label(canvas,
+  DrawTag(canvas,
         absl::StrCat("frame ", sample.response.frame_id(), ", ", lanes.size(),
                      lanes.size() == 1 ? " lane" : " lanes"),
         {4, canvas.rows - 4}, cv::Scalar(255, 255, 255));
