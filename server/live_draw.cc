@@ -175,9 +175,9 @@ LiveDrawing DrawLiveSample(const LiveSample& sample, const lane::Detector& detec
   cv::Mat& canvas = out.frame;
   if (frame.top > 0 || frame.top + frame.rows.rows < frame.height) {
     DrawTag(canvas,
-          absl::StrCat("decoded: rows ", frame.top, "-", frame.top + frame.rows.rows - 1,
-                       " (what the detector reads)"),
-          {4, 20}, cv::Scalar(200, 200, 200));
+            absl::StrCat("decoded: rows ", frame.top, "-", frame.top + frame.rows.rows - 1,
+                         " (what the detector reads)"),
+            {4, 20}, cv::Scalar(200, 200, 200));
   }
   const bool has_ego = sample.response.has_ego();
   const int ego_left = has_ego ? IndexOfId(lanes, sample.response.ego().left_lane_id()) : -1;
@@ -215,15 +215,15 @@ LiveDrawing DrawLiveSample(const LiveSample& sample, const lane::Detector& detec
           lane.image[0].y() > lane.image[3].y() ? lane.image[0] : lane.image[3];
       if (Drawable(low)) {
         DrawTag(canvas, absl::StrCat("#", lane.id),
-              {static_cast<int>(low.x()) - 12, static_cast<int>(low.y()) - canvas.rows / 10},
-              colour);
+                {static_cast<int>(low.x()) - 12, static_cast<int>(low.y()) - canvas.rows / 10},
+                colour);
       }
     }
   }
   DrawTag(canvas,
-        absl::StrCat("frame ", sample.response.frame_id(), ", ", lanes.size(),
-                     lanes.size() == 1 ? " lane" : " lanes"),
-        {4, canvas.rows - 4}, cv::Scalar(255, 255, 255));
+          absl::StrCat("frame ", sample.response.frame_id(), ", ", lanes.size(),
+                       lanes.size() == 1 ? " lane" : " lanes"),
+          {4, canvas.rows - 4}, cv::Scalar(255, 255, 255));
 
   // The top view.
   if (frame.rows.empty()) return out;

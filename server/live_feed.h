@@ -119,6 +119,8 @@ class LiveFeed {
 
   // The live view's side.
   void Watch(int64_t until_ns);
+  // Ends the watch now (its viewer went to another camera).
+  void Unwatch() { watched_until_ns_.store(0, std::memory_order_relaxed); }
   std::optional<LiveSample> TakeSample();
   void SetPictures(std::shared_ptr<const LivePictures> pictures);
   std::shared_ptr<const LivePictures> pictures() const;

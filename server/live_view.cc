@@ -195,6 +195,7 @@ void LiveView::DrawLoop() {
         mu_.AwaitWithTimeout(has_work_, absl::Seconds(1));
       }
       if (stopping_) return;
+      woken_ = false;
       posted.swap(posted_);
     }
     for (const std::weak_ptr<Session>& weak : posted) {
@@ -256,7 +257,7 @@ void LiveView::ExpireWatches() {
   }
 }
 
-absl::Status LiveView::Watch(const std::shared_ptr<Session>& session) {
+absl::Status LiveView::Watch(const std::shared_ptr<Session>& session, const std::string& viewer) {
   const lane::CameraModel& camera = session->config.camera;
   const uint64_t frame_bytes = uint64_t(camera.image_width) * uint64_t(camera.image_height) * 3;
   absl::MutexLock lock(&mu_);
@@ -267,6 +268,20 @@ absl::Status LiveView::Watch(const std::shared_ptr<Session>& session) {
         LivePictureBytes(camera.image_width, camera.image_height, *session->CurrentDetector());
     if (absl::Status s = sessions_.ReserveLiveView(session, bytes); !s.ok()) return s;
     watched_[session.get()] = Watched{session};
+    woken_ = true;
+  }
+  auto lease = leases_.find(viewer);
+  if (lease != leases_.end() && lease->second.camera != session.get()) {
+    const Session* previous = lease->second.camera;
+    lease->second.camera = session.get();
+    const bool still_watched =
+        std::any_of(leases_.begin(), leases_.end(),
+                    [previous](const auto& entry) { return entry.second.camera == previous; });
+    auto before = previous != nullptr && !still_watched ? watched_.find(previous) : watched_.end();
+    if (before != watched_.end()) {
+      if (std::shared_ptr<Session> old = before->second.session.lock()) old->live->Unwatch();
+      woken_ = true;  // the drawer drops it
+    }
   }
   session->live->Watch(absl::GetCurrentTimeNanos() + absl::ToInt64Nanoseconds(options_.lease));
   return absl::OkStatus();
@@ -449,7 +464,7 @@ HttpReply LiveView::CameraRoute(const HttpRequest& request, const std::string& c
     const std::string message = absl::StrCat("No session has the camera id '", camera_id, "'.");
     return page ? Page(404, MessagePage("No such camera", message)) : JsonError(404, message);
   }
-  if (absl::Status s = Watch(session); !s.ok()) {
+  if (absl::Status s = Watch(session, viewer); !s.ok()) {
     const int status = s.code() == absl::StatusCode::kNotFound ? 404 : 503;
     return page ? Page(status, MessagePage("Cannot show this camera", s.message()))
                 : JsonError(status, s.message());

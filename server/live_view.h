@@ -27,7 +27,9 @@
 //
 // Viewers. A viewer is an open page: it holds a lease that each of its
 // requests renews (?viewer=ID), which lapses `lease` after its last request.
-// At most `max_viewers` leases are held; a page beyond them is 503.
+// At most `max_viewers` leases are held; a page beyond them is 503. A lease
+// watches one camera at a time (the last it asked about), so at most
+// `max_viewers` cameras are watched, each within the session memory budget.
 //
 // Tokens. With tokens set, every route but /login, /live.js and /live.css
 // needs `Authorization: Bearer TOKEN` or the cookie /login sets: answered
@@ -112,6 +114,7 @@ class LiveView {
  private:
   struct Lease {
     absl::Time expiry;
+    const Session* camera = nullptr;  // the camera it watches, if any
   };
   struct Watched {
     std::weak_ptr<Session> session;
@@ -121,7 +124,9 @@ class LiveView {
   void DrawLoop();
   void Draw(const std::shared_ptr<Session>& session);
   void ExpireWatches();
-  bool HasWork() const ABSL_SHARED_LOCKS_REQUIRED(mu_) { return stopping_ || !posted_.empty(); }
+  bool HasWork() const ABSL_SHARED_LOCKS_REQUIRED(mu_) {
+    return stopping_ || woken_ || !posted_.empty();
+  }
 
   // Routing and answers (live_view.cc).
   HttpReply Route(const HttpRequest& request, const std::vector<std::string>& segments);
@@ -132,8 +137,10 @@ class LiveView {
   // A viewer lease for `requested` (renewed when alive, else a new one): its
   // id, or RESOURCE_EXHAUSTED at the limit.
   absl::StatusOr<std::string> AcquireViewer(const std::string& requested);
-  // Watches the session's camera (reserving its memory on the first watch).
-  absl::Status Watch(const std::shared_ptr<Session>& session);
+  // `viewer` watches the session's camera (reserving its memory on the
+  // first watch), and no longer the camera it watched before: a viewer
+  // watches one camera at a time, so at most max_viewers are watched.
+  absl::Status Watch(const std::shared_ptr<Session>& session, const std::string& viewer);
   bool Authorized(const HttpRequest& request) const;
   std::string SealCookie(int64_t expiry_unix_s) const;
   bool CookieValid(const std::string& cookie_header) const;
@@ -149,6 +156,9 @@ class LiveView {
   mutable absl::Mutex mu_;
   const absl::Condition has_work_{this, &LiveView::HasWork};
   bool stopping_ ABSL_GUARDED_BY(mu_) = false;
+  // A watch began: the drawer, asleep without a timeout while nothing was
+  // watched, starts checking for lapsed watches.
+  bool woken_ ABSL_GUARDED_BY(mu_) = false;
   // Sessions with a sample to draw.
   std::vector<std::weak_ptr<Session>> posted_ ABSL_GUARDED_BY(mu_);
   // Cameras being watched, by session.

@@ -293,6 +293,25 @@ TEST(LiveViewTest, LimitsViewers) {
   EXPECT_EQ(server.server().live_view()->viewers(), 1u);
 }
 
+TEST(LiveViewTest, AViewerWatchesOneCameraAtATime) {
+  TestServer server(LiveOptions());
+  ASSERT_FALSE(HasFailure());
+  const int port = server.server().metrics_port();
+  const v1::SessionConfig config = SessionConfigFor(ScaledCamera(0.5));
+  server.CreateSession("cam0", config);
+  server.CreateSession("cam1", config);
+  const LiveReply first = LiveFetch(port, "GET", "/cameras/cam0");
+  ASSERT_EQ(first.status, 200);
+  const std::string viewer = first.Header("X-Viewer");
+  EXPECT_EQ(server.server().live_view()->watched_cameras(), 1u);
+  ASSERT_EQ(LiveFetch(port, "GET", "/api/cameras/cam1?viewer=" + viewer).status, 200);
+  const std::shared_ptr<Session> cam0 = server.server().sessions().Peek("cam0");
+  const std::shared_ptr<Session> cam1 = server.server().sessions().Peek("cam1");
+  EXPECT_FALSE(cam0->live->Watched(absl::GetCurrentTimeNanos()));
+  EXPECT_TRUE(cam1->live->Watched(absl::GetCurrentTimeNanos()));
+  EXPECT_TRUE(PollUntil([&] { return server.server().live_view()->watched_cameras() == 1; }, 10));
+}
+
 TEST(LiveViewTest, KeepsNothingUnwatchedAndDrawsWhatIsWatched) {
   ServerOptions options = LiveOptions();
   options.live_view_lease = absl::Milliseconds(500);
