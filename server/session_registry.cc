@@ -115,14 +115,9 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
   auto session = std::make_shared<Session>(
       camera_id, next_version_++, spec.config, std::move(config_json), stream, spec.decode,
       *std::move(detector), now, spec.calibration, spec.tracking);
+  // Its fixed part is in `need`.
   if (options_.live_view_draw_interval_ns > 0) {
     session->live = std::make_unique<LiveFeed>(options_.live_view_draw_interval_ns);
-  }
-  // The live view's fixed part was not in `need`: check again with it.
-  if (options_.max_session_memory_bytes > 0 &&
-      held + SessionBytes(*session) > options_.max_session_memory_bytes) {
-    return wire::SessionMemoryExhausted(SessionBytes(*session), held,
-                                        options_.max_session_memory_bytes);
   }
   memory_bytes_ = held + SessionBytes(*session);
   const bool inserted = replaced == nullptr;

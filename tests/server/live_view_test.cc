@@ -10,10 +10,13 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -79,6 +82,27 @@ LiveReply LiveFetch(int port, const std::string& method, const std::string& path
   reply.body = text.substr(end + 4);
   return reply;
 }
+
+// A viewer that keeps asking for a camera's data (every 100 ms) until it is
+// destroyed: its camera stays watched however slow the machine is.
+class LiveWatcher {
+ public:
+  LiveWatcher(int port, const std::string& camera, const std::string& viewer)
+      : thread_([this, port, camera, viewer] {
+          while (!stop_.load()) {
+            LiveFetch(port, "GET", "/api/cameras/" + camera + "?viewer=" + viewer);
+            std::this_thread::sleep_for(std::chrono::milliseconds(100));
+          }
+        }) {}
+  ~LiveWatcher() {
+    stop_.store(true);
+    thread_.join();
+  }
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
 
 ServerOptions LiveOptions() {
   ServerOptions options = TestServer::DefaultOptions();
@@ -344,6 +368,7 @@ TEST(LiveViewTest, KeepsNothingUnwatchedAndDrawsWhatIsWatched) {
   ASSERT_EQ(page.status, 200);
   const std::string viewer = page.Header("X-Viewer");
   EXPECT_GT(server.server().sessions().memory_bytes(), unwatched_bytes);
+  auto watcher = std::make_unique<LiveWatcher>(port, "cam0", viewer);
   StreamResult watched = RunStream(server.stub(), LiveFrames("cam0", 20, 100));
   ASSERT_TRUE(watched.status.ok());
   ASSERT_EQ(watched.responses.size(), 20u);
@@ -375,7 +400,8 @@ TEST(LiveViewTest, KeepsNothingUnwatchedAndDrawsWhatIsWatched) {
   }
   EXPECT_EQ(data["width"], camera.image_width);
 
-  // The watch lapses: the pictures and the memory go.
+  // The viewer leaves, the watch lapses: the pictures and the memory go.
+  watcher.reset();
   EXPECT_TRUE(PollUntil(
       [&] {
         return server.server().live_view()->watched_cameras() == 0 &&
@@ -387,7 +413,7 @@ TEST(LiveViewTest, KeepsNothingUnwatchedAndDrawsWhatIsWatched) {
 
 TEST(LiveViewTest, AStalledViewerDoesNotSlowTheStream) {
   ServerOptions options = LiveOptions();
-  options.live_view_fps = 30;
+  options.live_view_max_viewers = 8;
   TestServer server(options);
   ASSERT_FALSE(HasFailure());
   const int port = server.server().metrics_port();
@@ -403,12 +429,15 @@ TEST(LiveViewTest, AStalledViewerDoesNotSlowTheStream) {
     }
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
+  // A viewer watches throughout (the camera is drawn in both runs).
+  const LiveReply page = LiveFetch(port, "GET", "/cameras/cam0");
+  ASSERT_EQ(page.status, 200);
+  LiveWatcher watcher(port, "cam0", page.Header("X-Viewer"));
   timed();  // warm-up
   const double before = timed();
 
-  // A viewer watches, then stalls: its sockets ask for pictures and never
-  // read (a receive buffer of 1 KiB), and more connect and send nothing.
-  ASSERT_EQ(LiveFetch(port, "GET", "/cameras/cam0").status, 200);
+  // Another viewer stalls: its sockets ask for pictures and never read (a
+  // receive buffer of 1 KiB), and more connect and send nothing.
   std::vector<int> stalled;
   for (int i = 0; i < 6; ++i) {
     const int fd = socket(AF_INET, SOCK_STREAM, 0);
@@ -428,8 +457,9 @@ TEST(LiveViewTest, AStalledViewerDoesNotSlowTheStream) {
   const double during = timed();
   for (const int fd : stalled) close(fd);
   // Generous bounds for a shared machine: the stream is not held up by the
-  // viewer (a stream that waited for it would take the 10 s request timeout).
-  EXPECT_LT(during, 2.0 * before + 1.0) << "before " << before << " s";
+  // stalled viewer (a stream that waited for it would take the 10 s request
+  // timeout).
+  EXPECT_LT(during, 1.5 * before + 1.0) << "before " << before << " s";
   std::printf("400 frames: %.3f s before, %.3f s with a stalled viewer\n", before, during);
 }
 
