@@ -20,6 +20,8 @@ Command AddStreamCommand(CLI::App& client);
 Command AddBenchCommand(CLI::App& client);
 Command AddHealthCommand(CLI::App& client);
 Command AddInfoCommand(CLI::App& client);
+// view: the live view's URL.
+Command AddViewCommand(CLI::App& client);
 
 // Parses the arguments after the program name and runs the command.
 int RunCommand(const std::vector<std::string>& args);

@@ -178,6 +178,8 @@ absl::StatusOr<Security> TakeSecurityOptions(std::vector<std::string>& args) {
 
 void SetSecurity(Security security) { CurrentSecurity() = std::move(security); }
 
+bool HasToken() { return !CurrentSecurity().token.empty(); }
+
 std::shared_ptr<grpc::Channel> MakeChannel(const std::string& target, int connection) {
   grpc::ChannelArguments args;
   args.SetLoadBalancingPolicyName("round_robin");

@@ -84,6 +84,9 @@ absl::StatusOr<Security> TakeSecurityOptions(std::vector<std::string>& args);
 // The security of the channels built from now on (default: plaintext, no
 // token).
 void SetSecurity(Security security);
+// Whether the channels send a Bearer token (the live view's URL is then its
+// login page).
+bool HasToken();
 
 // --target: "host:port", "dns:///name[:port]", or a comma list "a:1,b:2".
 // A gRPC URI with its own address list ("ipv4:a:1,b:2", "ipv6:...") is kept

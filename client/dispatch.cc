@@ -15,8 +15,8 @@ int RunCommand(const std::vector<std::string>& args) {
   SecurityFlags security_flags;
   AddSecurityOptions(app, &security_flags);
   std::vector<Command> commands = AddSessionCommands(app);
-  for (Command command :
-       {AddStreamCommand(app), AddBenchCommand(app), AddHealthCommand(app), AddInfoCommand(app)}) {
+  for (Command command : {AddStreamCommand(app), AddBenchCommand(app), AddHealthCommand(app),
+                          AddInfoCommand(app), AddViewCommand(app)}) {
     commands.push_back(std::move(command));
   }
   if (const std::optional<int> exit_code = lane_tools::ParseCommandLine(app, args)) {

@@ -30,6 +30,8 @@ PACKAGES=(
   python3-setuptools python3-venv python3-pip     # pip install ./client/python (tests/python/install_test.sh)
   lintian                # the .deb's check (scripts/package-test.sh)
   nginx                  # deploy/nginx: the camera-affinity proxy (tests/deploy, deploy/proxy-cluster.sh)
+  libssl-dev             # server/live_view.cc: the live view's login cookie (HMAC-SHA256, libcrypto)
+  chromium chromium-driver python3-selenium   # tests/server/live_view_browser_test.py: the live view in headless Chromium
 )
 
 missing=()

@@ -45,6 +45,29 @@ std::vector<std::string> ParseTokenList(absl::string_view list) {
   return tokens;
 }
 
+bool IsAcceptedToken(absl::string_view presented, const std::vector<std::string>& tokens) {
+  bool match = false;
+  // Every token is compared (no early exit), each in constant time.
+  for (const std::string& token : tokens) match |= ConstantTimeEquals(presented, token);
+  return match;
+}
+
+absl::Status CheckBearerValue(absl::string_view authorization,
+                              const std::vector<std::string>& tokens) {
+  if (tokens.empty()) return absl::OkStatus();
+  if (authorization.empty()) {
+    return absl::UnauthenticatedError("missing authorization metadata (Bearer token)");
+  }
+  absl::string_view presented = authorization;
+  if (!absl::ConsumePrefix(&presented, "Bearer ") && !absl::ConsumePrefix(&presented, "bearer ")) {
+    return absl::UnauthenticatedError("authorization metadata is not a Bearer token");
+  }
+  if (!IsAcceptedToken(presented, tokens)) {
+    return absl::UnauthenticatedError("invalid Bearer token");
+  }
+  return absl::OkStatus();
+}
+
 absl::Status CheckBearerToken(const grpc::ServerContextBase& context,
                               const std::vector<std::string>& tokens) {
   if (tokens.empty()) return absl::OkStatus();
@@ -53,16 +76,7 @@ absl::Status CheckBearerToken(const grpc::ServerContextBase& context,
   if (it == metadata.end()) {
     return absl::UnauthenticatedError("missing authorization metadata (Bearer token)");
   }
-  const absl::string_view value(it->second.data(), it->second.size());
-  absl::string_view presented = value;
-  if (!absl::ConsumePrefix(&presented, "Bearer ") && !absl::ConsumePrefix(&presented, "bearer ")) {
-    return absl::UnauthenticatedError("authorization metadata is not a Bearer token");
-  }
-  bool match = false;
-  // Every token is compared (no early exit), each in constant time.
-  for (const std::string& token : tokens) match |= ConstantTimeEquals(presented, token);
-  if (!match) return absl::UnauthenticatedError("invalid Bearer token");
-  return absl::OkStatus();
+  return CheckBearerValue(absl::string_view(it->second.data(), it->second.size()), tokens);
 }
 
 }  // namespace lane::server

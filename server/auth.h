@@ -31,6 +31,14 @@ std::vector<std::string> ParseTokenList(absl::string_view list);
 absl::Status CheckBearerToken(const grpc::ServerContextBase& context,
                               const std::vector<std::string>& tokens);
 
+// The same check on an `Authorization` header's value (the live view's HTTP
+// requests; empty: no header). Messages never quote the token.
+absl::Status CheckBearerValue(absl::string_view authorization,
+                              const std::vector<std::string>& tokens);
+// True when `presented` is one of `tokens`: every token is compared, each in
+// constant time (CheckBearerToken and CheckBearerValue use it).
+bool IsAcceptedToken(absl::string_view presented, const std::vector<std::string>& tokens);
+
 }  // namespace lane::server
 
 #endif  // LANE_SERVER_AUTH_H_

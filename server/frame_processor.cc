@@ -44,7 +44,7 @@ void StartResponse(const v1::FrameRequest& request, const std::string& camera_id
 absl::Status ProcessFrame(const v1::FrameRequest& request, Session& session,
                           const FrameLimits& limits, const Arrival& arrival, Metrics& metrics,
                           v1::FrameResponse* response, std::optional<lane::Detection>* detection,
-                          bool tracked) {
+                          bool tracked, LiveFrame* live_sample) {
   const SteadyTime start = std::chrono::steady_clock::now();
   const double queue_wait_ms = MillisecondsBetween(arrival.steady, start);
   metrics.ObserveQueueWait(queue_wait_ms * 1e-3);
@@ -75,6 +75,14 @@ absl::Status ProcessFrame(const v1::FrameRequest& request, Session& session,
     if (!frame.ok()) {
       status = frame.status();
     } else {
+      if (live_sample != nullptr && session.live != nullptr &&
+          session.live->ClaimDrawTurn(absl::GetCurrentTimeNanos())) {
+        // Region decoding leaves the rows the detector does not read
+        // undefined: only the others are kept.
+        const bool region = !session.decode.full_decode && request.has_encoded();
+        *live_sample = LiveFrame::Copy(*frame, region ? detector->Needs().top : 0,
+                                       region ? detector->Needs().bottom : frame->rows);
+      }
       absl::StatusOr<lane::Detection> detected =
           tracked ? session.tracker().Measure(*detector, *frame) : detector->Detect(*frame);
       if (detected.ok()) {

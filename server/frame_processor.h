@@ -14,6 +14,7 @@
 #include "absl/time/time.h"
 #include "lane/detector.h"
 #include "lane/v1/lane_service.pb.h"
+#include "live_feed.h"
 #include "metrics.h"
 #include "session.h"
 
@@ -54,10 +55,15 @@ struct FrameLimits {
 // With `tracked` (a tracked session's frame), this is the session tracker's
 // Measure: the detector also searches the predicted lanes, and each lane's
 // colour and type are read for FinishFrame's vote.
+// With `live_sample` (the live view is on): when the session's camera is
+// watched and its draw interval has passed (LiveFeed::ClaimDrawTurn), the
+// decoded frame's rows go there (LiveFrame: the rows the detector read, or
+// the whole frame for raw frames and full_decode sessions); otherwise it is
+// left empty, and nothing is copied.
 absl::Status ProcessFrame(const v1::FrameRequest& request, Session& session,
                           const FrameLimits& limits, const Arrival& arrival, Metrics& metrics,
                           v1::FrameResponse* response, std::optional<lane::Detection>* detection,
-                          bool tracked = false);
+                          bool tracked = false, LiveFrame* live_sample = nullptr);
 
 // In frame order, after ProcessFrame, when the response is about to be
 // written: with `tracked`, an OK frame's detection goes through the session

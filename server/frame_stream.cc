@@ -41,6 +41,8 @@ struct FrameStream::Slot {
   // An OK frame's lanes, kept as lanes until the response is written (and,
   // for a tracked session, committed to its tracker in stream order then).
   std::optional<lane::Detection> detection;
+  // The live view's copy of the frame, when its camera is watched and due.
+  LiveFrame live_sample;
   grpc::ByteBuffer wire;  // the response, serialized for the write
   std::string camera_id;
   Arrival arrival;
@@ -202,7 +204,8 @@ void FrameStream::Process(const std::shared_ptr<Slot>& slot) {
     if (slot->session != nullptr) {
       // A bad frame's status is in its response; the stream goes on.
       ProcessFrame(request, *slot->session, deps_.limits, slot->arrival, deps_.metrics,
-                   &slot->response, &slot->detection, slot->session->TracksStreams())
+                   &slot->response, &slot->detection, slot->session->TracksStreams(),
+                   deps_.live_view != nullptr ? &slot->live_sample : nullptr)
           .IgnoreError();
     }
   }
@@ -313,6 +316,9 @@ void FrameStream::MaybeWriteLocked() {
       MaybeAttachResumeStateLocked(front);
     }
     front.response.set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
+    if (deps_.live_view != nullptr && front.session != nullptr) {
+      deps_.live_view->Record(front.session, front.response, std::move(front.live_sample));
+    }
     if (absl::Status s = SerializeMessage(front.response, &front.wire); !s.ok()) {
       PopFrontLocked();
       FinishLocked(s);

@@ -31,6 +31,7 @@
 #include "absl/time/time.h"
 #include "frame_processor.h"
 #include "lane/v1/lane_service.grpc.pb.h"
+#include "live_view.h"
 #include "metrics.h"
 #include "resume_seal.h"
 #include "session.h"
@@ -68,6 +69,9 @@ struct StreamDeps {
   // Called once from OnDone, before the stream deletes itself (the service
   // unregisters it there). May be empty.
   std::function<void(FrameStream*)> on_done;
+  // The live view (--live_view), or null: every written response is
+  // recorded there.
+  LiveView* live_view = nullptr;
 };
 
 // Requests and responses are bytes (see raw_call.h): a message that does not

@@ -171,7 +171,7 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* LaneServiceImpl::St
   const bool admitted = reject.ok();
   StreamDeps deps{sessions_, *options_.resume_seal, pool_,
                   metrics_,  options_.frame_limits, options_.stream,
-                  nullptr};
+                  nullptr,   options_.live_view};
   if (admitted) deps.on_done = [this](FrameStream* stream) { Unregister(stream); };
   auto* stream = new FrameStream(std::move(deps));
   if (admitted) {
@@ -224,10 +224,15 @@ grpc::ServerUnaryReactor* LaneServiceImpl::Detect(grpc::CallbackServerContext* c
                 StartResponse(request, request.camera_id(), arrival, response);
                 const bool track = session->TracksUnary();
                 std::optional<lane::Detection> detection;
+                LiveFrame sample;
                 status = ProcessFrame(request, *session, options_.frame_limits, arrival, metrics_,
-                                      response, &detection, track);
+                                      response, &detection, track,
+                                      options_.live_view != nullptr ? &sample : nullptr);
                 FinishFrame(*session, track, detection, response);
                 response->set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
+                if (options_.live_view != nullptr) {
+                  options_.live_view->Record(session, *response, std::move(sample));
+                }
               }
               metrics_.FrameAnswered();
               call->Reply(status);
@@ -259,6 +264,8 @@ void LaneServiceImpl::FillServerInfo(v1::ServerInfo* response) const {
   response->set_build("git " + build.git_revision + ", " + build.build_type + ", gRPC " +
                       build.grpc_version + ", OpenCV " + build.opencv_version);
   response->set_process_cpu_seconds(ProcessCpuSeconds());
+  response->set_live_view_port(
+      static_cast<uint32_t>(std::max(0, live_view_port_.load(std::memory_order_relaxed))));
   response->add_encoded_formats("jpeg");
   response->add_encoded_formats("png");
   response->add_raw_formats(v1::PIXEL_FORMAT_BGR8);

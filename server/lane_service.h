@@ -10,6 +10,7 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -46,6 +47,9 @@ struct ServiceOptions {
   std::shared_ptr<const ResumeStateSeal> resume_seal;
   // Accepted Bearer tokens (authorization metadata); empty = no auth.
   std::vector<std::string> auth_tokens;
+  // The live view (--live_view), or null: frames of streams and Detect are
+  // recorded there. Must outlive the service.
+  LiveView* live_view = nullptr;
   BuildInfo build;
 };
 
@@ -92,6 +96,9 @@ class LaneServiceImpl final : public RawLaneService {
   // StartDrain. StartDrain also tells every open stream to stop reading,
   // answer the frames it has received and end with UNAVAILABLE.
   void SetServing();
+  // The live view's port, for GetServerInfo (set once the metrics endpoint
+  // listens; 0 = no live view).
+  void SetLiveViewPort(int port) { live_view_port_.store(port, std::memory_order_relaxed); }
   void StartDrain();
   // Waits until every stream has ended or `deadline` passes; true if all did.
   bool WaitForStreams(absl::Time deadline);
@@ -125,6 +132,7 @@ class LaneServiceImpl final : public RawLaneService {
   const absl::Condition no_streams_{this, &LaneServiceImpl::NoStreams};
   State state_ ABSL_GUARDED_BY(mu_) = State::kStarting;
   std::unordered_set<FrameStream*> streams_ ABSL_GUARDED_BY(mu_);
+  std::atomic<int> live_view_port_{0};
 };
 
 }  // namespace lane::server

@@ -117,6 +117,17 @@ ABSL_FLAG(int, metrics_camera_labels, 0,
           "lanesvc_camera_zero_lane_frames_total{camera}) for the first N camera ids seen; later "
           "ones share camera=\"_other\". 0 = off: camera ids come from clients, and every id is "
           "a series in Prometheus.");
+ABSL_FLAG(bool, live_view, false,
+          "Serve the live view on the metrics port: a page of every session (/) and of each "
+          "camera (/cameras/ID: its latest frame and top view with the lanes, its lanes, a strip "
+          "chart), with the Bearer-token check when tokens are set. Frames are kept and drawn "
+          "only while someone watches. See docs/service.md, \"Live view\".");
+ABSL_FLAG(double, live_view_fps, 5,
+          "Live view: pictures drawn and JPEG-encoded per second per watched camera, at most "
+          "(on the live view's own thread, never a frame worker).");
+ABSL_FLAG(int, live_view_max_viewers, 4,
+          "Live view: open pages at once (each holds a lease its requests renew, for 5 s after "
+          "the last); one more is answered 503.");
 ABSL_FLAG(std::string, log_format, "text",
           "How the server logs to stderr: text (one line per event, for people) or json (one "
           "JSON object per line with ts, level, logger, msg and the event's fields, for log "
@@ -261,6 +272,9 @@ absl::StatusOr<lane::server::ServerOptions> ServerOptionsFromFlags(
   options.max_concurrent_streams = absl::GetFlag(FLAGS_max_concurrent_streams);
   options.metrics_camera_labels =
       static_cast<size_t>(std::max(0, absl::GetFlag(FLAGS_metrics_camera_labels)));
+  options.live_view = absl::GetFlag(FLAGS_live_view);
+  options.live_view_fps = absl::GetFlag(FLAGS_live_view_fps);
+  options.live_view_max_viewers = absl::GetFlag(FLAGS_live_view_max_viewers);
   // Tokens: never a command-line literal (visible in ps), never logged.
   if (const std::string path = absl::GetFlag(FLAGS_auth_tokens_file); !path.empty()) {
     absl::StatusOr<std::vector<std::string>> tokens = lane::server::ReadTokenFile(path);
@@ -327,6 +341,10 @@ void LogStarted(Log& log, const lane::server::LaneServer& server,
   if (server.metrics_port() >= 0) {
     absl::StrAppend(&text, ", metrics on port ", server.metrics_port());
     fields.emplace_back("metrics_port", server.metrics_port());
+  }
+  if (options.live_view) {
+    absl::StrAppend(&text, ", live view on port ", server.metrics_port());
+    fields.emplace_back("live_view", true);
   }
   if (!options.default_config_path.empty()) {
     absl::StrAppend(&text, ", session '", options.default_camera_id, "' from ",

@@ -64,11 +64,27 @@ absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> MakeCredentials(
   return grpc::SslServerCredentials(ssl);
 }
 
+// HTTP request threads of the metrics port: 2 for scrapes and probes, and
+// with the live view 2 more per viewer (a page asks for its data and its
+// pictures at once), at most 16 in all.
+int HttpThreads(const ServerOptions& options) {
+  return options.live_view ? std::min(16, 2 + 2 * options.live_view_max_viewers) : 2;
+}
+
 int ToMillis(absl::Duration d) {
   return static_cast<int>(std::min<int64_t>(absl::ToInt64Milliseconds(d), INT32_MAX));
 }
 
 }  // namespace
+
+LiveViewOptions LiveViewOptionsOf(const ServerOptions& options) {
+  LiveViewOptions live;
+  live.fps = options.live_view_fps;
+  live.max_viewers = options.live_view_max_viewers;
+  live.lease = options.live_view_lease;
+  live.auth_tokens = options.auth_tokens;
+  return live;
+}
 
 BuildInfo CurrentBuildInfo() {
   BuildInfo info;
@@ -133,6 +149,13 @@ absl::Status ServerOptions::Validate() const {
   if (metrics_camera_labels > 10000) {
     return bad("metrics_camera_labels", metrics_camera_labels, "must lie in 0..10000");
   }
+  if (live_view) {
+    if (metrics_address.empty()) {
+      return absl::InvalidArgumentError(
+          "--live_view needs --metrics_address: its pages are served on the metrics port");
+    }
+    if (absl::Status s = LiveViewOptionsOf(*this).Validate(); !s.ok()) return s;
+  }
   return absl::OkStatus();
 }
 
@@ -193,11 +216,16 @@ void LaneServer::BuildService() {
   registry_options.max_receive_message_bytes =
       static_cast<uint64_t>(options_.max_receive_message_bytes);
   registry_options.max_session_memory_bytes = options_.max_session_memory_bytes;
+  const LiveViewOptions live_options = LiveViewOptionsOf(options_);
+  if (options_.live_view) {
+    registry_options.live_view_draw_interval_ns = live_options.DrawIntervalNs();
+  }
   Metrics* metrics = metrics_.get();
   registry_options.on_size_change = [metrics](size_t n) {
     metrics->SetSessions(static_cast<double>(n));
   };
   sessions_ = std::make_unique<SessionRegistry>(std::move(registry_options));
+  if (options_.live_view) live_view_ = std::make_unique<LiveView>(live_options, *sessions_);
 
   WorkerPool::Options pool_options;
   pool_options.threads = options_.workers;
@@ -215,6 +243,7 @@ void LaneServer::BuildService() {
       options_.resume_state_keys ? *options_.resume_state_keys : ResumeStateKeys::Random());
   service_options.stream.max_age = options_.max_connection_age;
   service_options.build = options_.build;
+  service_options.live_view = live_view_.get();
   service_ = std::make_unique<LaneServiceImpl>(service_options, *sessions_, *pool_, *metrics_);
 }
 
@@ -261,16 +290,21 @@ absl::Status LaneServer::StartGrpc(const std::shared_ptr<grpc::ServerCredentials
 
 absl::Status LaneServer::StartHttp() {
   if (options_.metrics_address.empty()) return absl::OkStatus();
-  absl::StatusOr<std::unique_ptr<HttpEndpoint>> http =
-      HttpEndpoint::Start(options_.metrics_address, 2,
-                          {registry_, std::make_shared<ProcessMetrics>(),
-                           std::make_shared<CalibrationMetrics>(*sessions_)},
-                          [this] { return ready_.load(std::memory_order_acquire); });
+  HttpEndpoint::PageHandler pages;
+  if (live_view_ != nullptr) {
+    pages = [live = live_view_.get()](const HttpRequest& request) { return live->Handle(request); };
+  }
+  absl::StatusOr<std::unique_ptr<HttpEndpoint>> http = HttpEndpoint::Start(
+      options_.metrics_address, HttpThreads(options_),
+      {registry_, std::make_shared<ProcessMetrics>(),
+       std::make_shared<CalibrationMetrics>(*sessions_)},
+      [this] { return ready_.load(std::memory_order_acquire); }, std::move(pages));
   if (!http.ok()) {
     return absl::UnavailableError(absl::StrCat("cannot serve metrics: ", http.status().message()));
   }
   http_ = std::move(*http);
   metrics_port_ = http_->port();
+  if (live_view_ != nullptr) service_->SetLiveViewPort(metrics_port_);
   return absl::OkStatus();
 }
 

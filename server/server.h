@@ -21,6 +21,7 @@
 #include "absl/time/time.h"
 #include "http_endpoint.h"
 #include "lane_service.h"
+#include "live_view.h"
 #include "metrics.h"
 #include "resume_seal.h"
 #include "session_registry.h"
@@ -102,6 +103,17 @@ struct ServerOptions {
   // Camera ids with series of their own in the per-camera metrics; 0 = no
   // per-camera metrics (see Metrics::CountCameraFrame).
   size_t metrics_camera_labels = 0;
+  // The live view: web pages of every camera on the metrics port
+  // (live_view.h). Off by default; needs metrics_address. Its tokens are
+  // auth_tokens.
+  bool live_view = false;
+  // Pictures per second per watched camera, at most (--live_view_fps).
+  double live_view_fps = 5;
+  // Open pages at once (--live_view_max_viewers).
+  int live_view_max_viewers = 4;
+  // A viewer's lease and its camera's watch after its last request (no
+  // flag: tests shorten it).
+  absl::Duration live_view_lease = absl::Seconds(5);
   BuildInfo build;
 
   // OK, or INVALID_ARGUMENT naming the first option that makes no sense (by
@@ -146,6 +158,8 @@ class LaneServer {
   // -1 without a metrics endpoint.
   int metrics_port() const { return metrics_port_; }
   SessionRegistry& sessions() { return *sessions_; }
+  // Null without --live_view.
+  LiveView* live_view() { return live_view_.get(); }
   LaneServiceImpl& service() { return *service_; }
   Metrics& metrics() { return *metrics_; }
   grpc::Server& grpc_server() { return *server_; }
@@ -163,6 +177,9 @@ class LaneServer {
   std::shared_ptr<prometheus::Registry> registry_;
   std::unique_ptr<Metrics> metrics_;
   std::unique_ptr<SessionRegistry> sessions_;
+  // After sessions_ (it holds a reference), before the service, the gRPC
+  // server and the HTTP endpoint that call it (destroyed after them).
+  std::unique_ptr<LiveView> live_view_;
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<LaneServiceImpl> service_;
   std::unique_ptr<grpc::Server> server_;
@@ -192,6 +209,9 @@ class LaneServer {
 // The build described by compile-time constants (version, build type,
 // library versions).
 BuildInfo CurrentBuildInfo();
+
+// The live view's options from the server's (its flags, its tokens).
+LiveViewOptions LiveViewOptionsOf(const ServerOptions& options);
 
 }  // namespace lane::server
 

@@ -23,6 +23,7 @@
 #include "lane/config/config.h"
 #include "lane/detector.h"
 #include "lane/track/frame_tracker.h"
+#include "live_feed.h"
 #include "resume_seal.h"
 
 namespace lane::server {
@@ -139,6 +140,9 @@ struct Session {
   const absl::Time create_time;
   // Frames processed with this session.
   std::atomic<uint64_t> frames_processed{0};
+  // The live view's side of the camera (live_feed.h); null without
+  // --live_view. Set by SessionRegistry before the session is shared.
+  std::unique_ptr<LiveFeed> live;
 
   // The detector for the next frame: `detector`, or with auto_calibrate the
   // one re-derived from the latest refined camera. Valid while the caller

@@ -81,7 +81,8 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
   if (!detector.ok()) {
     return wire::InvalidRequest(absl::StrCat("session config: ", detector.status().message()));
   }
-  const uint64_t need = detector->MemoryBytes() + config_json.size();
+  const uint64_t need = detector->MemoryBytes() + config_json.size() +
+                        (options_.live_view_draw_interval_ns > 0 ? LiveFeed::kFixedBytes : 0);
 
   std::shared_ptr<Session> replaced;  // destroyed outside the lock
   absl::MutexLock lock(&mu_);
@@ -106,6 +107,10 @@ absl::StatusOr<SessionRegistry::CreateResult> SessionRegistry::Create(const std:
   auto session = std::make_shared<Session>(
       camera_id, next_version_++, spec.config, std::move(config_json), stream, spec.decode,
       *std::move(detector), now, spec.calibration, spec.tracking, epochs_());
+  // Its fixed part is in `need`.
+  if (options_.live_view_draw_interval_ns > 0) {
+    session->live = std::make_unique<LiveFeed>(options_.live_view_draw_interval_ns);
+  }
   memory_bytes_ = held + SessionBytes(*session);
   const bool inserted = replaced == nullptr;
   sessions_.insert_or_assign(camera_id, Entry{session, now});
@@ -119,6 +124,44 @@ std::shared_ptr<Session> SessionRegistry::Find(absl::string_view camera_id) {
   if (it == sessions_.end()) return nullptr;
   it->second.last_used = options_.clock();
   return it->second.session;
+}
+
+std::shared_ptr<Session> SessionRegistry::Peek(absl::string_view camera_id) const {
+  absl::MutexLock lock(&mu_);
+  auto it = sessions_.find(camera_id);
+  return it == sessions_.end() ? nullptr : it->second.session;
+}
+
+absl::Status SessionRegistry::ReserveLiveView(const std::shared_ptr<Session>& session,
+                                              uint64_t bytes) {
+  if (session == nullptr || session->live == nullptr) {
+    return absl::FailedPreconditionError("the live view is off");
+  }
+  absl::MutexLock lock(&mu_);
+  auto it = sessions_.find(session->camera_id);
+  if (it == sessions_.end() || it->second.session != session) {
+    return wire::SessionNotFound(session->camera_id);
+  }
+  const uint64_t before = session->live->reserved_bytes.load(std::memory_order_relaxed);
+  const uint64_t held = memory_bytes_ - before;
+  if (options_.max_session_memory_bytes > 0 && held + bytes > options_.max_session_memory_bytes) {
+    return absl::ResourceExhaustedError(
+        absl::StrCat("the live view of this camera would hold ", bytes,
+                     " bytes and the sessions hold ", held, " of their budget of ",
+                     options_.max_session_memory_bytes, " bytes (--max_session_memory_mib)"));
+  }
+  session->live->reserved_bytes.store(bytes, std::memory_order_relaxed);
+  memory_bytes_ = held + bytes;
+  return absl::OkStatus();
+}
+
+void SessionRegistry::ReleaseLiveView(const std::shared_ptr<Session>& session) {
+  if (session == nullptr || session->live == nullptr) return;
+  absl::MutexLock lock(&mu_);
+  const uint64_t before = session->live->reserved_bytes.exchange(0, std::memory_order_relaxed);
+  auto it = sessions_.find(session->camera_id);
+  // A session no longer registered took its bytes out when it left.
+  if (it != sessions_.end() && it->second.session == session) memory_bytes_ -= before;
 }
 
 absl::StatusOr<SessionRegistry::Entry> SessionRegistry::Get(absl::string_view camera_id) {
@@ -184,7 +227,11 @@ size_t SessionRegistry::EvictIdle() {
 }
 
 uint64_t SessionRegistry::SessionBytes(const Session& session) {
-  return session.detector.MemoryBytes() + session.config_json.size();
+  uint64_t bytes = session.detector.MemoryBytes() + session.config_json.size();
+  if (session.live != nullptr) {
+    bytes += LiveFeed::kFixedBytes + session.live->reserved_bytes.load(std::memory_order_relaxed);
+  }
+  return bytes;
 }
 
 uint64_t SessionRegistry::RawFrameRequestBytes(const lane::CameraModel& camera) {

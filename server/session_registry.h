@@ -48,6 +48,10 @@ class SessionRegistry {
     // on the worker pool before this check, so at most one per worker is
     // held beyond the budget at any moment. 0 = no budget.
     uint64_t max_session_memory_bytes = uint64_t{1} << 30;
+    // With --live_view: every session gets a LiveFeed that samples a watched
+    // camera at most once per this interval (ns); 0 = no live view. Its
+    // fixed part (LiveFeed::kFixedBytes) counts in SessionBytes.
+    int64_t live_view_draw_interval_ns = 0;
     // Time source (tests inject a fake clock).
     std::function<absl::Time()> clock = [] { return absl::Now(); };
     // Called with the number of sessions after every change, under the
@@ -76,6 +80,18 @@ class SessionRegistry {
 
   // The session of a camera, marking it used; nullptr if none.
   std::shared_ptr<Session> Find(absl::string_view camera_id);
+  // The same without marking it used (the live view: looking at a camera
+  // does not keep its session alive); nullptr if none.
+  std::shared_ptr<Session> Peek(absl::string_view camera_id) const;
+
+  // The live view's memory of a watched camera: counts `bytes` for
+  // `session` (which must be the camera's current session) against
+  // max_session_memory_bytes, in place of what it counted before.
+  // RESOURCE_EXHAUSTED beyond the budget, NOT_FOUND when the session is no
+  // longer registered (deleted, replaced, evicted).
+  absl::Status ReserveLiveView(const std::shared_ptr<Session>& session, uint64_t bytes);
+  // Counts it no more (the watch has lapsed).
+  void ReleaseLiveView(const std::shared_ptr<Session>& session);
   // Like Find with its last use; NOT_FOUND if none.
   absl::StatusOr<Entry> Get(absl::string_view camera_id);
   // All sessions, sorted by camera id.
@@ -99,7 +115,9 @@ class SessionRegistry {
   bool EpochRetired(uint64_t epoch) const;
   static constexpr size_t kMaxRetiredEpochs = 4096;
 
-  // What a session counts against max_session_memory_bytes.
+  // What a session counts against max_session_memory_bytes: its detector,
+  // its config and, with the live view, its LiveFeed (and while watched the
+  // frame and pictures reserved for it).
   static uint64_t SessionBytes(const Session& session);
   // Bytes of the largest request carrying a raw BGR frame of the camera.
   static uint64_t RawFrameRequestBytes(const lane::CameraModel& camera);
