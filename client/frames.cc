@@ -13,6 +13,7 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "cli/input_file.h"
 #include "cli/inputs.h"
 
 namespace lane_client {
@@ -22,16 +23,6 @@ namespace fs = std::filesystem;
 
 std::string Where(const std::string& path, const std::string& name) {
   return path == name ? std::string() : absl::StrCat(" (", path, ")");
-}
-
-bool ReadFile(const std::string& path, std::string* bytes) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return false;
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  if (in.bad()) return false;
-  *bytes = std::move(buffer).str();
-  return true;
 }
 
 }  // namespace
@@ -50,11 +41,16 @@ FrameSource::FrameSource(const std::vector<std::string>& inputs, bool raw,
 FrameSource::~FrameSource() = default;
 
 void FrameSource::ReadImage(const lane_tools::InputEntry& entry, ClientFrame* frame) const {
-  std::string bytes;
-  if (!ReadFile(entry.path, &bytes)) {
-    frame->error = absl::StrCat("cannot read file", Where(entry.path, entry.name));
+  // Bounded and never blocking: a FIFO, a device or a /proc file is this
+  // frame's error, and so is a file over the image cap (cli/input_file.h).
+  absl::StatusOr<std::string> read =
+      lane_tools::ReadRegularFile(entry.path, lane_tools::kDefaultMaxImageBytes);
+  if (!read.ok()) {
+    frame->error = absl::StrCat("cannot read file", Where(entry.path, entry.name), ": ",
+                                read.status().message());
     return;
   }
+  std::string bytes = *std::move(read);
   if (!raw_ && IsJpegOrPng(bytes)) {
     frame->encoded = std::move(bytes);
     return;
