@@ -1,4 +1,4 @@
-# The Debian package (cpack -G DEB in the build folder; scripts/package.sh):
+# The Debian package (cpack -G DEB in the build folder; tested by scripts/package-test.sh):
 # one package, lanedet, with
 #   /usr/bin/lane, lane-server, lane-client   the programs
 #   /usr/lib, /usr/include, /usr/share/lanedet the library, headers, configs

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Starts lane-server with a default session (camera id "default", the
-# synthetic/Caltech camera of configs/synthetic.json): gRPC on :50051,
+# synthetic (Caltech) camera of configs/synthetic.json): gRPC on :50051,
 # Prometheus metrics on :9464. Installs dependencies and builds first.
 # Extra arguments go to lane-server (e.g. --default_config=configs/culane-driver161.json).
 set -euo pipefail

@@ -1,5 +1,5 @@
 // `lane calibrate`: a camera's config from frames of ordinary driving
-// (lane/calibration.h, docs/calibration.md).
+// (lane/calibrate/calibration.h, docs/calibration.md).
 #include <cmath>
 #include <cstdio>
 #include <fstream>

@@ -1,7 +1,7 @@
 // The detector's config on the wire: lane::Config <-> lane.v1.SessionConfig.
 //
 // The conversion is written once, over the config's schema
-// (lane/config_fields.h): each field of the core structs is found in the
+// (lane/config/config_fields.h): each field of the core structs is found in the
 // proto message by its name (protobuf reflection), so a new option needs its
 // field-list entry and a proto field of the same name, nothing else.
 // ProtoSchemaMismatches() lists what does not line up; a test requires it to

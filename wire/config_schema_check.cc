@@ -1,4 +1,4 @@
-// ProtoSchemaMismatches: the config schema (lane/config_fields.h) against the
+// ProtoSchemaMismatches: the config schema (lane/config/config_fields.h) against the
 // lane.v1 descriptors, so that a field missing on either side fails a test
 // by name instead of being dropped silently by the conversion.
 #include <google/protobuf/descriptor.h>

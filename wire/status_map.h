@@ -49,7 +49,7 @@ absl::Status InvalidRequest(absl::string_view message);
 // Every status message leaving the server is cut to this many bytes: a
 // default gRPC client refuses status metadata beyond about 8 kB, and then
 // reports RESOURCE_EXHAUSTED instead of the real code. Messages that quote
-// client input quote a short excerpt (lane/excerpt.h); this is the backstop.
+// client input quote a short excerpt (lane/base/excerpt.h); this is the backstop.
 inline constexpr size_t kMaxStatusMessageBytes = 1024;
 
 // Stream-level and unary statuses: the same code and message.

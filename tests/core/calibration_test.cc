@@ -1,4 +1,4 @@
-// Auto-calibration (lane/calibration.h, lane/vanishing_point.h): the pieces,
+// Auto-calibration (lane/calibrate/calibration.h, lane/calibrate/vanishing_point.h): the pieces,
 // random cameras recovered from rendered drives, the real clips when
 // present, and the online refinement following a drifting pitch.
 #include "lane/calibrate/calibration.h"

@@ -1,7 +1,9 @@
-// The profile primitives of post-processing (lane/postprocess.h): the
+// The profile primitives of post-processing (lane/postprocess/profile.h): the
 // smoothing and the sampling along a normal are written for speed (blocked
 // sums, no bounds test per point when a segment's ends lie inside); here they
 // are held to the plain definitions they must equal exactly.
+#include "lane/postprocess/profile.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,7 +12,6 @@
 #include <random>
 #include <vector>
 
-#include "lane/postprocess/profile.h"
 #include "lane/postprocess/spline_walk.h"
 
 namespace lane {

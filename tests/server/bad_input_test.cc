@@ -1,5 +1,5 @@
 // Hostile and malformed input, one test per row of the "Bad input" table in
-// README.md: the status the user sees, and the server keeps serving
+// docs/service.md: the status the user sees, and the server keeps serving
 // (every test ends with a good frame on the same server).
 #include <gtest/gtest.h>
 

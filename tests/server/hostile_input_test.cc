@@ -1,7 +1,7 @@
 // Hardening, round 2: hostile input a client can send, one test per class,
 // each with a healthy stream running beside it on the same connection the
 // whole time. The healthy stream must lose, reorder and duplicate nothing.
-// The README's "Bad input" table lists every case with its test.
+// docs/service.md's "Bad input" table lists every case with its test.
 #include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/impl/codegen/client_unary_call.h>
 #include <grpcpp/impl/codegen/sync_stream.h>

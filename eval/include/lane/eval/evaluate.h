@@ -52,7 +52,7 @@ FrameScore ScoreFrame(const std::vector<Curve>& detections, const LabelledFrame&
 struct EvalReport {
   std::string dataset;  // the folder given
   // What was scored, for the tables' heading; set by the caller (e.g.
-  // "detector, config configs/x.json" or "results out/results.jsonl").
+  // "detector, config configs/caltech.json" or "results out/results.jsonl").
   std::string source;
   DatasetFormat format = DatasetFormat::kCulane;
   EvalOptions options;

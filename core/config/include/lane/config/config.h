@@ -1,6 +1,6 @@
 // The detector's configuration file: calibration, IPM and detector options in
 // one JSON document. Every key is optional; missing keys keep their defaults.
-// The format is documented in README.md ("Configuration file").
+// The format, every key, is documented in docs/config.md.
 #ifndef LANE_CONFIG_H_
 #define LANE_CONFIG_H_
 

@@ -1,8 +1,8 @@
 // Stage 7, the checks that drop candidates which are not lane markings (not
 // in the paper, which names vehicles, curbs and writing as its false
-// positives): grouped here so that Detector::Detect calls one function per
-// frame of reference. The checks themselves live in vehicle_check.h and
-// marking_check.h; their options in PostprocessOptions.
+// positives): grouped here so that PostprocessCandidates (postprocess.cc)
+// calls one function per frame of reference. The checks themselves live in
+// vehicle_check.h and marking_check.h; their options in PostprocessOptions.
 #ifndef LANE_CANDIDATE_CHECKS_H_
 #define LANE_CANDIDATE_CHECKS_H_
 
@@ -12,8 +12,8 @@
 
 #include "lane/geometry/bezier.h"
 #include "lane/geometry/camera.h"
-#include "lane/geometry/ipm.h"
 #include "lane/geometry/channel_view.h"
+#include "lane/geometry/ipm.h"
 #include "lane/postprocess/postprocess_options.h"
 
 namespace lane {

@@ -38,7 +38,7 @@ struct PostprocessOptions {
   // 0.015, to keep the false-positive rate (cordova1, docs/accuracy-log.md
   // entry 35).
   double min_bar_fraction = 0.2;
-  // Vertical objects (lane/vehicle_check.h): a top-view spline closer in
+  // Vertical objects (lane/postprocess/vehicle_check.h): a top-view spline closer in
   // direction to the ray from the camera's foot point through it than to the
   // road's direction is dropped, where the two directions differ by at
   // least this many degrees (twice the ~3 deg by which yaw and curvature
@@ -47,7 +47,7 @@ struct PostprocessOptions {
   // candidate that bends by more than max_ray_bend_m from its straight line
   // is a marking on a curve, not a (straight) ray.
   double min_ray_angle_deg = 6.0;
-  // Bright neighbours (lane/vehicle_check.h): a top-view spline with a side,
+  // Bright neighbours (lane/postprocess/vehicle_check.h): a top-view spline with a side,
   // side_offset_m across, brighter than the road by more than half its own
   // contrast along more than this fraction of its length is dropped: a
   // marking has road on both sides. >= 1 disables it (the default: on the
@@ -88,7 +88,7 @@ struct PostprocessOptions {
   double extend_min_row = -1;
   double extend_max_row = -1;
   // Extension in the image follows the road's geometry
-  // (lane/image_extension.h): each step looks for a bright bar as wide as a
+  // (lane/postprocess/image_extension.h): each step looks for a bright bar as wide as a
   // marking across a normal `extend_search_m` metres long on the road (so the
   // window follows the perspective: the reference's fixed 20 px are +-1.4 m
   // at the Caltech camera's far rows and +-0.2 m at its near rows), walks
@@ -121,7 +121,7 @@ struct PostprocessOptions {
   // ipm_max_angle_from_vertical_deg of the road's direction, as the top-view
   // spline had to (paper II-E.3: geometric checks after each step).
   bool check_ground_angle = true;
-  // Colour (lane/marking_check.h): an image spline whose median redness
+  // Colour (lane/postprocess/marking_check.h): an image spline whose median redness
   // (R - G) / R exceeds this is dropped. Yellow paint reads ~0.15, faded
   // orange ~0.3, red curbs, red cars and tail lights 0.5-0.7; 0.4 lies
   // between. >= 1 disables it. Grey frames are not checked.
