@@ -1,57 +1,272 @@
 #!/usr/bin/env python3
-"""Functions longer than LINES lines (default 80) in the C++ sources outside
-tests/ and fuzz/: from the first line of the signature to the closing brace.
+"""Functions longer than LINES lines (default 80), and files longer than 600.
 
-    scripts/long_functions.py [LINES]
+    scripts/long_functions.py [LINES]       list them
+    scripts/long_functions.py --check       fail (exit 1) beyond the limits
 
-A brace counter, not a parser: a definition is a line at the top indentation
-of a namespace (or a class body, one level in) that opens a body '{' after a
-')' or an initializer list. Good enough to track the project's rule (issue
-33: at most 5 functions over 80 lines, each with its reason in the code).
+The limits (issues 33 and 48): at most 5 functions over 80 lines in the
+whole tree, tests included, each with its reason in the code; no C++ or
+Python source over 600 lines, tests included.
+
+A function runs from the first line of its declaration (its template line,
+if any) to its closing brace. C++: every body at namespace or class scope
+is found, whatever its form: free functions, members defined in or out of
+their class, constructors and destructors (with initializer lists, braced
+or not), operators, conversion functions, functions with trailing return
+types or attributes, test bodies (TEST(...), TEST_F(...)) and lambdas held
+by a variable at namespace scope; a lambda or local class inside a function
+counts towards that function. Comments, strings and preprocessor lines are
+blanked first. Python: every function and method, by the ast module, with
+its decorators; a nested function counts towards the one around it.
 """
+import ast
+import os
 import re
 import subprocess
 import sys
 
-limit = int(sys.argv[1]) if len(sys.argv) > 1 else 80
-files = [f for f in subprocess.check_output(["git", "ls-files", "*.cc", "*.h"]).decode().split()
-         if not f.startswith(("tests/", "fuzz/"))]
-SIG = re.compile(r"^(\s{0,2})[A-Za-z_~][\w:<>,*&\s\[\]]*[\w>)\]]\s*\(")
-found = []
-for path in files:
-    lines = open(path, encoding="utf-8", errors="replace").read().split("\n")
-    i = 0
-    while i < len(lines):
-        line = lines[i]
-        m = SIG.match(line)
-        if not m or line.lstrip().startswith(("if", "for", "while", "switch", "return", "//", "#")):
-            i += 1
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+MAX_LONG_FUNCTIONS = 5
+MAX_FILE_LINES = 600
+CXX_EXT = (".cc", ".h", ".cpp", ".hpp")
+
+
+def source_files():
+    try:
+        out = subprocess.check_output(["git", "ls-files", "--cached", "--others",
+                                       "--exclude-standard"], cwd=ROOT,
+                                      stderr=subprocess.DEVNULL).decode()
+        files = [f for f in out.split("\n") if f]
+    except (OSError, subprocess.CalledProcessError):
+        files = []
+        for d, subdirs, names in os.walk(ROOT):
+            if d == ROOT:
+                subdirs[:] = [s for s in subdirs if not s.startswith((".", "build", "out"))]
+            files += [os.path.relpath(os.path.join(d, n), ROOT) for n in names]
+    return sorted(f for f in files if f.endswith(CXX_EXT + (".py",))
+                  and os.path.isfile(os.path.join(ROOT, f)))
+
+
+def blank_cxx(text):
+    """TEXT with comments, string and character literals and preprocessor
+    lines replaced by spaces; newlines kept, so offsets map to lines."""
+    out, i, n = [], 0, len(text)
+    line_start = True
+    while i < n:
+        c = text[i]
+        if line_start and c == "#" or (line_start and c in " \t" and
+                                       text[i:].lstrip(" \t").startswith("#")):
+            j = i
+            while True:  # the directive and its continuation lines
+                k = text.find("\n", j)
+                k = n if k < 0 else k
+                if k > 0 and text[k - 1] == "\\" and k < n:
+                    j = k + 1
+                    continue
+                break
+            out.append(re.sub(r"[^\n]", " ", text[i:k]))
+            i = k
             continue
-        # Find the body's '{' within the next 12 lines, before any ';'.
-        j, body = i, -1
-        while j < len(lines) and j < i + 12:
-            text = re.sub(r"//.*", "", lines[j])
-            if "{" in text:
-                body = j
-                break
-            if ";" in text:
-                break
-            j += 1
-        if body < 0:
-            i += 1
+        if text.startswith("//", i):
+            k = text.find("\n", i)
+            k = n if k < 0 else k
+            out.append(" " * (k - i))
+            i = k
             continue
-        depth, k = 0, body
-        while k < len(lines):
-            text = re.sub(r"//.*|\"(\\.|[^\"\\])*\"|'(\\.|[^'\\])*'", "", lines[k])
-            depth += text.count("{") - text.count("}")
-            if depth <= 0 and k >= body:
-                break
-            k += 1
-        n = k - i + 1
-        name = re.search(r"([~\w:]+)\s*\(", line)
-        if n > limit:
-            found.append((n, path, i + 1, name.group(1) if name else line.strip()))
-        i = k + 1
-for n, path, line, name in sorted(found, reverse=True):
-    print("%4d  %s:%d  %s" % (n, path, line, name))
-print("%d functions over %d lines" % (len(found), limit))
+        if text.startswith("/*", i):
+            k = text.find("*/", i + 2)
+            k = n if k < 0 else k + 2
+            out.append(re.sub(r"[^\n]", " ", text[i:k]))
+            i = k
+            continue
+        m = re.match(r'(?:u8|u|U|L)?R"([^(\s]{0,16})\(', text[i:i + 24])
+        if m and (i == 0 or not (text[i - 1].isalnum() or text[i - 1] == "_")):
+            k = text.find(")" + m.group(1) + '"', i + m.end())
+            k = n if k < 0 else k + len(m.group(1)) + 2
+            out.append(re.sub(r"[^\n]", " ", text[i:k]))
+            i = k
+            continue
+        # A quote; a ' after a digit or letter is a digit separator (1'000).
+        if c == '"' or (c == "'" and not (i > 0 and (text[i - 1].isalnum()))):
+            k = i + 1
+            while k < n and text[k] != c and text[k] != "\n":
+                k += 2 if text[k] == "\\" else 1
+            k = min(k + 1, n)
+            out.append(re.sub(r"[^\n]", " ", text[i:k]))
+            i = k
+            continue
+        out.append(c)
+        line_start = c == "\n" or (line_start and c in " \t")
+        i += 1
+    return "".join(out)
+
+
+def top_level(text):
+    """TEXT with everything inside (), [] and <> of templates blanked, so
+    only the top level's tokens are left ('(' and ')' themselves stay)."""
+    out, depth = [], 0
+    for c in text:
+        if c in "([":
+            out.append(c if depth == 0 else " ")
+            depth += 1
+        elif c in ")]":
+            depth = max(depth - 1, 0)
+            out.append(c if depth == 0 else " ")
+        else:
+            out.append(c if depth == 0 else " ")
+    return "".join(out)
+
+
+TEMPLATE = re.compile(r"^\s*template\s*<")
+ACCESS = re.compile(r"^\s*(public|private|protected)\s*:(?!:)")
+LAMBDA = re.compile(r"^\s*\[[^\]]*\]\s*(\([^)]*\))?\s*[\w\s]*(->[^{]*)?$", re.S)
+
+
+def strip_prefixes(header):
+    while True:
+        m = ACCESS.match(header)
+        if m:
+            header = header[m.end():]
+            continue
+        m = TEMPLATE.match(header)
+        if m:
+            depth, k = 1, m.end()
+            while k < len(header) and depth:
+                depth += {"<": 1, ">": -1}.get(header[k], 0)
+                k += 1
+            header = header[k:]
+            continue
+        return header
+
+
+def classify(header):
+    """What a '{' after HEADER (at namespace or class scope) opens:
+    'scope' (namespace, class), 'function', 'member-init' (a braced member
+    initializer inside a constructor's initializer list) or 'data'."""
+    h = strip_prefixes(header).strip()
+    words = h.split()
+    if not words:
+        return "data"
+    if words[0] in ("namespace", "extern") or words[:2] == ["inline", "namespace"]:
+        return "scope"
+    if words[0] in ("class", "struct", "union") or (words[0] == "typedef" and len(words) > 1 and
+                                                    words[1] in ("class", "struct", "union")):
+        return "scope"
+    if words[0] == "enum" or words[:2] == ["typedef", "enum"]:
+        return "data"
+    flat = top_level(h)
+    paren = flat.find("(")
+    eq = re.search(r"(?<![=!<>])=(?!=)", flat)
+    if eq and (paren < 0 or eq.start() < paren) and "operator" not in flat[:eq.start()]:
+        return "function" if LAMBDA.match(h[eq.end():]) else "data"
+    if paren < 0:
+        return "data"
+    # A constructor's initializer list: a ':' after the parameters.
+    after = flat[flat.find(")", paren) + 1:] if ")" in flat[paren:] else ""
+    if re.search(r"(?<!:):(?!:)", after):
+        last = h.rstrip()[-1:]
+        return "member-init" if (last.isalnum() or last in "_>") else "function"
+    return "function"
+
+
+def function_name(header):
+    h = strip_prefixes(header)
+    flat = top_level(h)
+    eq = re.search(r"(?<![=!<>])=(?!=)", flat)
+    paren = flat.find("(")
+    if eq and (paren < 0 or eq.start() < paren):  # a lambda: its variable
+        m = re.search(r"([\w:]+)\s*$", h[:eq.start()])
+        return (m.group(1) if m else "lambda") + " (lambda)"
+    m = re.search(r"((?:[\w~]+::)*(?:operator\s*(?:\(\)|[^\s(]+)|~?\w+))\s*$", flat[:paren])
+    name = m.group(1) if m else h.strip().split("\n")[0]
+    if re.match(r"[A-Z_0-9]+$", name):  # TEST(Suite, Name) and the like
+        close = h.find(")", h.find("("))
+        return re.sub(r"\s+", " ", h[h.find(name):close + 1])
+    return name
+
+
+def cxx_functions(text):
+    """(first line, last line, name) of every function body in TEXT."""
+    code = blank_cxx(text)
+    found = []
+    # Each open brace: (kind, header start offset, header, keeps header).
+    stack = []
+    header_start = 0
+    paren = 0
+    for pos, c in enumerate(code):
+        in_scope = not stack or stack[-1][0] == "scope"
+        if c in "([":
+            paren += 1
+        elif c in ")]":
+            paren = max(paren - 1, 0)
+        elif c == ";" and in_scope and paren == 0:
+            header_start = pos + 1
+        elif c == "{":
+            if in_scope and paren == 0:
+                header = code[header_start:pos]
+                kind = classify(header)
+                stack.append((kind, header_start, header, paren))
+                if kind != "member-init":  # its constructor's header goes on
+                    header_start = pos + 1
+            else:
+                kind = "inner" if stack and stack[-1][0] in ("function", "inner") else "data"
+                stack.append((kind, header_start, None, paren))
+            paren = 0
+        elif c == "}" and stack:
+            kind, start, header, outer_paren = stack.pop()
+            paren = outer_paren
+            if kind == "function":
+                first = start + len(header) - len(header.lstrip())
+                found.append((code.count("\n", 0, first) + 1, code.count("\n", 0, pos) + 1,
+                              function_name(header)))
+            if kind in ("function", "scope"):
+                header_start = pos + 1
+    return found
+
+
+def python_functions(text):
+    found = []
+
+    def visit(body):
+        for node in body:
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                first = min([node.lineno] + [d.lineno for d in node.decorator_list])
+                found.append((first, node.end_lineno, node.name))
+            elif isinstance(node, ast.ClassDef):
+                visit(node.body)
+            elif isinstance(node, (ast.If, ast.Try, ast.With)):  # functions defined under if/try
+                visit(getattr(node, "body", []) + getattr(node, "orelse", []))
+
+    visit(ast.parse(text).body)
+    return found
+
+
+def main(argv):
+    check = "--check" in argv
+    args = [a for a in argv if not a.startswith("--")]
+    limit = int(args[0]) if args else 80
+    long_functions, long_files = [], []
+    for path in source_files():
+        text = open(os.path.join(ROOT, path), encoding="utf-8", errors="replace").read()
+        lines = text.count("\n") + (0 if text.endswith("\n") or not text else 1)
+        if lines > MAX_FILE_LINES:
+            long_files.append((lines, path))
+        functions = python_functions(text) if path.endswith(".py") else cxx_functions(text)
+        for first, last, name in functions:
+            if last - first + 1 > limit:
+                long_functions.append((last - first + 1, path, first, name))
+    for n, path, line, name in sorted(long_functions, reverse=True):
+        print("%4d  %s:%d  %s" % (n, path, line, name))
+    print("%d functions over %d lines (at most %d)" % (len(long_functions), limit,
+                                                       MAX_LONG_FUNCTIONS))
+    for n, path in sorted(long_files, reverse=True):
+        print("%4d  %s" % (n, path))
+    print("%d files over %d lines (none allowed)" % (len(long_files), MAX_FILE_LINES))
+    if check and (len(long_functions) > MAX_LONG_FUNCTIONS or long_files):
+        print("FAILED: over the limits of scripts/long_functions.py")
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
