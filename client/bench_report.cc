@@ -336,6 +336,45 @@ std::string CsvReport(const Report& r) {
   return out.str();
 }
 
+namespace {
+
+// A run's line in the text report, after the table: errors, unsent frames,
+// the server's split, targets, the ratios to the in-process reference.
+std::vector<std::string> TextRunNotes(const Report& r, const LoadResult& run) {
+  std::vector<std::string> notes;
+  if (!run.errors.empty()) notes.push_back("errors " + ErrorsText(run.errors));
+  if (run.unsent > 0) notes.push_back(absl::StrCat(run.unsent, " frames unsent"));
+  if (run.stream_failures > 0) {
+    notes.push_back(absl::StrCat(run.stream_failures, " stream failures"));
+  }
+  if (run.open_loop && run.max_send_lag_ms > 1) {
+    notes.push_back(absl::StrFormat("sender up to %.1f ms behind schedule", run.max_send_lag_ms));
+  }
+  notes.push_back(absl::StrFormat(
+      "server p50 %.2f ms p99 %.2f ms (p50: queue %.2f, decode %.2f, detect %.2f ms)",
+      run.server_ms.p50, run.server_ms.p99, run.queue_ms.p50, run.decode_ms.p50,
+      run.detect_ms.p50));
+  if (run.ok_by_target.size() > 1) {
+    std::vector<std::string> parts;
+    for (const auto& [target, n] : run.ok_by_target) parts.push_back(absl::StrCat(target, " ", n));
+    notes.push_back("ok by target: " + absl::StrJoin(parts, ", "));
+  }
+  if (const std::optional<double> ratio = r.Ratio(run)) {
+    notes.push_back(absl::StrFormat("service/in-process %.1f %%", *ratio * 100));
+  }
+  if (run.server_cpu_ms_per_frame >= 0) {
+    std::string cpu = absl::StrFormat("server CPU %.2f ms/frame", run.server_cpu_ms_per_frame);
+    if (const std::optional<double> cpu_ratio = r.CpuRatio(run)) {
+      absl::StrAppend(&cpu, absl::StrFormat(" (in-process %.2f ms, %.2fx)",
+                                            r.inprocess->cpu_ms_per_frame, *cpu_ratio));
+    }
+    notes.push_back(cpu);
+  }
+  return notes;
+}
+
+}  // namespace
+
 std::string TextReport(const Report& r) {
   std::ostringstream out;
   out << "lane-client bench: " << absl::StrJoin(r.targets, ",");
@@ -359,36 +398,7 @@ std::string TextReport(const Report& r) {
         run.frames_sent, run.frames_ok, run.errors_total, run.dropped);
   }
   for (const LoadResult& run : r.runs) {
-    std::vector<std::string> notes;
-    if (!run.errors.empty()) notes.push_back("errors " + ErrorsText(run.errors));
-    if (run.unsent > 0) notes.push_back(absl::StrCat(run.unsent, " frames unsent"));
-    if (run.stream_failures > 0) {
-      notes.push_back(absl::StrCat(run.stream_failures, " stream failures"));
-    }
-    if (run.open_loop && run.max_send_lag_ms > 1) {
-      notes.push_back(absl::StrFormat("sender up to %.1f ms behind schedule", run.max_send_lag_ms));
-    }
-    notes.push_back(absl::StrFormat(
-        "server p50 %.2f ms p99 %.2f ms (p50: queue %.2f, decode %.2f, detect %.2f ms)",
-        run.server_ms.p50, run.server_ms.p99, run.queue_ms.p50, run.decode_ms.p50,
-        run.detect_ms.p50));
-    if (run.ok_by_target.size() > 1) {
-      std::vector<std::string> parts;
-      for (const auto& [target, n] : run.ok_by_target)
-        parts.push_back(absl::StrCat(target, " ", n));
-      notes.push_back("ok by target: " + absl::StrJoin(parts, ", "));
-    }
-    if (const std::optional<double> ratio = r.Ratio(run)) {
-      notes.push_back(absl::StrFormat("service/in-process %.1f %%", *ratio * 100));
-    }
-    if (run.server_cpu_ms_per_frame >= 0) {
-      std::string cpu = absl::StrFormat("server CPU %.2f ms/frame", run.server_cpu_ms_per_frame);
-      if (const std::optional<double> cpu_ratio = r.CpuRatio(run)) {
-        absl::StrAppend(&cpu, absl::StrFormat(" (in-process %.2f ms, %.2fx)",
-                                              r.inprocess->cpu_ms_per_frame, *cpu_ratio));
-      }
-      notes.push_back(cpu);
-    }
+    const std::vector<std::string> notes = TextRunNotes(r, run);
     out << absl::StrFormat("  %d cameras: ", run.cameras) << absl::StrJoin(notes, "; ") << "\n";
     for (const std::string& warning : Warnings(r, run)) {
       out << "  warning: " << warning << "\n";

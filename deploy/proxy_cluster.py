@@ -296,133 +296,139 @@ def reconnect_frames(results_path):
             if rows[i].get("connection", 0) != rows[i - 1].get("connection", 0)]
 
 
-def main():
-    args = parse_args()
-    bins = binaries()
-    nginx = os.environ.get("NGINX", "/usr/sbin/nginx")
-    if not os.access(nginx, os.X_OK):
-        log("nginx is missing (apt-get install nginx; scripts/install-deps.sh)")
-        return 2
-    out = os.path.abspath(args.out)
-    os.makedirs(out, exist_ok=True)
-    n_total = args.replicas + 1
-    ports = free_ports(2 * n_total + 1)
-    replicas = [Replica(i, bins["server"], ports[2 * i], ports[2 * i + 1], out, args)
-                for i in range(n_total)]
-    proxy = Proxy(out, ports[-1])
-    started = time.monotonic()
-    failures = []
-
-    log("rendering %d drives of %d frames" % (args.cameras, args.frames))
-    drives = render(bins["lane"], out, args.cameras, args.frames)
-    log("reference: each drive tracked in one process (lane detect --track)")
+def track_references(lane, out, drives):
+    """Each drive tracked in one process (lane detect --track): the reference."""
     for c, d in enumerate(drives):
-        subprocess.run([bins["lane"], "detect", "--config", CONFIG, "--track",
+        subprocess.run([lane, "detect", "--config", CONFIG, "--track",
                         os.path.join(d, "list.txt"), "--output",
                         os.path.join(out, "reference-%d.jsonl" % c)],
                        check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
+
+def start_cluster(args, bins, nginx, replicas, proxy):
+    """Starts the first REPLICAS replicas and the proxy; False when one of
+    them does not pass its health checks."""
     live = replicas[:args.replicas]
-    try:
-        for r in live:
-            r.start()
-        proxy.write(replicas if args.spare_slot else live)  # a spare slot is down for now
-        proxy.start(nginx)
-        for r in live:
-            if not wait_healthy(bins["client"], [r.address], 20):
-                log("replica %d did not start" % r.index)
-                return 1
-        if not wait_healthy(bins["client"], [proxy.target], 20):
-            log("the proxy did not pass health checks")
-            return 1
+    for r in live:
+        r.start()
+    proxy.write(replicas if args.spare_slot else live)  # a spare slot is down for now
+    proxy.start(nginx)
+    for r in live:
+        if not wait_healthy(bins["client"], [r.address], 20):
+            log("replica %d did not start" % r.index)
+            return False
+    if not wait_healthy(bins["client"], [proxy.target], 20):
+        log("the proxy did not pass health checks")
+        return False
+    return True
 
-        probes = ["probe-%03d" % i for i in range(args.probe)]
-        before = probe_placement(bins["client"], proxy.target, live, probes)
 
-        cams = ["cam-%d" % c for c in range(args.cameras)]
-        streams = []
-        for c, d in enumerate(drives):
-            errf = open(os.path.join(out, "stream-%d.err" % c), "w")
-            streams.append(subprocess.Popen(
-                [bins["client"], "stream", "--target", proxy.target, "--camera", cams[c],
-                 "--config", CONFIG, "--fps", str(args.fps), "--window", "4", "--no-progress",
-                 "--output", os.path.join(out, "stream-%d.jsonl" % c),
-                 os.path.join(d, "list.txt")], stdout=subprocess.DEVNULL, stderr=errf))
-        t0 = time.monotonic()
-        duration = args.frames / args.fps
+def start_streams(args, client, target, out, drives, cams):
+    streams = []
+    for c, d in enumerate(drives):
+        errf = open(os.path.join(out, "stream-%d.err" % c), "w")
+        streams.append(subprocess.Popen(
+            [client, "stream", "--target", target, "--camera", cams[c],
+             "--config", CONFIG, "--fps", str(args.fps), "--window", "4", "--no-progress",
+             "--output", os.path.join(out, "stream-%d.jsonl" % c),
+             os.path.join(d, "list.txt")], stdout=subprocess.DEVNULL, stderr=errf))
+    return streams
 
-        def at(fraction):
-            wait = t0 + fraction * duration - time.monotonic()
-            if wait > 0:
-                time.sleep(wait)
 
-        def holder(exclude=()):
-            counts = {r.index: len(r.camera_frames()) for r in live if r.index not in exclude}
-            return max(counts, key=counts.get)
+def camera_affinity(live, cams, failures):
+    """Which replicas each streaming camera's frames went to; a failure when
+    a camera is on more than one replica, or on none."""
+    per_camera = collections.defaultdict(set)
+    for r in live:
+        for cam, n in r.camera_frames().items():
+            if cam in cams and n > 0:
+                per_camera[cam].add(r.index)
+    split = [c for c, rs in per_camera.items() if len(rs) > 1]
+    affinity = {c: sorted(rs) for c, rs in per_camera.items()}
+    if split or len(per_camera) < len(cams):
+        failures.append("before the faults, cameras on more than one replica (or none): %s"
+                        % affinity)
+    return affinity
 
-        # Affinity before any fault (and before the first --max_connection_age).
-        at(0.15)
-        per_camera = collections.defaultdict(set)
-        for r in live:
-            for cam, n in r.camera_frames().items():
-                if cam in cams and n > 0:
-                    per_camera[cam].add(r.index)
-        split = [c for c, rs in per_camera.items() if len(rs) > 1]
-        affinity = {c: sorted(rs) for c, rs in per_camera.items()}
-        if split or len(per_camera) < len(cams):
-            failures.append("before the faults, cameras on more than one replica (or none): %s"
-                            % affinity)
 
-        at(0.2)
-        a = holder()
-        log("SIGTERM replica %d (it drains)" % a)
-        replicas[a].proc.send_signal(signal.SIGTERM)
-        replicas[a].proc.wait(timeout=30)
-        at(0.35)
-        replicas[a].start()
-        at(0.45)
-        b = holder(exclude=(a,))
-        log("SIGKILL replica %d" % b)
-        replicas[b].proc.kill()
-        replicas[b].proc.wait()
-        at(0.5)
-        replicas[b].start()
-        at(0.6)
-        new = replicas[args.replicas]
-        new.start()
-        wait_healthy(bins["client"], [new.address], 20)
-        live = replicas[:args.replicas + 1]
-        if args.spare_slot:
-            log("replica %d started in the proxy's spare slot" % new.index)
-            time.sleep(2.5)  # the slot's fail_timeout: nginx tries it again
-        else:
-            log("adding replica %d to the proxy (nginx -s reload)" % new.index)
-            proxy.write(live)
-            proxy.reload(nginx)
-            time.sleep(0.5)
-        after = probe_placement(bins["client"], proxy.target, live, probes)
-        moved = sum(1 for cam in probes if cam in before and after.get(cam) != before[cam])
-        to_new = sum(1 for cam in probes if after.get(cam) == new.index)
+def stream_through_faults(args, bins, nginx, replicas, proxy, drives, failures):
+    """The cameras stream through the proxy while a replica drains, one is
+    killed and a new one is added. What the checks need, as a dict."""
+    live = replicas[:args.replicas]
+    probes = ["probe-%03d" % i for i in range(args.probe)]
+    before = probe_placement(bins["client"], proxy.target, live, probes)
+    cams = ["cam-%d" % c for c in range(args.cameras)]
+    streams = start_streams(args, bins["client"], proxy.target, args.out_abs, drives, cams)
+    t0 = time.monotonic()
+    duration = args.frames / args.fps
 
-        rcs = [s.wait(timeout=duration + 120) for s in streams]
-        resumes = collections.Counter()
-        for r in live:
-            resumes.update(r.resumes())
-        cams_on_new = sorted(c for c in cams if new.camera_frames().get(c, 0) > 0)
-    finally:
-        for r in replicas:
-            if r.proc is not None and r.proc.poll() is None:
-                r.proc.terminate()
-        if proxy.proc is not None:
-            proxy.proc.terminate()
-        for r in replicas:
-            if r.proc is not None:
-                try:
-                    r.proc.wait(timeout=15)
-                except subprocess.TimeoutExpired:
-                    r.proc.kill()
+    def at(fraction):
+        wait = t0 + fraction * duration - time.monotonic()
+        if wait > 0:
+            time.sleep(wait)
 
-    # Exactly once, in order.
+    def holder(exclude=()):
+        counts = {r.index: len(r.camera_frames()) for r in live if r.index not in exclude}
+        return max(counts, key=counts.get)
+
+    # Affinity before any fault (and before the first --max_connection_age).
+    at(0.15)
+    affinity = camera_affinity(live, cams, failures)
+    at(0.2)
+    a = holder()
+    log("SIGTERM replica %d (it drains)" % a)
+    replicas[a].proc.send_signal(signal.SIGTERM)
+    replicas[a].proc.wait(timeout=30)
+    at(0.35)
+    replicas[a].start()
+    at(0.45)
+    b = holder(exclude=(a,))
+    log("SIGKILL replica %d" % b)
+    replicas[b].proc.kill()
+    replicas[b].proc.wait()
+    at(0.5)
+    replicas[b].start()
+    at(0.6)
+    new = replicas[args.replicas]
+    new.start()
+    wait_healthy(bins["client"], [new.address], 20)
+    live = replicas[:args.replicas + 1]
+    if args.spare_slot:
+        log("replica %d started in the proxy's spare slot" % new.index)
+        time.sleep(2.5)  # the slot's fail_timeout: nginx tries it again
+    else:
+        log("adding replica %d to the proxy (nginx -s reload)" % new.index)
+        proxy.write(live)
+        proxy.reload(nginx)
+        time.sleep(0.5)
+    after = probe_placement(bins["client"], proxy.target, live, probes)
+    run = {"affinity": affinity, "new": new, "probed": len(before)}
+    run["moved"] = sum(1 for cam in probes if cam in before and after.get(cam) != before[cam])
+    run["to_new"] = sum(1 for cam in probes if after.get(cam) == new.index)
+    run["rcs"] = [s.wait(timeout=duration + 120) for s in streams]
+    run["resumes"] = collections.Counter()
+    for r in live:
+        run["resumes"].update(r.resumes())
+    run["cams_on_new"] = sorted(c for c in cams if new.camera_frames().get(c, 0) > 0)
+    return run
+
+
+def stop_cluster(replicas, proxy):
+    for r in replicas:
+        if r.proc is not None and r.proc.poll() is None:
+            r.proc.terminate()
+    if proxy.proc is not None:
+        proxy.proc.terminate()
+    for r in replicas:
+        if r.proc is not None:
+            try:
+                r.proc.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                r.proc.kill()
+
+
+def check_frames(args, out, rcs, failures):
+    """Exactly once, in order: (lost, duplicated) frames."""
     lost = dup = 0
     for c in range(args.cameras):
         path = os.path.join(out, "stream-%d.jsonl" % c)
@@ -435,10 +441,12 @@ def main():
             dup += len(ids) - len(set(ids))
             failures.append("camera %d: frames not answered exactly once in order "
                             "(%d answers)" % (c, len(ids)))
+    return lost, dup
 
-    # Lane ids across the reconnections.
-    carried = extra_switches = extra_reused = reconnects = 0
-    rows = []
+
+def check_ids(out, drives, failures):
+    """Lane ids across the reconnections, against the one-process reference."""
+    ids = {"carried": 0, "extra_switches": 0, "extra_reused": 0, "rows": []}
     for c, d in enumerate(drives):
         path = os.path.join(out, "stream-%d.jsonl" % c)
         if not os.path.exists(path):
@@ -447,46 +455,84 @@ def main():
         _, ref_switches, ref_reused = id_story(d, os.path.join(out, "reference-%d.jsonl" % c))
         at_reconnect = reconnect_frames(path)
         n = sum(len(frames[i - 1]) for i in at_reconnect if i - 1 < len(frames))
-        reconnects += len(at_reconnect)
-        carried += n
-        extra_switches += max(0, switches - ref_switches)
-        extra_reused += max(0, reused - ref_reused)
-        rows.append((c, len(at_reconnect), n, switches, ref_switches, reused, ref_reused))
-    kept = 1.0 - extra_switches / carried if carried else 1.0
+        ids["carried"] += n
+        ids["extra_switches"] += max(0, switches - ref_switches)
+        ids["extra_reused"] += max(0, reused - ref_reused)
+        ids["rows"].append((c, len(at_reconnect), n, switches, ref_switches, reused, ref_reused))
+    carried = ids["carried"]
+    ids["kept"] = kept = 1.0 - ids["extra_switches"] / carried if carried else 1.0
     if carried == 0:
         failures.append("no boundary was carried across a reconnection: nothing was tested")
     if kept < 0.95:
         failures.append("only %.1f %% of the boundaries kept their id across reconnections"
                         % (100 * kept))
-    if extra_reused > 0:
+    if ids["extra_reused"] > 0:
         failures.append("%d lane ids were given to a second boundary more often than in the "
-                        "reference" % extra_reused)
-    moved_share = moved / max(1, len(before))
-    if moved_share > 0.40:
-        failures.append("adding a replica moved %.0f %% of the probe cameras" % (100 * moved_share))
+                        "reference" % ids["extra_reused"])
+    return ids
 
+
+def report(args, run, lost, dup, ids, moved_share, started, failures):
     print("# proxy-cluster: %d replicas + 1 added, nginx (consistent hash of x-camera-id), "
           "%d cameras x %d frames at %g/s, --max_connection_age %gs"
           % (args.replicas, args.cameras, args.frames, args.fps, args.max_age))
-    print("affinity before the faults: %s" % affinity)
+    print("affinity before the faults: %s" % run["affinity"])
     print("frames: %d lost, %d duplicated" % (lost, dup))
     print("| camera | reconnections | boundaries carried | id switches | reference | ids reused "
           "| reference |")
     print("|---|---:|---:|---:|---:|---:|---:|")
-    for row in rows:
+    for row in ids["rows"]:
         print("| cam-%d | %d | %d | %d | %d | %d | %d |" % row)
     print("boundaries that kept their id across reconnections: %.1f %% (%d carried, %d extra "
-          "switches)" % (100 * kept, carried, extra_switches))
+          "switches)" % (100 * ids["kept"], ids["carried"], ids["extra_switches"]))
+    resumes = run["resumes"]
     print("resumes on the replicas: %s" % dict(resumes))
     if resumes.get("states"):
         print("resume state: %.0f bytes on average over %d states"
               % (resumes["state_bytes"] / resumes["states"], resumes["states"]))
     print("adding replica %d: %d of %d probe cameras moved (%.0f %%, %d now on it); streaming "
           "cameras on it by the end: %s"
-          % (new.index, moved, len(before), 100 * moved_share, to_new, cams_on_new))
+          % (run["new"].index, run["moved"], run["probed"], 100 * moved_share, run["to_new"],
+             run["cams_on_new"]))
     print("time: %.0f s" % (time.monotonic() - started))
     for f in failures:
         print("FAILED: " + f)
+
+
+def main():
+    args = parse_args()
+    bins = binaries()
+    nginx = os.environ.get("NGINX", "/usr/sbin/nginx")
+    if not os.access(nginx, os.X_OK):
+        log("nginx is missing (apt-get install nginx; scripts/install-deps.sh)")
+        return 2
+    out = args.out_abs = os.path.abspath(args.out)
+    os.makedirs(out, exist_ok=True)
+    n_total = args.replicas + 1
+    ports = free_ports(2 * n_total + 1)
+    replicas = [Replica(i, bins["server"], ports[2 * i], ports[2 * i + 1], out, args)
+                for i in range(n_total)]
+    proxy = Proxy(out, ports[-1])
+    started = time.monotonic()
+    failures = []
+
+    log("rendering %d drives of %d frames" % (args.cameras, args.frames))
+    drives = render(bins["lane"], out, args.cameras, args.frames)
+    log("reference: each drive tracked in one process (lane detect --track)")
+    track_references(bins["lane"], out, drives)
+    try:
+        if not start_cluster(args, bins, nginx, replicas, proxy):
+            return 1
+        run = stream_through_faults(args, bins, nginx, replicas, proxy, drives, failures)
+    finally:
+        stop_cluster(replicas, proxy)
+
+    lost, dup = check_frames(args, out, run["rcs"], failures)
+    ids = check_ids(out, drives, failures)
+    moved_share = run["moved"] / max(1, run["probed"])
+    if moved_share > 0.40:
+        failures.append("adding a replica moved %.0f %% of the probe cameras" % (100 * moved_share))
+    report(args, run, lost, dup, ids, moved_share, started, failures)
     return 1 if failures else 0
 
 

@@ -162,6 +162,61 @@ uint64_t LivePictureBytes(int width, int height, const lane::Detector& detector)
   return 3 * frame + 3 * top + frame + top;
 }
 
+namespace {
+
+// The session camera's horizon (dashed) and vanishing point on the frame.
+void DrawHorizonAndVanishingPoint(cv::Mat& canvas, const lane::CameraModel& camera) {
+  const double horizon = camera.HorizonRow();
+  if (std::isfinite(horizon) && horizon >= 0 && horizon < canvas.rows) {
+    const int y = static_cast<int>(std::lround(horizon));
+    for (int x = 0; x < canvas.cols; x += 14) {
+      cv::line(canvas, {x, y}, {std::min(x + 7, canvas.cols - 1), y}, cv::Scalar(220, 220, 220), 1);
+    }
+    DrawTag(canvas, "horizon", {4, y - 4}, cv::Scalar(220, 220, 220));
+  }
+  const Eigen::Vector2d vp = camera.VanishingPoint();
+  if (Drawable(vp)) {
+    const cv::Point c(static_cast<int>(std::lround(vp.x())), static_cast<int>(std::lround(vp.y())));
+    const cv::Scalar yellow(0, 230, 255);
+    cv::circle(canvas, c, 6, yellow, 1, cv::LINE_AA);
+    cv::line(canvas, c - cv::Point(10, 0), c + cv::Point(10, 0), yellow, 1, cv::LINE_AA);
+    cv::line(canvas, c - cv::Point(0, 10), c + cv::Point(0, 10), yellow, 1, cv::LINE_AA);
+  }
+}
+
+// The detector's top view of the frame, stretched and enlarged, with the
+// lanes (ego lane shaded between `ego_left` and `ego_right`, -1: none); an
+// empty picture when there is none.
+cv::Mat DrawLiveTopView(const LiveFrame& frame, const lane::Detector& detector,
+                        const std::vector<lane::Lane>& lanes, const std::vector<int>& slots,
+                        int ego_left, int ego_right) {
+  const cv::Mat view = detector.ipm().Apply(detector.ExtractChannel(DetectorInput(frame)));
+  if (view.empty()) return cv::Mat();
+  cv::Mat stretched;
+  cv::normalize(view, stretched, 0, 255, cv::NORM_MINMAX, CV_8U);
+  const int s = TopViewScale(detector);
+  cv::Mat big;
+  cv::resize(stretched, big, cv::Size(), s, s, cv::INTER_NEAREST);
+  cv::Mat top;
+  cv::cvtColor(big, top, cv::COLOR_GRAY2BGR);
+  // IPM pixel (col, row) covers [s*col, s*(col+1)) of the canvas.
+  const auto to_top = [s](const Eigen::Vector2d& p) {
+    return Eigen::Vector2d((p.x() + 0.5) * s - 0.5, (p.y() + 0.5) * s - 0.5);
+  };
+  if (ego_left >= 0 && ego_right >= 0) {
+    ShadeBetween(top, CurvePoints(lanes[size_t(ego_left)].ipm, to_top),
+                 CurvePoints(lanes[size_t(ego_right)].ipm, to_top), cv::Scalar(80, 200, 80), 0.25);
+  }
+  for (size_t i = 0; i < lanes.size(); ++i) {
+    const lane::Lane& lane = lanes[i];
+    DrawCurve(top, CurvePoints(lane.ipm, to_top), LiveSlotColour(slots[i]), 2,
+              lane.predicted || lane.inferred);
+  }
+  return top;
+}
+
+}  // namespace
+
 LiveDrawing DrawLiveSample(const LiveSample& sample, const lane::Detector& detector) {
   LiveDrawing out;
   const LiveFrame& frame = sample.frame;
@@ -187,23 +242,7 @@ LiveDrawing DrawLiveSample(const LiveSample& sample, const lane::Detector& detec
                  CurvePoints(lanes[size_t(ego_right)].image, identity), cv::Scalar(80, 200, 80),
                  0.25);
   }
-  // Horizon and vanishing point of the session's camera.
-  const double horizon = camera.HorizonRow();
-  if (std::isfinite(horizon) && horizon >= 0 && horizon < canvas.rows) {
-    const int y = static_cast<int>(std::lround(horizon));
-    for (int x = 0; x < canvas.cols; x += 14) {
-      cv::line(canvas, {x, y}, {std::min(x + 7, canvas.cols - 1), y}, cv::Scalar(220, 220, 220), 1);
-    }
-    DrawTag(canvas, "horizon", {4, y - 4}, cv::Scalar(220, 220, 220));
-  }
-  const Eigen::Vector2d vp = camera.VanishingPoint();
-  if (Drawable(vp)) {
-    const cv::Point c(static_cast<int>(std::lround(vp.x())), static_cast<int>(std::lround(vp.y())));
-    const cv::Scalar yellow(0, 230, 255);
-    cv::circle(canvas, c, 6, yellow, 1, cv::LINE_AA);
-    cv::line(canvas, c - cv::Point(10, 0), c + cv::Point(10, 0), yellow, 1, cv::LINE_AA);
-    cv::line(canvas, c - cv::Point(0, 10), c + cv::Point(0, 10), yellow, 1, cv::LINE_AA);
-  }
+  DrawHorizonAndVanishingPoint(canvas, camera);
   for (size_t i = 0; i < lanes.size(); ++i) {
     const lane::Lane& lane = lanes[i];
     const cv::Scalar colour = LiveSlotColour(slots[i]);
@@ -226,28 +265,8 @@ LiveDrawing DrawLiveSample(const LiveSample& sample, const lane::Detector& detec
           {4, canvas.rows - 4}, cv::Scalar(255, 255, 255));
 
   // The top view.
-  if (frame.rows.empty()) return out;
-  const cv::Mat view = detector.ipm().Apply(detector.ExtractChannel(DetectorInput(frame)));
-  if (view.empty()) return out;
-  cv::Mat stretched;
-  cv::normalize(view, stretched, 0, 255, cv::NORM_MINMAX, CV_8U);
-  const int s = TopViewScale(detector);
-  cv::Mat big;
-  cv::resize(stretched, big, cv::Size(), s, s, cv::INTER_NEAREST);
-  cv::cvtColor(big, out.top, cv::COLOR_GRAY2BGR);
-  // IPM pixel (col, row) covers [s*col, s*(col+1)) of the canvas.
-  const auto to_top = [s](const Eigen::Vector2d& p) {
-    return Eigen::Vector2d((p.x() + 0.5) * s - 0.5, (p.y() + 0.5) * s - 0.5);
-  };
-  if (ego_left >= 0 && ego_right >= 0) {
-    ShadeBetween(out.top, CurvePoints(lanes[size_t(ego_left)].ipm, to_top),
-                 CurvePoints(lanes[size_t(ego_right)].ipm, to_top), cv::Scalar(80, 200, 80), 0.25);
-  }
-  for (size_t i = 0; i < lanes.size(); ++i) {
-    const lane::Lane& lane = lanes[i];
-    DrawCurve(out.top, CurvePoints(lane.ipm, to_top), LiveSlotColour(slots[i]), 2,
-              lane.predicted || lane.inferred);
-  }
+  if (!frame.rows.empty())
+    out.top = DrawLiveTopView(frame, detector, lanes, slots, ego_left, ego_right);
   return out;
 }
 

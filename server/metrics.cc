@@ -7,56 +7,52 @@ prometheus::Histogram::BucketBoundaries Metrics::LatencyBuckets() {
           10e-3, 25e-3,  50e-3,  100e-3, 250e-3, 500e-3, 1.0};
 }
 
+namespace {
+
+// The one unlabelled series of a new family.
+prometheus::Histogram& NewMetricsHistogram(prometheus::Registry& registry, const char* name,
+                                           const char* help,
+                                           const prometheus::Histogram::BucketBoundaries& buckets) {
+  return prometheus::BuildHistogram().Name(name).Help(help).Register(registry).Add({}, buckets);
+}
+prometheus::Counter& NewMetricsCounter(prometheus::Registry& registry, const char* name,
+                                       const char* help) {
+  return prometheus::BuildCounter().Name(name).Help(help).Register(registry).Add({});
+}
+prometheus::Gauge& NewMetricsGauge(prometheus::Registry& registry, const char* name,
+                                   const char* help) {
+  return prometheus::BuildGauge().Name(name).Help(help).Register(registry).Add({});
+}
+
+}  // namespace
+
 Metrics::Metrics(prometheus::Registry& registry, const BuildInfo& build, size_t camera_labels)
-    : frame_latency_(prometheus::BuildHistogram()
-                         .Name("lanesvc_frame_latency_seconds")
-                         .Help("Time from receiving a frame to its response being ready.")
-                         .Register(registry)
-                         .Add({}, LatencyBuckets())),
-      queue_wait_(prometheus::BuildHistogram()
-                      .Name("lanesvc_queue_wait_seconds")
-                      .Help("Time a received frame waits for a worker.")
-                      .Register(registry)
-                      .Add({}, LatencyBuckets())),
-      received_(prometheus::BuildCounter()
-                    .Name("lanesvc_frames_received_total")
-                    .Help("Frames received (each is answered once, or the stream fails).")
-                    .Register(registry)
-                    .Add({})),
-      inflight_(prometheus::BuildGauge()
-                    .Name("lanesvc_inflight_frames")
-                    .Help("Frames received and not yet answered.")
-                    .Register(registry)
-                    .Add({})),
-      sessions_(prometheus::BuildGauge()
-                    .Name("lanesvc_sessions_active")
-                    .Help("Camera sessions held by the server.")
-                    .Register(registry)
-                    .Add({})),
+    : frame_latency_(NewMetricsHistogram(registry, "lanesvc_frame_latency_seconds",
+                                         "Time from receiving a frame to its response being ready.",
+                                         LatencyBuckets())),
+      queue_wait_(NewMetricsHistogram(registry, "lanesvc_queue_wait_seconds",
+                                      "Time a received frame waits for a worker.",
+                                      LatencyBuckets())),
+      received_(NewMetricsCounter(registry, "lanesvc_frames_received_total",
+                                  "Frames received (each is answered once, or the stream fails).")),
+      inflight_(NewMetricsGauge(registry, "lanesvc_inflight_frames",
+                                "Frames received and not yet answered.")),
+      sessions_(NewMetricsGauge(registry, "lanesvc_sessions_active",
+                                "Camera sessions held by the server.")),
       frame_bytes_(
-          prometheus::BuildHistogram()
-              .Name("lanesvc_frame_bytes")
-              .Help("Size of each frame request processed, bytes (encoded or raw).")
-              .Register(registry)
-              .Add({}, prometheus::Histogram::BucketBoundaries{16e3, 64e3, 128e3, 256e3, 512e3, 1e6,
-                                                               2e6, 4e6, 8e6, 16e6, 32e6})),
-      lanes_per_frame_(
-          prometheus::BuildHistogram()
-              .Name("lanesvc_lanes_per_frame")
-              .Help("Lanes found in each frame detected without error.")
-              .Register(registry)
-              .Add({}, prometheus::Histogram::BucketBoundaries{0, 1, 2, 3, 4, 5, 6, 8, 10})),
-      zero_lane_frames_(prometheus::BuildCounter()
-                            .Name("lanesvc_zero_lane_frames_total")
-                            .Help("Frames detected without error in which no lane was found.")
-                            .Register(registry)
-                            .Add({})),
-      resume_state_bytes_(prometheus::BuildHistogram()
-                              .Name("lanesvc_resume_state_bytes")
-                              .Help("Size of each tracker resume state sent in a response, bytes.")
-                              .Register(registry)
-                              .Add({}, prometheus::Histogram::BucketBoundaries{64, 128, 256, 512,
-                                                                               1024, 2048, 4096})),
+          NewMetricsHistogram(registry, "lanesvc_frame_bytes",
+                              "Size of each frame request processed, bytes (encoded or raw).",
+                              {16e3, 64e3, 128e3, 256e3, 512e3, 1e6, 2e6, 4e6, 8e6, 16e6, 32e6})),
+      lanes_per_frame_(NewMetricsHistogram(registry, "lanesvc_lanes_per_frame",
+                                           "Lanes found in each frame detected without error.",
+                                           {0, 1, 2, 3, 4, 5, 6, 8, 10})),
+      zero_lane_frames_(
+          NewMetricsCounter(registry, "lanesvc_zero_lane_frames_total",
+                            "Frames detected without error in which no lane was found.")),
+      resume_state_bytes_(
+          NewMetricsHistogram(registry, "lanesvc_resume_state_bytes",
+                              "Size of each tracker resume state sent in a response, bytes.",
+                              {64, 128, 256, 512, 1024, 2048, 4096})),
       grpc_(registry),
       camera_labels_(camera_labels) {
   if (camera_labels_ > 0) {
@@ -73,6 +69,20 @@ Metrics::Metrics(prometheus::Registry& registry, const BuildInfo& build, size_t 
                                   "camera (as lanesvc_camera_frames_total).")
                               .Register(registry);
   }
+  RegisterLabelledFamilies(registry);
+  prometheus::BuildGauge()
+      .Name("lanesvc_build_info")
+      .Help("Always 1; the labels describe the build.")
+      .Register(registry)
+      .Add({{"version", build.version},
+            {"git_revision", build.git_revision},
+            {"build_type", build.build_type},
+            {"grpc_version", build.grpc_version},
+            {"opencv_version", build.opencv_version}})
+      .Set(1);
+}
+
+void Metrics::RegisterLabelledFamilies(prometheus::Registry& registry) {
   auto& resumes = prometheus::BuildCounter()
                       .Name("lanesvc_stream_resumes_total")
                       .Help(
@@ -108,16 +118,6 @@ Metrics::Metrics(prometheus::Registry& registry, const BuildInfo& build, size_t 
   for (wire::FrameResult r : wire::kAllFrameResults) {
     frames_[static_cast<int>(r)] = &frames.Add({{"result", wire::FrameResultLabel(r)}});
   }
-  prometheus::BuildGauge()
-      .Name("lanesvc_build_info")
-      .Help("Always 1; the labels describe the build.")
-      .Register(registry)
-      .Add({{"version", build.version},
-            {"git_revision", build.git_revision},
-            {"build_type", build.build_type},
-            {"grpc_version", build.grpc_version},
-            {"opencv_version", build.opencv_version}})
-      .Set(1);
 }
 
 void Metrics::ObserveDetectorStages(const lane::StageTimings& t) {

@@ -99,6 +99,9 @@ class Metrics {
   void CountResume(Resume outcome) { resumes_[static_cast<int>(outcome)]->Increment(); }
 
  private:
+  // The families with labels (resumes, lane paths, stages, frames by result).
+  void RegisterLabelledFamilies(prometheus::Registry& registry);
+
   prometheus::Histogram& frame_latency_;
   prometheus::Histogram& queue_wait_;
   prometheus::Histogram* decode_stage_ = nullptr;

@@ -63,6 +63,69 @@ TEST(HttpEndpointTest, HealthAndReadinessFollowTheServer) {
   EXPECT_EQ(HealthStatus(server.channel()), 2);  // gRPC health agrees
 }
 
+// The go-grpc-prometheus families after one stream of `frames` frames and
+// one GetSession of an unknown camera, labels sorted by name.
+void ExpectGoGrpcFamilies(const std::string& text, int frames) {
+  const std::string stream =
+      "{grpc_method=\"StreamFrames\",grpc_service=\"lane.v1.LaneService\","
+      "grpc_type=\"bidi_stream\"}";
+  EXPECT_EQ(SampleValue(text, "grpc_server_started_total" + stream), 1) << text;
+  EXPECT_EQ(SampleValue(text, "grpc_server_msg_received_total" + stream), frames);
+  EXPECT_EQ(SampleValue(text, "grpc_server_msg_sent_total" + stream), frames);
+  EXPECT_EQ(SampleValue(text, "grpc_server_handling_seconds_count" + stream), 1);
+  EXPECT_EQ(SampleValue(text,
+                        "grpc_server_handled_total{grpc_code=\"OK\",grpc_method=\"StreamFrames\","
+                        "grpc_service=\"lane.v1.LaneService\",grpc_type=\"bidi_stream\"}"),
+            1);
+  EXPECT_EQ(SampleValue(text,
+                        "grpc_server_handled_total{grpc_code=\"NOT_FOUND\",grpc_method="
+                        "\"GetSession\",grpc_service=\"lane.v1.LaneService\",grpc_type=\"unary\"}"),
+            1);
+  // The lane service's calls only: health checks are not counted.
+  EXPECT_EQ(text.find("grpc.health.v1.Health"), std::string::npos);
+  EXPECT_EQ(SampleValue(text,
+                        "grpc_server_msg_received_total{grpc_method=\"GetSession\","
+                        "grpc_service=\"lane.v1.LaneService\",grpc_type=\"unary\"}"),
+            1);
+  EXPECT_EQ(SampleValue(text,
+                        "grpc_server_msg_sent_total{grpc_method=\"GetSession\","
+                        "grpc_service=\"lane.v1.LaneService\",grpc_type=\"unary\"}"),
+            0);
+}
+
+void ExpectProcessFamilies(const std::string& text) {
+  EXPECT_GT(SampleValue(text, "process_resident_memory_bytes "), 1e6);
+  EXPECT_GT(SampleValue(text, "process_virtual_memory_bytes "), 1e6);
+  EXPECT_GT(SampleValue(text, "process_cpu_seconds_total "), 0);
+  EXPECT_GE(SampleValue(text, "process_open_fds "), 3);
+  EXPECT_GT(SampleValue(text, "process_max_fds "), 0);
+  const double started = SampleValue(text, "process_start_time_seconds ");
+  const double now = static_cast<double>(std::time(nullptr));
+  EXPECT_LE(started, now + 1);
+  EXPECT_GT(started, now - 24 * 3600);
+}
+
+// `promtool check metrics` on a scrape: its exit status and what it said.
+struct PromtoolVerdict {
+  bool passed = false;
+  std::string output;
+};
+PromtoolVerdict RunPromtool(const char* promtool, const std::string& text, int port) {
+  const std::filesystem::path file =
+      std::filesystem::temp_directory_path() / ("lane-metrics-" + std::to_string(port) + ".txt");
+  std::ofstream(file) << text;
+  const std::string command = std::string(promtool) + " check metrics < " + file.string() + " 2>&1";
+  PromtoolVerdict verdict;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return verdict;
+  char buffer[512];
+  while (fgets(buffer, sizeof(buffer), pipe) != nullptr) verdict.output += buffer;
+  const int status = pclose(pipe);
+  std::filesystem::remove(file);
+  verdict.passed = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  return verdict;
+}
+
 TEST(HttpEndpointTest, MetricsHaveTheStandardFamilies) {
   TestServer server(WithMetrics());
   ASSERT_FALSE(HasFailure());
@@ -92,44 +155,8 @@ TEST(HttpEndpointTest, MetricsHaveTheStandardFamilies) {
   ASSERT_EQ(scrape.status, 200);
   EXPECT_NE(scrape.headers.find("text/plain; version=0.0.4"), std::string::npos);
   const std::string& text = scrape.body;
-
-  // go-grpc-prometheus families, labels sorted by name.
-  const std::string stream =
-      "{grpc_method=\"StreamFrames\",grpc_service=\"lane.v1.LaneService\","
-      "grpc_type=\"bidi_stream\"}";
-  EXPECT_EQ(SampleValue(text, "grpc_server_started_total" + stream), 1) << text;
-  EXPECT_EQ(SampleValue(text, "grpc_server_msg_received_total" + stream), kFrames);
-  EXPECT_EQ(SampleValue(text, "grpc_server_msg_sent_total" + stream), kFrames);
-  EXPECT_EQ(SampleValue(text, "grpc_server_handling_seconds_count" + stream), 1);
-  EXPECT_EQ(SampleValue(text,
-                        "grpc_server_handled_total{grpc_code=\"OK\",grpc_method=\"StreamFrames\","
-                        "grpc_service=\"lane.v1.LaneService\",grpc_type=\"bidi_stream\"}"),
-            1);
-  EXPECT_EQ(SampleValue(text,
-                        "grpc_server_handled_total{grpc_code=\"NOT_FOUND\",grpc_method="
-                        "\"GetSession\",grpc_service=\"lane.v1.LaneService\",grpc_type=\"unary\"}"),
-            1);
-  // The lane service's calls only: health checks are not counted.
-  EXPECT_EQ(text.find("grpc.health.v1.Health"), std::string::npos);
-  EXPECT_EQ(SampleValue(text,
-                        "grpc_server_msg_received_total{grpc_method=\"GetSession\","
-                        "grpc_service=\"lane.v1.LaneService\",grpc_type=\"unary\"}"),
-            1);
-  EXPECT_EQ(SampleValue(text,
-                        "grpc_server_msg_sent_total{grpc_method=\"GetSession\","
-                        "grpc_service=\"lane.v1.LaneService\",grpc_type=\"unary\"}"),
-            0);
-
-  // Process metrics.
-  EXPECT_GT(SampleValue(text, "process_resident_memory_bytes "), 1e6);
-  EXPECT_GT(SampleValue(text, "process_virtual_memory_bytes "), 1e6);
-  EXPECT_GT(SampleValue(text, "process_cpu_seconds_total "), 0);
-  EXPECT_GE(SampleValue(text, "process_open_fds "), 3);
-  EXPECT_GT(SampleValue(text, "process_max_fds "), 0);
-  const double started = SampleValue(text, "process_start_time_seconds ");
-  const double now = static_cast<double>(std::time(nullptr));
-  EXPECT_LE(started, now + 1);
-  EXPECT_GT(started, now - 24 * 3600);
+  ExpectGoGrpcFamilies(text, kFrames);
+  ExpectProcessFamilies(text);
 
   // Domain signals.
   EXPECT_EQ(SampleValue(text, "lanesvc_lanes_per_frame_count "), kFrames);
@@ -148,19 +175,8 @@ TEST(HttpEndpointTest, MetricsHaveTheStandardFamilies) {
   if (!std::filesystem::exists(kPromtool)) {
     GTEST_SKIP() << kPromtool << " is not installed (Debian package prometheus)";
   }
-  const std::filesystem::path file =
-      std::filesystem::temp_directory_path() / ("lane-metrics-" + std::to_string(port) + ".txt");
-  std::ofstream(file) << text;
-  const std::string command =
-      std::string(kPromtool) + " check metrics < " + file.string() + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  ASSERT_NE(pipe, nullptr);
-  std::string output;
-  char buffer[512];
-  while (fgets(buffer, sizeof(buffer), pipe) != nullptr) output += buffer;
-  const int status = pclose(pipe);
-  std::filesystem::remove(file);
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "promtool:\n" << output;
+  const PromtoolVerdict verdict = RunPromtool(kPromtool, text, port);
+  EXPECT_TRUE(verdict.passed) << "promtool:\n" << verdict.output;
 }
 
 TEST(HttpEndpointTest, PerCameraSeriesWhenAskedFor) {
