@@ -144,6 +144,7 @@ class LiveView {
   bool Authorized(const HttpRequest& request) const;
   std::string SealCookie(int64_t expiry_unix_s) const;
   bool CookieValid(const std::string& cookie_header) const;
+  // The JSON of the pages' scripts (live_view_json.cc).
   using Json = nlohmann::ordered_json;
   Json SummaryJson(const Session& session, int64_t now_ns) const;
   Json SessionsJson() const;

@@ -15,7 +15,8 @@
 // two processes running the same shard at once share its work and never
 // tear an output. A recording whose output checks is skipped, so a killed
 // shard resumes where it stopped; one whose output does not check is redone.
-// OUT/summary-shard-I-of-N.json says what was done.
+// OUT/summary-shard-I-of-N.json says what was done. One recording's work:
+// tools/backfill_recording.h.
 #include <malloc.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -43,6 +44,7 @@
 #include "absl/synchronization/mutex.h"
 #include "backfill_manifest.h"
 #include "backfill_output.h"
+#include "backfill_recording.h"
 #include "cli/input_file.h"
 #include "cli/inputs.h"
 #include "cli/results_json.h"
@@ -93,15 +95,6 @@ constexpr char kBackfillFooter[] =
     "there and whole, 1 when one is missing or torn, 2 for a bad command line or\n"
     "manifest.";
 
-// Frames in flight per recording, and the tracker's prior lag: frame i is
-// detected with the tracker's state after frame i - kWindow (the lanes do not
-// depend on the threads' timing, nor on --jobs up to kWindow).
-constexpr int kWindow = 8;
-
-// A camera's config file: refused over 1 MiB before it is read (a config is
-// a few KiB; lane::ParseConfig bounds its size and depth again).
-constexpr int64_t kMaxBackfillConfigBytes = int64_t{1} << 20;
-
 struct BackfillFlags {
   std::string manifest;
   std::string output_dir;
@@ -111,349 +104,8 @@ struct BackfillFlags {
   bool verify = false;
   int64_t max_image_bytes = kDefaultMaxImageBytes;
 };
-
-// A fixed set of threads running tasks in submission order.
-class Workers {
- public:
-  explicit Workers(int n) {
-    for (int i = 0; i < n; ++i) threads_.emplace_back([this] { Loop(); });
-  }
-  ~Workers() {
-    {
-      absl::MutexLock lock(&mu_);
-      done_ = true;
-    }
-    for (std::thread& t : threads_) t.join();
-  }
-  // `task` must not throw (RecordingRun's catch everything themselves).
-  void Submit(std::function<void()> task) {
-    absl::MutexLock lock(&mu_);
-    tasks_.push_back(std::move(task));
-  }
-
- private:
-  bool HasWorkOrDone() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) { return done_ || !tasks_.empty(); }
-  void Loop() {
-    for (;;) {
-      std::function<void()> task;
-      {
-        absl::MutexLock lock(&mu_);
-        mu_.Await(absl::Condition(this, &Workers::HasWorkOrDone));
-        if (tasks_.empty()) return;
-        task = std::move(tasks_.front());
-        tasks_.pop_front();
-      }
-      task();
-    }
-  }
-  absl::Mutex mu_;
-  std::deque<std::function<void()>> tasks_ ABSL_GUARDED_BY(mu_);
-  bool done_ ABSL_GUARDED_BY(mu_) = false;
-  std::vector<std::thread> threads_;
-};
-
-// One frame on its way: read (and decoded) on a worker or by the video
-// reader, detected on a worker, then tracked and written in order. `frame`
-// and `detection` belong to the worker until Finish and to the committer
-// after Wait.
-struct Slot {
-  InputFrame frame;
-  absl::StatusOr<lane::Detection> detection = lane::Detection();
-
-  void Finish() {
-    absl::MutexLock lock(&mu);
-    ready = true;
-  }
-  void Wait() {
-    absl::MutexLock lock(&mu);
-    mu.Await(absl::Condition(&ready));
-  }
-
- private:
-  absl::Mutex mu;
-  bool ready ABSL_GUARDED_BY(mu) = false;
-};
-
-struct RecordingResult {
-  std::string status;  // done, redone, skipped, failed; claimed_elsewhere (deferred)
-  std::string error;
-  std::string redo_reason;         // redone: what was wrong with the output found
-  bool claimed_elsewhere = false;  // another process held it first; waited for
-  int removed_partials = 0;        // dead processes' partial files removed
-  long frames = 0;
-  long failed_frames = 0;
-  long lanes = 0;
-  double wall_s = 0;
-};
-
-class RecordingRun {
- public:
-  RecordingRun(const lane::Config& config, const lane::Detector& detector, Workers& workers,
-               PartialOutput& out, int64_t max_image_bytes)
-      : config_(config),
-        detector_(detector),
-        tracker_(config.camera),
-        workers_(workers),
-        out_(out) {
-    read_options_.max_image_bytes = max_image_bytes;
-  }
-
-  // Every frame of `entries`, in order. Nothing throws out of it: an
-  // exception while reading is that frame's error, and every frame in
-  // flight is committed before it returns (the workers use this object).
-  void Run(const std::vector<InputEntry>& entries) {
-    for (const InputEntry& entry : entries) {
-      try {
-        RunEntry(entry);
-      } catch (const std::exception& e) {
-        SubmitError(entry.name, absl::StrCat("error reading ", entry.path, ": ", e.what()));
-      } catch (...) {
-        SubmitError(entry.name, absl::StrCat("error reading ", entry.path));
-      }
-    }
-    while (!window_.empty()) CommitOldest();
-  }
-
-  long frames() const { return frames_; }
-  long failed() const { return failed_; }
-  long lanes() const { return lanes_; }
-  // The first failed frame's name and error, or "".
-  const std::string& first_error() const { return first_error_; }
-
- private:
-  void RunEntry(const InputEntry& entry) {
-    if (entry.kind == InputEntry::kVideo) {
-      // A video decodes in order, here; its frames are detected on the workers.
-      FrameReader reader({entry.path}, read_options_);
-      auto slot = std::make_shared<Slot>();
-      while (reader.Next(&slot->frame)) {
-        slot->frame.name = VideoFrameName(entry.name, video_index_++);
-        Submit(slot, /*decode=*/nullptr);
-        slot = std::make_shared<Slot>();
-      }
-      video_index_ = 0;
-      return;
-    }
-    if (entry.kind == InputEntry::kError) {
-      SubmitError(entry.name, entry.error);
-      return;
-    }
-    // An image: read and decoded on a worker (only the detector's rows and
-    // channel, as lane detect does).
-    auto slot = std::make_shared<Slot>();
-    slot->frame.name = entry.name;
-    const std::string path = entry.path;
-    const std::string name = entry.name;
-    Submit(slot, [this, path, name](InputFrame* frame) {
-      FrameReader reader({path}, read_options_);
-      reader.DecodeOnly(detector_.Needs(), config_.camera.image_width, config_.camera.image_height);
-      if (!reader.Next(frame)) frame->error = "no frame";
-      frame->name = name;
-    });
-  }
-
-  void SubmitError(const std::string& name, const std::string& error) {
-    auto slot = std::make_shared<Slot>();
-    slot->frame.name = name;
-    slot->frame.error = error;
-    Submit(slot, nullptr);
-  }
-
-  // Frame i's prior is taken after frame i - kWindow is committed: the
-  // window is full, the oldest is committed first.
-  void Submit(const std::shared_ptr<Slot>& slot, std::function<void(InputFrame*)> decode) {
-    if (static_cast<int>(window_.size()) >= kWindow) CommitOldest();
-    const lane::DetectionPrior prior = tracker_.Prior(detector_);
-    window_.push_back(slot);
-    workers_.Submit([this, slot, decode = std::move(decode), prior] {
-      // No exception leaves a worker: it is this frame's error, and the
-      // slot is finished whatever happens (the committer waits for it).
-      try {
-        if (decode) decode(&slot->frame);
-        Detect(*slot, prior);
-      } catch (const std::exception& e) {
-        slot->frame.bgr.release();
-        slot->frame.error = absl::StrCat("error: ", e.what());
-      } catch (...) {
-        slot->frame.bgr.release();
-        slot->frame.error = "error: an unknown exception";
-      }
-      slot->Finish();
-    });
-  }
-
-  void Detect(Slot& slot, const lane::DetectionPrior& prior) const {
-    InputFrame& f = slot.frame;
-    if (f.error.empty() &&
-        (f.bgr.cols != config_.camera.image_width || f.bgr.rows != config_.camera.image_height)) {
-      f.error = absl::StrCat("frame is ", f.bgr.cols, "x", f.bgr.rows, " but the camera expects ",
-                             config_.camera.image_width, "x", config_.camera.image_height,
-                             " (camera.image_width/image_height)");
-    }
-    if (!f.error.empty()) return;
-    try {
-      slot.detection = tracker_.Measure(detector_, f.bgr, prior);
-      if (!slot.detection.ok()) f.error = std::string(slot.detection.status().message());
-    } catch (const std::exception& e) {
-      f.error = absl::StrCat("detector error: ", e.what());
-    }
-  }
-
-  void CommitOldest() {
-    std::shared_ptr<Slot> slot = window_.front();
-    window_.pop_front();
-    slot->Wait();
-    ++frames_;
-    const InputFrame& f = slot->frame;
-    const lane::Mode mode = detector_.options().mode;
-    const int width = config_.camera.image_width, height = config_.camera.image_height;
-    if (!f.error.empty()) {
-      ++failed_;
-      if (first_error_.empty()) first_error_ = absl::StrCat(f.name, ": ", f.error);
-      out_.WriteLine(ErrorJsonLine(f.name, width, height, mode, f.error));
-      return;
-    }
-    tracker_.Commit(detector_, *slot->detection, std::nullopt);
-    lanes_ += static_cast<long>(slot->detection->lanes.size());
-    out_.WriteLine(
-        DetectionJsonLine(f.name, width, height, mode, *slot->detection, f.decode_ms, true));
-  }
-
-  const lane::Config& config_;
-  const lane::Detector& detector_;
-  lane::FrameTracker tracker_;
-  Workers& workers_;
-  PartialOutput& out_;
-  ReadOptions read_options_;
-  std::deque<std::shared_ptr<Slot>> window_;
-  int video_index_ = 0;
-  long frames_ = 0, failed_ = 0, lanes_ = 0;
-  std::string first_error_;
-};
-
-// What a shard's recordings share.
-struct BackfillContext {
-  std::string out_dir;
-  Workers* workers = nullptr;
-  int64_t max_image_bytes = kDefaultMaxImageBytes;
-  // Partial outputs found in out_dir at the start, by output name; removed
-  // once the output's claim is held.
-  std::map<std::string, std::vector<std::string>> partials;
-};
-
-// The recording's path, before anything reads it: a folder, or a regular
-// file (a video or a list, or one image), on a real file system; never a
-// live source, a FIFO, a socket, a device or a /proc file.
-absl::Status CheckRecordingPath(const std::string& path) {
-  if (const std::optional<LiveSource> live = ClassifyLiveSource(path)) {
-    return absl::FailedPreconditionError(
-        absl::StrCat(path, ": a live source (", live->kind, ") is not a recording"));
-  }
-  struct stat st;
-  if (::stat(path.c_str(), &st) != 0) {
-    return absl::NotFoundError(absl::StrCat(path, ": ", std::strerror(errno)));
-  }
-  if (S_ISDIR(st.st_mode)) return CheckDirectory(path);
-  return OpenRegularFile(path).status();
-}
-
-// A recording's camera config, read within bounds (cli/input_file.h).
-absl::StatusOr<lane::Config> LoadRecordingConfig(const std::string& path) {
-  absl::StatusOr<std::string> text = ReadRegularFile(path, kMaxBackfillConfigBytes);
-  if (!text.ok()) {
-    return absl::Status(text.status().code(),
-                        absl::StrCat("cannot read config ", text.status().message()));
-  }
-  absl::StatusOr<lane::Config> config = lane::ParseConfig(*text);
-  if (!config.ok()) {
-    return absl::Status(config.status().code(),
-                        absl::StrCat(path, ": ", config.status().message()));
-  }
-  return config;
-}
-
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
-// One recording: skipped when its output checks; claimed, else left to the
-// process that holds it (status claimed_elsewhere; with `wait`, waited for);
-// computed into a partial file of this process's own; published only where
-// no output exists (a torn one is removed first, under the claim).
-RecordingResult ProcessRecording(const BackfillRecording& r, BackfillContext& ctx, bool wait) {
-  RecordingResult result;
-  const auto start = Clock::now();
-  const auto fail = [&result, &start](absl::string_view error) {
-    result.status = "failed";
-    result.error = std::string(error);
-    result.wall_s = SecondsSince(start);
-    return result;
-  };
-  const std::string final_path = (fs::path(ctx.out_dir) / (r.output + ".jsonl")).string();
-  if (CheckBackfillOutput(final_path).state == OutputCheck::kOk) {
-    result.status = "skipped";
-    return result;
-  }
-  absl::StatusOr<std::optional<OutputClaim>> claim =
-      OutputClaim::Acquire(ctx.out_dir, r.output, wait);
-  if (!claim.ok()) return fail(claim.status().message());
-  if (!claim->has_value()) {
-    result.status = "claimed_elsewhere";
-    return result;
-  }
-  // Claimed: any partial file of this output is a dead process's.
-  if (auto found = ctx.partials.find(r.output);
-      found != ctx.partials.end() && (*claim)->exclusive()) {
-    for (const std::string& stale : found->second) {
-      if (::unlink(stale.c_str()) == 0) ++result.removed_partials;
-    }
-    ctx.partials.erase(found);
-  }
-  // Published while we waited for the claim (or checked before it)?
-  const OutputCheck found = CheckBackfillOutput(final_path);
-  if (found.state == OutputCheck::kOk) {
-    result.status = "skipped";
-    return result;
-  }
-  const bool redo = found.state == OutputCheck::kTorn;
-  if (redo) result.redo_reason = found.reason;
-
-  if (absl::Status s = CheckRecordingPath(r.recording); !s.ok()) return fail(s.message());
-  absl::StatusOr<lane::Config> config = LoadRecordingConfig(r.config);
-  if (!config.ok()) return fail(config.status().message());
-  absl::StatusOr<lane::Detector> detector =
-      lane::Detector::Create(config->camera, config->ipm, config->detector);
-  if (!detector.ok()) return fail(detector.status().message());
-  const std::vector<InputEntry> entries = ExpandInputs({r.recording});
-  absl::StatusOr<std::unique_ptr<PartialOutput>> out = PartialOutput::Create(ctx.out_dir, r.output);
-  if (!out.ok()) return fail(out.status().message());
-  RecordingRun run(*config, *detector, *ctx.workers, **out, ctx.max_image_bytes);
-  run.Run(entries);
-  result.frames = run.frames();
-  result.failed_frames = run.failed();
-  result.lanes = run.lanes();
-  if (result.frames == 0) return fail("the recording has no frames");  // a re-run tries again
-  if (result.failed_frames == result.frames) {
-    return fail(
-        absl::StrCat("all ", result.frames, " frames failed; the first: ", run.first_error()));
-  }
-  if (absl::Status s = (*out)->Finish(result.failed_frames, VersionString()); !s.ok()) {
-    return fail(s.message());
-  }
-  if (redo && ::unlink(final_path.c_str()) != 0 && errno != ENOENT) {
-    return fail(absl::StrCat("cannot remove the torn ", final_path, ": ", std::strerror(errno)));
-  }
-  if (absl::Status s = (*out)->Publish(); !s.ok()) {
-    // Only a process that does not claim outputs can have put one there.
-    if (absl::IsAlreadyExists(s) && CheckBackfillOutput(final_path).state == OutputCheck::kOk) {
-      result.status = "skipped";
-      return result;
-    }
-    return fail(s.message());
-  }
-  result.status = redo ? "redone" : "done";
-  result.wall_s = SecondsSince(start);
-  return result;
 }
 
 // --verify: every output of the manifest (or of the shard's share) present
@@ -508,7 +160,7 @@ std::vector<RecordingResult> RunShare(const std::vector<BackfillRecording>& mine
                    res.claimed_elsewhere ? " (claimed by another process first)" : "");
     }
   };
-  Workers workers(jobs);
+  BackfillWorkers workers(jobs);
   BackfillContext ctx;
   ctx.out_dir = flags.output_dir;
   ctx.workers = &workers;
@@ -610,7 +262,7 @@ int RunBackfill(const CLI::App& app, const BackfillFlags& flags) {
   }
   const int jobs = std::clamp(
       flags.jobs > 0 ? flags.jobs : static_cast<int>(std::thread::hardware_concurrency()), 1,
-      kWindow);
+      kBackfillWindow);
   // Frames run in parallel, one per thread: OpenCV's own threads would only
   // compete with them (as in lane-server, --opencv_threads 1).
   cv::setNumThreads(1);

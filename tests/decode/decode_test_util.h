@@ -69,6 +69,16 @@ inline ::testing::AssertionResult Identical(const cv::Mat& actual, const cv::Mat
   return ::testing::AssertionSuccess();
 }
 
+// Decodes with DecodeImage and compares with cv::imdecode of the same bytes.
+inline ::testing::AssertionResult SameAsOpenCv(const std::string& bytes, int width, int height,
+                                               bool gray) {
+  absl::StatusOr<cv::Mat> ours = DecodeImage(bytes, For(width, height, gray));
+  if (!ours.ok()) return ::testing::AssertionFailure() << ours.status();
+  const cv::Mat theirs = CvDecode(bytes, gray);
+  if (theirs.empty()) return ::testing::AssertionFailure() << "cv::imdecode failed";
+  return Identical(*ours, theirs);
+}
+
 inline void ExpectShortMessage(const absl::Status& status) {
   EXPECT_LT(status.message().size(), 200u) << status;
 }
