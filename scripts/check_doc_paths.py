@@ -324,36 +324,23 @@ def comments(path, text):
     if path.endswith((".py", ".sh")):  # whole-line comments only
         return "\n".join(l if l.lstrip().startswith("#") and not l.startswith("#!") else ""
                          for l in text.split("\n"))
-    i, n = 0, len(text)
-    keep = []
-    while i < n:
-        c = text[i]
-        if text.startswith("//", i):
-            j = text.find("\n", i)
-            j = n if j < 0 else j
-            keep.append(text[i:j])
-            i = j
-        elif text.startswith("/*", i):
-            j = text.find("*/", i + 2)
-            j = n if j < 0 else j + 2
-            keep.append(text[i:j])
-            i = j
-        elif text.startswith('R"', i) and re.match(r'R"([^(\s]*)\(', text[i:]):
-            delim = re.match(r'R"([^(\s]*)\(', text[i:]).group(1)
-            j = text.find(")" + delim + '"', i)
-            j = n if j < 0 else j + len(delim) + 2
-            keep.append(re.sub(r"[^\n]", " ", text[i:j]))
-            i = j
-        elif c in "\"'" and not (c == "'" and i > 0 and text[i - 1].isalnum()):
-            j = i + 1
-            while j < n and text[j] != c and text[j] != "\n":
-                j += 2 if text[j] == "\\" else 1
-            keep.append(" " * (min(j, n) + 1 - i))
-            i = j + 1
-        else:
-            keep.append("\n" if c == "\n" else " ")
-            i += 1
+    keep, last = [], 0
+    for m in CXX_TOKENS.finditer(text):
+        keep.append(BLANK.sub(" ", text[last:m.start()]))
+        token = m.group(0)
+        keep.append(token if token.startswith("/") else BLANK.sub(" ", token))
+        last = m.end()
+    keep.append(BLANK.sub(" ", text[last:]))
     return "".join(keep)
+
+
+# Comments (kept) and the literals that may hold comment-like text (blanked).
+CXX_TOKENS = re.compile(
+    r"""//[^\n]*|/\*.*?(?:\*/|\Z)"""
+    r"""|(?<![\w])(?:u8|u|U|L)?R"([^(\s"]{0,16})\(.*?(?:\)\1"|\Z)"""
+    r"""|"(?:\\.|[^"\\\n])*"?|(?<![0-9A-Za-z_])'(?:\\.|[^'\\\n])*'?""",
+    re.S)
+BLANK = re.compile(r"[^\n]")
 
 
 def main():

@@ -47,58 +47,23 @@ def source_files():
                   and os.path.isfile(os.path.join(ROOT, f)))
 
 
+# What blank_cxx replaces: preprocessor lines (with their continuations),
+# comments, raw strings, string literals and character literals (a ' after a
+# digit or letter is a digit separator, 1'000, and is left alone).
+BLANKED = re.compile(
+    r"""^[ \t]*\#(?:[^\n]*\\\n)*[^\n]*"""
+    r"""|//[^\n]*"""
+    r"""|/\*.*?(?:\*/|\Z)"""
+    r"""|(?<![\w])(?:u8|u|U|L)?R"([^(\s"]{0,16})\(.*?(?:\)\1"|\Z)"""
+    r"""|"(?:\\.|[^"\\\n])*"?"""
+    r"""|(?<![0-9A-Za-z_])'(?:\\.|[^'\\\n])*'?""",
+    re.M | re.S)
+
+
 def blank_cxx(text):
     """TEXT with comments, string and character literals and preprocessor
     lines replaced by spaces; newlines kept, so offsets map to lines."""
-    out, i, n = [], 0, len(text)
-    line_start = True
-    while i < n:
-        c = text[i]
-        if line_start and c == "#" or (line_start and c in " \t" and
-                                       text[i:].lstrip(" \t").startswith("#")):
-            j = i
-            while True:  # the directive and its continuation lines
-                k = text.find("\n", j)
-                k = n if k < 0 else k
-                if k > 0 and text[k - 1] == "\\" and k < n:
-                    j = k + 1
-                    continue
-                break
-            out.append(re.sub(r"[^\n]", " ", text[i:k]))
-            i = k
-            continue
-        if text.startswith("//", i):
-            k = text.find("\n", i)
-            k = n if k < 0 else k
-            out.append(" " * (k - i))
-            i = k
-            continue
-        if text.startswith("/*", i):
-            k = text.find("*/", i + 2)
-            k = n if k < 0 else k + 2
-            out.append(re.sub(r"[^\n]", " ", text[i:k]))
-            i = k
-            continue
-        m = re.match(r'(?:u8|u|U|L)?R"([^(\s]{0,16})\(', text[i:i + 24])
-        if m and (i == 0 or not (text[i - 1].isalnum() or text[i - 1] == "_")):
-            k = text.find(")" + m.group(1) + '"', i + m.end())
-            k = n if k < 0 else k + len(m.group(1)) + 2
-            out.append(re.sub(r"[^\n]", " ", text[i:k]))
-            i = k
-            continue
-        # A quote; a ' after a digit or letter is a digit separator (1'000).
-        if c == '"' or (c == "'" and not (i > 0 and (text[i - 1].isalnum()))):
-            k = i + 1
-            while k < n and text[k] != c and text[k] != "\n":
-                k += 2 if text[k] == "\\" else 1
-            k = min(k + 1, n)
-            out.append(re.sub(r"[^\n]", " ", text[i:k]))
-            i = k
-            continue
-        out.append(c)
-        line_start = c == "\n" or (line_start and c in " \t")
-        i += 1
-    return "".join(out)
+    return BLANKED.sub(lambda m: re.sub(r"[^\n]", " ", m.group(0)), text)
 
 
 def top_level(text):
@@ -193,7 +158,8 @@ def cxx_functions(text):
     stack = []
     header_start = 0
     paren = 0
-    for pos, c in enumerate(code):
+    for m in re.finditer(r"[{}()\[\];]", code):
+        pos, c = m.start(), m.group(0)
         in_scope = not stack or stack[-1][0] == "scope"
         if c in "([":
             paren += 1
