@@ -179,6 +179,28 @@ TEST(GroundViewRuleTest, CameraOnlyConfigGetsTheRulesView) {
       << up.status();
 }
 
+TEST(GroundViewRuleTest, RoadOutlineOfStillShapes) {
+  // Random frames; still: a hood rising from row 200 at the sides to row
+  // 160 at the centre, and the left 48 columns from top to bottom (outside a
+  // lens's image circle), which show no road at all.
+  RoadRowFinder finder;
+  for (int i = 0; i < 12; ++i) {
+    cv::Mat frame(240, 320, CV_8UC1);
+    cv::randu(frame, 0, 255);
+    for (int u = 0; u < 320; ++u) {
+      const double t = (u - 160.0) / 160.0;
+      frame.col(u).rowRange(static_cast<int>(160 + 40 * t * t), 240).setTo(cv::Scalar(40));
+    }
+    frame.colRange(0, 48).setTo(cv::Scalar(0));
+    finder.Add(frame);
+  }
+  const RoadOutline o = finder.Outline();
+  ASSERT_EQ(o.first_row_below.size(), 320u);
+  EXPECT_EQ(o.first_row_below[10], 0);
+  EXPECT_NEAR(o.first_row_below[160], 160, RoadRowFinder::kScale);
+  EXPECT_NEAR(o.first_row_below[280], 160 + 40 * 0.75 * 0.75, 2 * RoadRowFinder::kScale);
+}
+
 // Rendered frames of the hood camera (the hood is the same in every frame).
 std::vector<SyntheticFrame> RenderHoodFrames(const SyntheticOptions& o, int n, uint64_t seed) {
   std::vector<SyntheticFrame> frames;

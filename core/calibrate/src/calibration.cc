@@ -102,7 +102,7 @@ RoadOutline RoadRowFinder::Outline() const {
   const int bands = std::max(1, cols / kBandColumns);
   // Per band, the still rows at its bottom, as RoadBottomRow finds them for
   // the whole image: the band's spread per row is the median over its columns.
-  std::vector<double> band_bottom(static_cast<size_t>(bands), height_);
+  std::vector<double> band_bottom(static_cast<size_t>(bands));
   std::vector<double> s;
   for (int b = 0; b < bands; ++b) {
     const int c0 = b * cols / bands, c1 = (b + 1) * cols / bands;
@@ -112,11 +112,14 @@ RoadOutline RoadRowFinder::Outline() const {
       for (int c = c0; c < c1; ++c) s.push_back(std::sqrt(m[c] / (frames_ - 1)));
       return UpperMedian(s);
     };
+    // No moving rows at all: the band shows no road (outside a lens's
+    // image circle, a mount).
+    band_bottom[static_cast<size_t>(b)] = 0;
     bool previous = band_spread(rows - 1) >= 0.5 * level;
     for (int r = rows - 2; r >= 0; --r) {
       const bool moving = band_spread(r) >= 0.5 * level;
       if (moving && previous) {
-        if (r + 1 < rows - 1) band_bottom[static_cast<size_t>(b)] = (r + 2) * kScale;
+        band_bottom[static_cast<size_t>(b)] = r + 1 < rows - 1 ? (r + 2) * kScale : height_;
         break;
       }
       previous = moving;
