@@ -36,7 +36,11 @@ constexpr char kCalibrateDescription[] =
     "The camera height sets the metric scale. The focal length is --focal-px,\n"
     "or assumed (0.61 x the image width, a 79 degree field of view): at a\n"
     "given vanishing point it only scales distances along the road.\n"
-    "INPUT is read twice (image files, directories, list files or videos).";
+    "INPUT is read twice (image files, directories, list files or videos).\n"
+    "\n"
+    "A known mounting (--pitch-deg and --yaw-deg, from the vehicle's drawings)\n"
+    "needs no vanishing point: INPUT is read once for the hood's outline, then\n"
+    "for the self-check.";
 
 struct CalibrateFlags {
   double height_m = 0;
