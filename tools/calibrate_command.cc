@@ -135,25 +135,42 @@ void DrawOverlay(const BestFrame& best, const lane::CalibrationResult& r, const 
   cv::imwrite(path, img);
 }
 
+// The config's header for a known mounting (--pitch-deg, --yaw-deg).
+std::string MountedConfigHeader(const lane::CalibrationResult& r,
+                                const lane::LaneGeometryReport& check,
+                                const CalibrateFlags& flags) {
+  std::string h = "// Written by lane calibrate (docs/calibration.md).\n";
+  absl::StrAppendFormat(&h,
+                        "// Camera mounting given: pitch %.3f deg, yaw %.3f deg, height %.3f m, "
+                        "focal length %.1f px (%s); no vanishing point estimated.\n",
+                        r.camera.pitch_deg, r.camera.yaw_deg, r.camera.height_m, r.camera.fu,
+                        r.focal_assumed ? "assumed: 0.61 x image width" : "given");
+  absl::StrAppendFormat(&h,
+                        "// %d frames read, %d stationary; the road's rows end at rows %.0f..%.0f "
+                        "(per column); lane width for the top view %.2f m.\n",
+                        r.frames, r.frames_stationary, r.outline.Top(r.camera.image_height),
+                        r.outline.Bottom(r.camera.image_height), flags.lane_width_m);
+  absl::StrAppendFormat(&h,
+                        "// Self-check passed: lane pairs in %d of %d used frames, heading %.2f "
+                        "deg, divergence %.2f deg, width %.2f m.\n",
+                        check.frames_with_pair, check.frames, check.heading_deg,
+                        check.divergence_deg, check.width_m);
+  return h;
+}
+
 std::string ConfigHeader(const lane::CalibrationResult& r, const lane::LaneGeometryReport& check,
                          const CalibrateFlags& flags) {
+  if (r.mounting_given) return MountedConfigHeader(r, check, flags);
   const lane::CombinedVanishingPoint& vp = r.vanishing_point;
   std::string h = "// Written by lane calibrate (docs/calibration.md).\n";
-  if (r.mounting_given) {
-    absl::StrAppendFormat(&h,
-                          "// Camera mounting given: pitch %.3f deg, yaw %.3f deg (no vanishing "
-                          "point estimated); %d frames read, %d stationary.\n",
-                          r.camera.pitch_deg, r.camera.yaw_deg, r.frames, r.frames_stationary);
-  } else {
-    absl::StrAppendFormat(
-        &h,
-        "// Vanishing point (%.1f, %.1f) px +- (%.1f, %.1f) (95 %% interval, bootstrap over the "
-        "frames), from %d of %d frames\n// (%d curved, %d without markings, %d meeting "
-        "elsewhere, %d stationary, %d outliers) and %d marking segments.\n",
-        vp.point.x(), vp.point.y(), r.interval_px.x(), r.interval_px.y(), vp.frames_used, r.frames,
-        r.frames_curved, r.frames_no_markings, r.frames_elsewhere, r.frames_stationary,
-        vp.frames_rejected, r.segments);
-  }
+  absl::StrAppendFormat(
+      &h,
+      "// Vanishing point (%.1f, %.1f) px +- (%.1f, %.1f) (95 %% interval, bootstrap over the "
+      "frames), from %d of %d frames\n// (%d curved, %d without markings, %d meeting "
+      "elsewhere, %d stationary, %d outliers) and %d marking segments.\n",
+      vp.point.x(), vp.point.y(), r.interval_px.x(), r.interval_px.y(), vp.frames_used, r.frames,
+      r.frames_curved, r.frames_no_markings, r.frames_elsewhere, r.frames_stationary,
+      vp.frames_rejected, r.segments);
   absl::StrAppendFormat(&h, "// Camera height %.3f m (given); focal length %.1f px (%s).\n",
                         r.camera.height_m, r.camera.fu,
                         r.focal_assumed ? "assumed: 0.61 x image width; only the along-road "
@@ -249,30 +266,9 @@ constexpr char kRefusalAdvice[] =
     "sides; --focal-px if the focal length is known (0.61 x image width is assumed); "
     "--road-bottom-row if the hood shows in the frames; --overlay to see what voted";
 
-// Prints the estimate's summary on stdout.
-void PrintCalibration(const lane::CalibrationResult& r, const lane::LaneGeometryReport& check,
-                      const CalibrateFlags& flags) {
-  const lane::CombinedVanishingPoint& vp = r.vanishing_point;
-  if (r.mounting_given) {
-    std::printf("pitch, yaw        %.3f, %.3f deg (given: no vanishing point estimated)\n",
-                r.camera.pitch_deg, r.camera.yaw_deg);
-    std::printf("frames            %d read, %d used, %d stationary\n", r.frames, vp.frames_used,
-                r.frames_stationary);
-  } else {
-    std::printf(
-        "vanishing point   (%.1f, %.1f) px, 95 %% interval +-(%.1f, %.1f) px (bootstrap over %d "
-        "frames), spread (%.1f, %.1f) px\n",
-        vp.point.x(), vp.point.y(), r.interval_px.x(), r.interval_px.y(),
-        vp.frames_used + vp.frames_rejected, vp.spread.x(), vp.spread.y());
-    std::printf(
-        "frames            %d read, %d used, %d curved, %d without markings, %d meeting "
-        "elsewhere, %d stationary, %d outliers\n",
-        r.frames, vp.frames_used, r.frames_curved, r.frames_no_markings, r.frames_elsewhere,
-        r.frames_stationary, vp.frames_rejected);
-    std::printf("segments          %d supporting\n", r.segments);
-    std::printf("pitch, yaw        %.3f +- %.3f, %.3f +- %.3f deg (95 %% interval)\n",
-                r.camera.pitch_deg, r.pitch_interval_deg, r.camera.yaw_deg, r.yaw_interval_deg);
-  }
+// The summary's lines after the estimate itself (both kinds of estimate).
+void PrintCameraAndView(const lane::CalibrationResult& r, const lane::LaneGeometryReport& check,
+                        const CalibrateFlags& flags) {
   std::printf("focal length      %.1f px (%s)\n", r.camera.fu,
               r.focal_assumed ? "assumed: 0.61 x image width, give --focal-px if known" : "given");
   std::printf("principal point   (%.1f, %.1f) px%s\n", r.camera.cu, r.camera.cv,
@@ -287,6 +283,34 @@ void PrintCalibration(const lane::CalibrationResult& r, const lane::LaneGeometry
               r.view.y_min_m, r.view.y_max_m);
   PrintSelfCheck(check);
   std::printf("config            %s\n", flags.output.c_str());
+}
+
+// Prints the estimate's summary on stdout.
+void PrintCalibration(const lane::CalibrationResult& r, const lane::LaneGeometryReport& check,
+                      const CalibrateFlags& flags) {
+  const lane::CombinedVanishingPoint& vp = r.vanishing_point;
+  if (r.mounting_given) {
+    std::printf("pitch, yaw        %.3f, %.3f deg (given: no vanishing point estimated)\n",
+                r.camera.pitch_deg, r.camera.yaw_deg);
+    std::printf("frames            %d read, %d used, %d stationary\n", r.frames, vp.frames_used,
+                r.frames_stationary);
+    PrintCameraAndView(r, check, flags);
+    return;
+  }
+  std::printf(
+      "vanishing point   (%.1f, %.1f) px, 95 %% interval +-(%.1f, %.1f) px (bootstrap over %d "
+      "frames), spread (%.1f, %.1f) px\n",
+      vp.point.x(), vp.point.y(), r.interval_px.x(), r.interval_px.y(),
+      vp.frames_used + vp.frames_rejected, vp.spread.x(), vp.spread.y());
+  std::printf(
+      "frames            %d read, %d used, %d curved, %d without markings, %d meeting "
+      "elsewhere, %d stationary, %d outliers\n",
+      r.frames, vp.frames_used, r.frames_curved, r.frames_no_markings, r.frames_elsewhere,
+      r.frames_stationary, vp.frames_rejected);
+  std::printf("segments          %d supporting\n", r.segments);
+  std::printf("pitch, yaw        %.3f +- %.3f, %.3f +- %.3f deg (95 %% interval)\n",
+              r.camera.pitch_deg, r.pitch_interval_deg, r.camera.yaw_deg, r.yaw_interval_deg);
+  PrintCameraAndView(r, check, flags);
 }
 
 // A known mounting (--pitch-deg, --yaw-deg): one read for the road's

@@ -9,7 +9,7 @@
 namespace lane {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kNeverM = std::numeric_limits<double>::infinity();
 // Distances are searched from here (metres ahead of the camera's foot
 // point) to kFarthestM, in steps of kStepRatio, then refined by bisection.
 constexpr double kNearestM = 0.5;
@@ -19,15 +19,21 @@ constexpr int kBisections = 24;
 // Lateral spacing of the boundaries tried within the reach, metres.
 constexpr double kLateralStepM = 0.25;
 
-// The ground point (x, y) lies in front of the camera (its image is the
-// projection, not the mirror image of a point behind): the homogeneous
+// Whether a ground point (x, y) lies in front of the camera (its image is
+// the projection, not the mirror image of a point behind): the homogeneous
 // coordinate of CameraModel::GroundToImage is positive.
-bool InFront(const CameraModel& camera, double x, double y) {
-  const double pitch = camera.pitch_deg * kDegToRad, yaw = camera.yaw_deg * kDegToRad;
-  return std::cos(pitch) * (std::sin(yaw) * x + std::cos(yaw) * y) +
-             std::sin(pitch) * camera.height_m >
-         1e-6;
-}
+class InFront {
+ public:
+  explicit InFront(const CameraModel& camera)
+      : c1_(std::cos(camera.pitch_deg * kDegToRad)),
+        s1h_(std::sin(camera.pitch_deg * kDegToRad) * camera.height_m),
+        c2_(std::cos(camera.yaw_deg * kDegToRad)),
+        s2_(std::sin(camera.yaw_deg * kDegToRad)) {}
+  bool operator()(double x, double y) const { return c1_ * (s2_ * x + c2_ * y) + s1h_ > 1e-6; }
+
+ private:
+  double c1_, s1h_, c2_, s2_;
+};
 
 // The first y in [lo, hi] where `pred` holds, when it does not at lo but
 // does at hi (bisection to kBisections steps).
@@ -45,10 +51,13 @@ double FirstTrue(double lo, double hi, const Pred& pred) {
 class RoadVisibility {
  public:
   RoadVisibility(const CameraModel& camera, const RoadOutline& outline, double margin_px)
-      : camera_(camera), outline_(outline), top_row_(camera.HorizonRow() + margin_px) {}
+      : camera_(camera),
+        in_front_(camera),
+        outline_(outline),
+        top_row_(camera.HorizonRow() + margin_px) {}
 
   bool OnRoad(double x, double y) const {
-    if (!InFront(camera_, x, y)) return false;
+    if (!in_front_(x, y)) return false;
     const Eigen::Vector2d p = camera_.GroundToImage({x, y});
     if (!p.allFinite() || !(p.y() >= top_row_)) return false;
     if (p.x() < 0 || p.x() > camera_.image_width - 1.0) return false;
@@ -65,11 +74,12 @@ class RoadVisibility {
       if (OnRoad(x, y)) return FirstTrue(previous, y, [&](double t) { return OnRoad(x, t); });
       previous = y;
     }
-    return kInf;
+    return kNeverM;
   }
 
  private:
   const CameraModel& camera_;
+  InFront in_front_;
   const RoadOutline& outline_;
   double top_row_;
 };
@@ -77,8 +87,9 @@ class RoadVisibility {
 // The distance at which the ground point (x, y) rises to image row `row`
 // (towards the horizon), or kFarthestM.
 double DistanceAtRow(const CameraModel& camera, double x, double row) {
+  const InFront in_front(camera);
   auto above = [&](double y) {
-    if (!InFront(camera, x, y)) return false;
+    if (!in_front(x, y)) return false;
     const Eigen::Vector2d p = camera.GroundToImage({x, y});
     return !p.allFinite() || p.y() < row;
   };
@@ -90,8 +101,9 @@ double DistanceAtRow(const CameraModel& camera, double x, double row) {
 // The distance at which a marking of `width_m` straight ahead (x = 0)
 // narrows to `min_px` image columns, or kFarthestM.
 double DistanceAtMarkingWidth(const CameraModel& camera, double width_m, double min_px) {
+  const InFront in_front(camera);
   auto narrow = [&](double y) {
-    if (!InFront(camera, -0.5 * width_m, y) || !InFront(camera, 0.5 * width_m, y)) return false;
+    if (!in_front(-0.5 * width_m, y) || !in_front(0.5 * width_m, y)) return false;
     const double u0 = camera.GroundToImage({-0.5 * width_m, y}).x();
     const double u1 = camera.GroundToImage({0.5 * width_m, y}).x();
     return !(std::abs(u1 - u0) >= min_px);
@@ -178,7 +190,7 @@ absl::StatusOr<DerivedGroundView> DeriveGroundView(const CameraModel& camera,
   // The far limit: where the view's far corners rise to the horizon's
   // margin, or a marking narrows below the resolution.
   const double margin_row = camera.HorizonRow() + rule.horizon_margin_px;
-  double horizon_limit = kInf;
+  double horizon_limit = kNeverM;
   for (const double x : {g.x_min_m, 0.0, g.x_max_m}) {
     horizon_limit = std::min(horizon_limit, DistanceAtRow(camera, x, margin_row));
   }
@@ -189,7 +201,7 @@ absl::StatusOr<DerivedGroundView> DeriveGroundView(const CameraModel& camera,
   const RoadVisibility visibility(camera, outline, rule.horizon_margin_px);
   const double reach = rule.reach_lanes * rule.lane_width_m;
   const int steps = std::max(2, static_cast<int>(std::ceil(2.0 * reach / kLateralStepM)));
-  d.nearest_road_m = kInf;
+  d.nearest_road_m = kNeverM;
   d.last_entry_m = 0;
   bool unseen = false;
   for (int i = 0; i <= steps; ++i) {
