@@ -19,6 +19,7 @@
 #include "cli/inputs.h"
 #include "commands.h"
 #include "lane/calibrate/calibration.h"
+#include "lane/calibrate/mounted_camera.h"
 #include "lane/config/config.h"
 #include "lane/detector.h"
 
@@ -35,7 +36,11 @@ constexpr char kCalibrateDescription[] =
     "The camera height sets the metric scale. The focal length is --focal-px,\n"
     "or assumed (0.61 x the image width, a 79 degree field of view): at a\n"
     "given vanishing point it only scales distances along the road.\n"
-    "INPUT is read twice (image files, directories, list files or videos).";
+    "INPUT is read twice (image files, directories, list files or videos).\n"
+    "\n"
+    "A known mounting (--pitch-deg and --yaw-deg, from the vehicle's drawings)\n"
+    "needs no vanishing point: INPUT is read once for the hood's outline, then\n"
+    "for the self-check.";
 
 struct CalibrateFlags {
   double height_m = 0;
@@ -43,6 +48,8 @@ struct CalibrateFlags {
   std::optional<std::string> principal_point;
   double lane_width_m = 3.5;
   std::optional<int> road_bottom_row;
+  // A known mounting: no vanishing point (lane/calibrate/mounted_camera.h).
+  std::optional<double> pitch_deg, yaw_deg;
   std::optional<std::string> template_config;
   std::string output;
   std::optional<std::string> overlay;
@@ -79,8 +86,13 @@ void DrawOverlay(const BestFrame& best, const lane::CalibrationResult& r, const 
   const double horizon = r.camera.HorizonRow();
   cv::line(img, {0, static_cast<int>(std::lround(horizon))},
            {img.cols - 1, static_cast<int>(std::lround(horizon))}, {255, 255, 0}, 1, cv::LINE_AA);
-  if (r.road_bottom_row < img.rows) {
-    cv::line(img, {0, r.road_bottom_row}, {img.cols - 1, r.road_bottom_row}, {0, 0, 255}, 1);
+  // The road's outline (the hood), where it lies above the image's bottom.
+  for (int u = 0; u + 1 < img.cols; ++u) {
+    const double a = r.outline.FirstRowBelow(u, img.rows),
+                 b = r.outline.FirstRowBelow(u + 1, img.rows);
+    if (a < img.rows || b < img.rows) {
+      cv::line(img, {u, static_cast<int>(a)}, {u + 1, static_cast<int>(b)}, {0, 0, 255}, 1);
+    }
   }
   const Eigen::Vector2d vp = r.vanishing_point.point;
   std::vector<bool> support(best.segments.size(), false);
@@ -123,8 +135,32 @@ void DrawOverlay(const BestFrame& best, const lane::CalibrationResult& r, const 
   cv::imwrite(path, img);
 }
 
+// The config's header for a known mounting (--pitch-deg, --yaw-deg).
+std::string MountedConfigHeader(const lane::CalibrationResult& r,
+                                const lane::LaneGeometryReport& check,
+                                const CalibrateFlags& flags) {
+  std::string h = "// Written by lane calibrate (docs/calibration.md).\n";
+  absl::StrAppendFormat(&h,
+                        "// Camera mounting given: pitch %.3f deg, yaw %.3f deg, height %.3f m, "
+                        "focal length %.1f px (%s); no vanishing point estimated.\n",
+                        r.camera.pitch_deg, r.camera.yaw_deg, r.camera.height_m, r.camera.fu,
+                        r.focal_assumed ? "assumed: 0.61 x image width" : "given");
+  absl::StrAppendFormat(&h,
+                        "// %d frames read, %d stationary; the road's rows end at rows %.0f..%.0f "
+                        "(per column); lane width for the top view %.2f m.\n",
+                        r.frames, r.frames_stationary, r.outline.Top(r.camera.image_height),
+                        r.outline.Bottom(r.camera.image_height), flags.lane_width_m);
+  absl::StrAppendFormat(&h,
+                        "// Self-check passed: lane pairs in %d of %d used frames, heading %.2f "
+                        "deg, divergence %.2f deg, width %.2f m.\n",
+                        check.frames_with_pair, check.frames, check.heading_deg,
+                        check.divergence_deg, check.width_m);
+  return h;
+}
+
 std::string ConfigHeader(const lane::CalibrationResult& r, const lane::LaneGeometryReport& check,
                          const CalibrateFlags& flags) {
+  if (r.mounting_given) return MountedConfigHeader(r, check, flags);
   const lane::CombinedVanishingPoint& vp = r.vanishing_point;
   std::string h = "// Written by lane calibrate (docs/calibration.md).\n";
   absl::StrAppendFormat(
@@ -140,8 +176,11 @@ std::string ConfigHeader(const lane::CalibrationResult& r, const lane::LaneGeome
                         r.focal_assumed ? "assumed: 0.61 x image width; only the along-road "
                                           "scale depends on it"
                                         : "given");
-  absl::StrAppendFormat(&h, "// Road rows end at row %d; lane width for the top view %.2f m.\n",
-                        r.road_bottom_row, flags.lane_width_m);
+  absl::StrAppendFormat(&h,
+                        "// Road rows end at row %d (per column: rows %.0f..%.0f); lane width for "
+                        "the top view %.2f m.\n",
+                        r.road_bottom_row, r.outline.Top(r.camera.image_height),
+                        r.outline.Bottom(r.camera.image_height), flags.lane_width_m);
   absl::StrAppendFormat(&h,
                         "// Self-check passed: lane pairs in %d of %d used frames, heading %.2f "
                         "deg, divergence %.2f deg, width %.2f m.\n",
@@ -227,10 +266,37 @@ constexpr char kRefusalAdvice[] =
     "sides; --focal-px if the focal length is known (0.61 x image width is assumed); "
     "--road-bottom-row if the hood shows in the frames; --overlay to see what voted";
 
+// The summary's lines after the estimate itself (both kinds of estimate).
+void PrintCameraAndView(const lane::CalibrationResult& r, const lane::LaneGeometryReport& check,
+                        const CalibrateFlags& flags) {
+  std::printf("focal length      %.1f px (%s)\n", r.camera.fu,
+              r.focal_assumed ? "assumed: 0.61 x image width, give --focal-px if known" : "given");
+  std::printf("principal point   (%.1f, %.1f) px%s\n", r.camera.cu, r.camera.cv,
+              flags.principal_point ? "" : " (image centre)");
+  std::printf("far ground point  (%.1f, %.1f) px (check: at the vanishing point)\n",
+              r.far_point.x(), r.far_point.y());
+  std::printf("road rows         end at row %d of %d%s; per column rows %.0f..%.0f\n",
+              r.road_bottom_row, r.camera.image_height,
+              r.road_bottom_row < r.camera.image_height ? " (still hood below)" : "",
+              r.outline.Top(r.camera.image_height), r.outline.Bottom(r.camera.image_height));
+  std::printf("top view          x %.2f..%.2f m, y %.2f..%.2f m\n", r.view.x_min_m, r.view.x_max_m,
+              r.view.y_min_m, r.view.y_max_m);
+  PrintSelfCheck(check);
+  std::printf("config            %s\n", flags.output.c_str());
+}
+
 // Prints the estimate's summary on stdout.
 void PrintCalibration(const lane::CalibrationResult& r, const lane::LaneGeometryReport& check,
                       const CalibrateFlags& flags) {
   const lane::CombinedVanishingPoint& vp = r.vanishing_point;
+  if (r.mounting_given) {
+    std::printf("pitch, yaw        %.3f, %.3f deg (given: no vanishing point estimated)\n",
+                r.camera.pitch_deg, r.camera.yaw_deg);
+    std::printf("frames            %d read, %d used, %d stationary\n", r.frames, vp.frames_used,
+                r.frames_stationary);
+    PrintCameraAndView(r, check, flags);
+    return;
+  }
   std::printf(
       "vanishing point   (%.1f, %.1f) px, 95 %% interval +-(%.1f, %.1f) px (bootstrap over %d "
       "frames), spread (%.1f, %.1f) px\n",
@@ -244,18 +310,42 @@ void PrintCalibration(const lane::CalibrationResult& r, const lane::LaneGeometry
   std::printf("segments          %d supporting\n", r.segments);
   std::printf("pitch, yaw        %.3f +- %.3f, %.3f +- %.3f deg (95 %% interval)\n",
               r.camera.pitch_deg, r.pitch_interval_deg, r.camera.yaw_deg, r.yaw_interval_deg);
-  std::printf("focal length      %.1f px (%s)\n", r.camera.fu,
-              r.focal_assumed ? "assumed: 0.61 x image width, give --focal-px if known" : "given");
-  std::printf("principal point   (%.1f, %.1f) px%s\n", r.camera.cu, r.camera.cv,
-              flags.principal_point ? "" : " (image centre)");
-  std::printf("far ground point  (%.1f, %.1f) px (check: at the vanishing point)\n",
-              r.far_point.x(), r.far_point.y());
-  std::printf("road rows         end at row %d of %d%s\n", r.road_bottom_row, r.camera.image_height,
-              r.road_bottom_row < r.camera.image_height ? " (still hood below)" : "");
-  std::printf("top view          x %.2f..%.2f m, y %.2f..%.2f m\n", r.view.x_min_m, r.view.x_max_m,
-              r.view.y_min_m, r.view.y_max_m);
-  PrintSelfCheck(check);
-  std::printf("config            %s\n", flags.output.c_str());
+  PrintCameraAndView(r, check, flags);
+}
+
+// A known mounting (--pitch-deg, --yaw-deg): one read for the road's
+// outline, the self-check, the config.
+int RunMounted(const CalibrateFlags& flags, const lane::CalibrationOptions& options,
+               const lane::Config& base) {
+  lane::MountedCameraSurvey survey(options, *flags.pitch_deg, *flags.yaw_deg);
+  int read_errors = 0;
+  BestFrame first;
+  if (!EachFrame(flags, read_errors, [&](const InputFrame& f) {
+        if (flags.overlay && first.bgr.empty()) first.bgr = f.bgr.clone();
+        return survey.AddFrame(f.bgr);
+      })) {
+    return kExitFailure;
+  }
+  const absl::StatusOr<lane::CalibrationResult> result = survey.Finish();
+  if (!result.ok()) return Failure("calibrate", std::string(result.status().message()));
+  const lane::CalibrationResult& r = *result;
+  if (flags.overlay && !first.bgr.empty()) DrawOverlay(first, r, *flags.overlay);
+  const absl::StatusOr<lane::LaneGeometryReport> check = SelfCheck(r, flags);
+  if (!check.ok()) return Failure("calibrate", std::string(check.status().message()));
+  if (!check->verdict.ok()) {
+    PrintSelfCheck(*check);
+    return Failure("calibrate",
+                   absl::StrFormat("the given mounting (pitch %.3f, yaw %.3f deg) failed its "
+                                   "self-check: %s; no config written. Check the mounting's "
+                                   "pitch, yaw, height and focal length; --overlay shows the "
+                                   "horizon and the top view",
+                                   r.camera.pitch_deg, r.camera.yaw_deg, check->verdict.message()));
+  }
+  if (absl::Status s = WriteCalibratedConfig(base, r, *check, flags); !s.ok()) {
+    return Failure("calibrate", std::string(s.message()));
+  }
+  PrintCalibration(r, *check, flags);
+  return read_errors > 0 ? kExitFailure : kExitOk;
 }
 
 int RunCalibrate(const CalibrateFlags& flags) {
@@ -273,6 +363,7 @@ int RunCalibrate(const CalibrateFlags& flags) {
   }
   absl::StatusOr<lane::Config> base = LoadEffectiveConfig(flags.template_config, {});
   if (!base.ok()) return Failure("calibrate", std::string(base.status().message()));
+  if (flags.pitch_deg) return RunMounted(flags, options, *base);
 
   lane::CameraCalibrator calibrator(options);
   int read_errors = 0;
@@ -354,6 +445,20 @@ Command AddCalibrateCommand(CLI::App& lane) {
   AddOptional(app, "--template", &flags->template_config,
               "config whose detector settings the output keeps (default: the built-in ones)")
       ->type_name("CONFIG");
+  CLI::Option* pitch =
+      AddOptional(app, "--pitch-deg", &flags->pitch_deg,
+                  "a known mounting: the camera's pitch, degrees (positive looking down; with "
+                  "--yaw-deg, and best --focal-px). No vanishing point is estimated: the frames "
+                  "give the hood's outline for the top view, and the self-check")
+          ->type_name("DEG")
+          ->check(CLI::Range(-89.0, 89.0));
+  CLI::Option* yaw = AddOptional(app, "--yaw-deg", &flags->yaw_deg,
+                                 "a known mounting: the camera's yaw, degrees (positive looking "
+                                 "right of the road; with --pitch-deg)")
+                         ->type_name("DEG")
+                         ->check(CLI::Range(-89.0, 89.0));
+  pitch->needs(yaw);
+  yaw->needs(pitch);
   app->add_option("--output,-o", flags->output, "the config to write")
       ->type_name("CONFIG.json")
       ->required();

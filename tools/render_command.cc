@@ -41,6 +41,9 @@ struct RenderFlags {
   bool straight = false;
   bool night = false;
   double double_lines = 0;
+  double hood_top_row = 0;
+  double hood_side_row = 0;
+  bool labels_through_hood = false;
   double fps = lane::SyntheticDriveOptions().fps;
   double speed_mps = lane::SyntheticDriveOptions().speed_mps;
 };
@@ -71,6 +74,9 @@ int RunRender(const RenderFlags& flags) {
   if (flags.clutter) lane::SetRoadsideClutter(&options);
   options.night = flags.night;
   options.double_line_probability = flags.double_lines;
+  options.hood_top_row = flags.hood_top_row;
+  options.hood_side_row = flags.hood_side_row;
+  options.labels_through_hood = flags.labels_through_hood;
   if (flags.straight) {
     options.straight_probability = 1.0;
     options.max_heading_rad = 0.005;
@@ -181,6 +187,24 @@ Command AddRenderCommand(CLI::App& lane) {
                 "straight roads only, nearly aligned with the car (independent frames): "
                 "calibration footage")
       ->excludes(sequence);
+  CLI::Option* hood =
+      app->add_option("--hood-top-row", flags->hood_top_row,
+                      "the car's hood: a dark, glossy, still region below a parabola through this "
+                      "row at the principal point's column and --hood-side-row at the image's "
+                      "edges. The labels stop at it (--labels-through-hood: they run on to the "
+                      "image's bottom, CULane's convention)")
+          ->type_name("V")
+          ->check(CLI::Range(1.0, 16384.0));
+  app->add_option("--hood-side-row", flags->hood_side_row,
+                  "--hood-top-row: the hood's edge at the image's left and right edges "
+                  "(default: the image's bottom)")
+      ->type_name("V")
+      ->check(CLI::Range(1.0, 16384.0))
+      ->needs(hood);
+  app->add_flag("--labels-through-hood", flags->labels_through_hood,
+                "--hood-top-row: label the lanes on through the hood to the image's bottom "
+                "(CULane's convention) instead of stopping at it")
+      ->needs(hood);
   app->add_option("--fps", flags->fps, "--sequence: frames per second")
       ->type_name("F")
       ->check(CLI::Range(1.0, 240.0));

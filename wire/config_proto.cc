@@ -8,6 +8,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "lane/config/config_fields.h"
+#include "lane/geometry/ground_view_rule.h"
 #include "wire/config_proto_internal.h"
 #include "wire/status_map.h"
 
@@ -150,6 +151,21 @@ absl::StatusOr<lane::Config> ConfigFromProto(const v1::SessionConfig& proto) {
     ProtoReader reader(proto, "");
     VisitFields(*config, reader);
     if (!reader.status().ok()) return reader.status();
+    // As in the config file: a camera and no ipm gets the view the camera
+    // needs (lane/geometry/ground_view_rule.h).
+    if (proto.has_camera() && !proto.has_ipm()) {
+      if (absl::Status s = config->camera.Validate(); !s.ok()) {
+        return InvalidRequest(absl::StrCat("session config: ", s.message()));
+      }
+      absl::StatusOr<lane::IpmOptions> ipm = lane::BuiltInIpm(config->camera);
+      if (!ipm.ok()) {
+        return InvalidRequest(absl::StrCat(
+            "session config: a camera and no ipm, and the built-in top view does not fit the "
+            "camera: ",
+            ipm.status().message()));
+      }
+      config->ipm = *std::move(ipm);
+    }
   }
   // The server never returns intermediate images.
   config->detector.keep_intermediates = false;

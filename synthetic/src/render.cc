@@ -438,6 +438,33 @@ void ApplyNight(const CameraModel& cam, const Night& night, cv::Mat& img) {
   f.convertTo(img, CV_8UC3);
 }
 
+void DrawHood(const CameraModel& cam, const SyntheticOptions& options, bool night, cv::Mat& img) {
+  if (!(options.hood_top_row > 0)) return;
+  const int w = img.cols, h = img.rows;
+  // Dark paint that mirrors the bright sky at grazing angles near its edge,
+  // with a soft highlight across it: smooth, and the same in every frame.
+  const double depth = std::max(1.0, h - options.hood_top_row);
+  const float dim = night ? 0.25f : 1.0f;
+  for (int u = 0; u < w; ++u) {
+    const double edge = HoodRow(cam, options, u);
+    for (int v = std::max(0, static_cast<int>(std::floor(edge))); v < h; ++v) {
+      const double cover = std::clamp(v + 0.5 - edge, 0.0, 1.0);
+      if (cover <= 0) continue;
+      const double d = (v - edge) / depth;
+      const double grey = 34.0 + 50.0 * std::exp(-d / 0.12) +
+                          22.0 * std::exp(-std::pow((d - 0.45) / 0.1, 2)) +
+                          6.0 * std::abs(u - cam.cu) / std::max(1.0, 0.5 * w);
+      const cv::Vec3f paint = cv::Vec3f(static_cast<float>(grey * 1.04), static_cast<float>(grey),
+                                        static_cast<float>(grey * 0.96)) *
+                              dim;
+      cv::Vec3b& px = img.at<cv::Vec3b>(v, u);
+      for (int c = 0; c < 3; ++c) {
+        px[c] = cv::saturate_cast<uchar>((1.0 - cover) * px[c] + cover * paint[c]);
+      }
+    }
+  }
+}
+
 double BottomDistance(const CameraModel& cam) {
   const int w = cam.image_width;
   const int h = cam.image_height;
@@ -461,7 +488,8 @@ SyntheticFrame RenderScene(const CameraModel& camera, const SyntheticOptions& op
   const double y_far = options.truth_far_m;
   for (int i = 0; i < static_cast<int>(road.boundaries.size()); ++i) {
     Boundary& m = road.boundaries[i];
-    m.visible = ground_visible && y_near < y_far && FitTruth(camera, road, y_near, y_far, &m);
+    m.visible =
+        ground_visible && y_near < y_far && FitTruth(camera, road, y_near, y_far, options, &m);
     if (!m.visible) continue;
     if (i == road.ego_left) frame.ego_left = static_cast<int>(frame.boundaries.size());
     if (i == road.ego_right) frame.ego_right = static_cast<int>(frame.boundaries.size());
@@ -477,7 +505,7 @@ SyntheticFrame RenderScene(const CameraModel& camera, const SyntheticOptions& op
   for (const double edge : {road.edge_left, road.edge_right}) {
     Boundary e;
     e.offset = edge;
-    if (ground_visible && y_near < y_far && FitTruth(camera, road, y_near, y_far, &e)) {
+    if (ground_visible && y_near < y_far && FitTruth(camera, road, y_near, y_far, options, &e)) {
       frame.road_edges.push_back(e.truth.p);
     }
   }
@@ -489,6 +517,7 @@ SyntheticFrame RenderScene(const CameraModel& camera, const SyntheticOptions& op
   canvas.convertTo(img, CV_8UC3);
   DrawObjects(camera, road, scene.objects, img);
   if (scene.night.on) ApplyNight(camera, scene.night, img);
+  DrawHood(camera, options, scene.night.on, img);
   cv::GaussianBlur(img, img, cv::Size(3, 3), look.blur_sigma);
 
   // Exposure and sensor noise.
@@ -515,6 +544,14 @@ SyntheticFrame RenderScene(const CameraModel& camera, const SyntheticOptions& op
 }  // namespace synthetic_internal
 
 using namespace synthetic_internal;  // NOLINT: this file's own helpers
+
+double HoodRow(const CameraModel& camera, const SyntheticOptions& options, double u) {
+  if (!(options.hood_top_row > 0)) return HUGE_VAL;
+  const double side = options.hood_side_row > 0 ? options.hood_side_row : camera.image_height;
+  const double half = u < camera.cu ? camera.cu : camera.image_width - 1.0 - camera.cu;
+  const double t = (u - camera.cu) / std::max(1.0, half);
+  return options.hood_top_row + (side - options.hood_top_row) * t * t;
+}
 
 absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
                                                     const SyntheticOptions& options,

@@ -169,6 +169,16 @@ absl::Status ValidateOptions(const SyntheticOptions& o) {
     if (!(p >= 0.0 && p <= 1.0)) return bad("clutter probabilities must be in [0, 1]");
   }
   if (!std::isfinite(o.truth_near_m) || o.truth_near_m < 0) return bad("truth_near_m must be >= 0");
+  if (!(o.hood_top_row >= 0 && o.hood_top_row <= 16384) ||
+      !(o.hood_side_row >= 0 && o.hood_side_row <= 16384)) {
+    return bad("hood rows must be in [0, 16384]");
+  }
+  if (o.hood_top_row > 0 && o.hood_side_row > 0 && o.hood_side_row < o.hood_top_row) {
+    return bad("hood_side_row must not lie above hood_top_row");
+  }
+  if (!(o.first_dash_m >= 0 && o.first_dash_m <= 1000)) {
+    return bad("first_dash_m must be in [0, 1000] metres");
+  }
   if (!std::isfinite(o.truth_far_m) || o.truth_far_m <= o.truth_near_m) {
     return bad("truth_far_m must be > truth_near_m");
   }
@@ -197,6 +207,7 @@ Road SampleRoad(const SyntheticOptions& o, Rng& rng) {
     m.dash = Uniform(rng, 2.5, 3.5);
     m.gap = Uniform(rng, 6.0, 9.0);
     m.phase = Uniform(rng, 0.0, m.dash + m.gap);
+    if (o.first_dash_m > 0) m.phase = m.paint_from = o.first_dash_m;
     m.alpha = Uniform(rng, 0.85, 1.0);
     m.wear = Uniform(rng, 0.0, 0.25);
     if (m.yellow) {
@@ -344,15 +355,18 @@ double PaintedUpTo(const Boundary& m, double s) {
     const double k = std::floor(t / period);
     return k * m.dash + std::min(t - k * period, m.dash);
   };
+  s = std::max(s, m.paint_from);
   if (s <= m.solid_from) return dashed(s);
   return dashed(m.solid_from) + (s - m.solid_from);
 }
 
 // Ground truth of one boundary: the visible projected centre line, fitted.
-bool FitTruth(const CameraModel& cam, const Road& road, double y_near, double y_far, Boundary* m) {
+bool FitTruth(const CameraModel& cam, const Road& road, double y_near, double y_far,
+              const SyntheticOptions& options, Boundary* m) {
   const int w = cam.image_width;
   const int h = cam.image_height;
   const double horizon = cam.HorizonRow();
+  const bool stop_at_hood = options.hood_top_row > 0 && !options.labels_through_hood;
   std::vector<Eigen::Vector2d> run, best;
   auto close_run = [&]() {
     if (run.size() > best.size()) best = run;
@@ -369,7 +383,8 @@ bool FitTruth(const CameraModel& cam, const Road& road, double y_near, double y_
     }
     const Eigen::Vector2d p = cam.GroundToImage({x, y});
     const bool inside = p.allFinite() && p.x() >= 0 && p.x() <= w - 1 && p.y() >= 0 &&
-                        p.y() <= h - 1 && p.y() > horizon;
+                        p.y() <= h - 1 && p.y() > horizon &&
+                        !(stop_at_hood && p.y() >= HoodRow(cam, options, p.x()));
     if (inside) {
       run.push_back(p);
     } else {

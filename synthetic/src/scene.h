@@ -56,6 +56,8 @@ struct Boundary {
   // A dashed boundary is solid from this far ahead on (metres; a drive's
   // dashed-to-solid change).
   double solid_from = std::numeric_limits<double>::infinity();
+  // Nothing is painted nearer than this (metres; SyntheticOptions::first_dash_m).
+  double paint_from = -std::numeric_limits<double>::infinity();
   bool visible = false;
   Bezier truth;
 };
@@ -204,7 +206,14 @@ SyntheticFrame RenderScene(const CameraModel& cam, const SyntheticOptions& optio
 
 // Fits the boundary's image-space Bezier truth between y_near and y_far;
 // false when too little of it is visible.
-bool FitTruth(const CameraModel& cam, const Road& road, double y_near, double y_far, Boundary* m);
+// Labels stop at the hood (SyntheticOptions::hood_top_row) unless
+// `options.labels_through_hood`.
+bool FitTruth(const CameraModel& cam, const Road& road, double y_near, double y_far,
+              const SyntheticOptions& options, Boundary* m);
+
+// Paints the hood (SyntheticOptions::hood_top_row) over `img` (8-bit BGR),
+// dimmed at night.
+void DrawHood(const CameraModel& cam, const SyntheticOptions& options, bool night, cv::Mat& img);
 
 }  // namespace lane::synthetic_internal
 

@@ -99,15 +99,24 @@ TEST(CalibrationTest, RoadRowsEndAtAStillHood) {
 }
 
 TEST(CalibrationTest, GroundViewFollowsTheDocumentedRules) {
-  // The CULane camera with its hood at row 546 gives the hand-made view.
-  const absl::StatusOr<GroundView> g = ChooseGroundView(testing::CulaneCamera(), 3.5, 546);
+  // The CULane camera with its hood flat at row 546: the hand-made view's
+  // near edge, and one dash cycle beyond it (every boundary within 5.25 m
+  // shows from the hood's edge on).
+  const CameraModel culane = testing::CulaneCamera();
+  const absl::StatusOr<GroundView> g =
+      ChooseGroundView(culane, 3.5, RoadOutline::Flat(546, culane.image_width));
   ASSERT_TRUE(g.ok()) << g.status();
   EXPECT_DOUBLE_EQ(g->x_min_m, -7.5);
   EXPECT_DOUBLE_EQ(g->x_max_m, 7.5);
-  // The ground under row 545, unrounded: the hand-made view's 8 m.
-  EXPECT_NEAR(g->y_min_m, 8.0, 0.05);
-  EXPECT_DOUBLE_EQ(g->y_max_m, g->y_min_m + 10.0);
-  EXPECT_FALSE(ChooseGroundView(testing::CulaneCamera(), 3.5, 300).ok());  // above the horizon
+  // The ground under row 545 is the hand-made view's 8 m at the principal
+  // column; this camera is yawed 3.7 deg, so on the ground the row slants:
+  // the boundaries 5.25 m right reach it at 7.72 m (the view's near edge),
+  // those 5.25 m left at 8.40 m (12 m short of its far edge).
+  EXPECT_NEAR(culane.ImageToGround({culane.cu, 545.0}).y(), 8.0, 0.05);
+  EXPECT_NEAR(g->y_min_m, 7.72, 0.02);
+  EXPECT_NEAR(g->y_max_m, 8.40 + 12.0, 0.02);
+  // Above the horizon.
+  EXPECT_FALSE(ChooseGroundView(culane, 3.5, RoadOutline::Flat(300, culane.image_width)).ok());
 }
 
 // Renders `n` frames of a drive through `camera` and runs both passes.
@@ -205,7 +214,7 @@ TEST(CalibrationTest, OnlineRefinementFollowsAPitchDrift) {
   Config config;
   config.camera = start;
   config.ipm.view = IpmView::kGround;
-  const absl::StatusOr<GroundView> view = ChooseGroundView(start, 3.6, start.image_height);
+  const absl::StatusOr<GroundView> view = ChooseGroundView(start, 3.6, RoadOutline{});
   ASSERT_TRUE(view.ok());
   config.ipm.ground = *view;
   config.ipm.interpolation = Interpolation::kArea;

@@ -90,7 +90,7 @@ TEST(SelfCheckTest, DetectorWithAWrongCameraIsRefused) {
   auto check = [&](const Eigen::Vector2d& shift) -> absl::StatusOr<LaneGeometryReport> {
     CalibrationResult r;
     r.camera = CameraFromVanishingPoint(truth, truth.VanishingPoint() + shift);
-    absl::StatusOr<GroundView> view = ChooseGroundView(r.camera, 3.6, truth.image_height);
+    absl::StatusOr<GroundView> view = ChooseGroundView(r.camera, 3.6, RoadOutline{});
     if (!view.ok()) return view.status();
     r.view = *view;
     absl::StatusOr<CalibrationSelfCheck> c = CalibrationSelfCheck::Create(r, 3.6);

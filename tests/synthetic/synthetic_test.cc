@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
@@ -249,6 +250,64 @@ TEST(SyntheticTest, InvalidOptionsAreAnError) {
     const auto f = RenderSyntheticFrame(cam, bad[i], 1);
     ASSERT_FALSE(f.ok()) << i;
     EXPECT_EQ(f.status().code(), absl::StatusCode::kInvalidArgument) << i;
+  }
+}
+
+// The hood (issue 49): still from frame to frame, under a parabola from
+// `hood_side_row` at the image's edges to `hood_top_row` at the principal
+// point's column; the labels stop at it, or run on through it to the
+// image's bottom (CULane's convention); dash patterns placed beyond it.
+TEST(SyntheticTest, HoodIsStillAndLabelsStopAtItOrRunThrough) {
+  const CameraModel cam = CaltechCamera();
+  SyntheticOptions o;
+  o.num_lanes = 3;
+  o.hood_top_row = 400;
+  o.hood_side_row = 450;
+  EXPECT_DOUBLE_EQ(lane::HoodRow(cam, o, cam.cu), 400);
+  EXPECT_NEAR(lane::HoodRow(cam, o, 0), 450, 1e-9);
+  const SyntheticFrame a = Render(cam, o, 21), b = Render(cam, o, 22);
+  // Below the hood's edge two different roads give the same pixels (up to
+  // the sensor's noise); above it they differ.
+  cv::Mat hood_a, hood_b, road_a, road_b;
+  cv::cvtColor(a.bgr.rowRange(455, 480), hood_a, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(b.bgr.rowRange(455, 480), hood_b, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(a.bgr.rowRange(300, 380), road_a, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(b.bgr.rowRange(300, 380), road_b, cv::COLOR_BGR2GRAY);
+  EXPECT_LT(cv::norm(hood_a, hood_b, cv::NORM_L1) / hood_a.total(), 6.0);
+  EXPECT_GT(cv::norm(road_a, road_b, cv::NORM_L1) / road_a.total(), 10.0);
+  ASSERT_FALSE(a.boundaries.empty());
+  for (const auto& boundary : a.boundaries) {
+    for (const Eigen::Vector2d& p : Bezier{boundary.image}.Sample(50)) {
+      EXPECT_LT(p.y(), lane::HoodRow(cam, o, p.x()) + 1.0);
+    }
+  }
+  o.labels_through_hood = true;
+  const SyntheticFrame through = Render(cam, o, 21);
+  double lowest = 0;
+  for (const auto& boundary : through.boundaries) {
+    for (const Eigen::Vector2d& p : Bezier{boundary.image}.Sample(50))
+      lowest = std::max(lowest, p.y());
+  }
+  EXPECT_GT(lowest, 470);
+  // Nothing painted nearer than first_dash_m, a dash from there on.
+  SyntheticOptions dashes;
+  dashes.num_lanes = 2;
+  dashes.dashed_probability = 1.0;
+  dashes.straight_probability = 1.0;
+  dashes.max_heading_rad = 0;
+  dashes.max_vehicles = 0;
+  dashes.max_shadows = 0;
+  dashes.first_dash_m = 12.0;
+  const SyntheticFrame d = Render(cam, dashes, 5);
+  ASSERT_EQ(d.boundaries.size(), 3u);
+  for (const auto& boundary : d.boundaries) {
+    const double x = boundary.lateral_offset_m;
+    double brightest_near = 0;
+    for (const double y : {6.0, 8.0, 10.0, 11.5}) {
+      brightest_near = std::max(brightest_near, Red(d.bgr, cam.GroundToImage({x, y})));
+    }
+    EXPECT_LT(brightest_near, 140) << "paint nearer than 12 m at x = " << x;
+    EXPECT_GT(Red(d.bgr, cam.GroundToImage({x, 13.0})), brightest_near + 20) << x;
   }
 }
 

@@ -6,6 +6,7 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 
+#include "lane/geometry/ground_view_rule.h"
 #include "wire/detection_proto.h"
 
 namespace lane::wire {
@@ -24,6 +25,42 @@ TEST(ConvertTest, EmptyConfigIsTheDefaults) {
   absl::StatusOr<lane::Config> config = ConfigFromProto(v1::SessionConfig());
   ASSERT_TRUE(config.ok()) << config.status();
   EXPECT_EQ(lane::ConfigToJson(*config), lane::ConfigToJson(lane::Config{}));
+}
+
+// A camera and no ipm: the view the camera needs, as in a config file
+// (lane/geometry/ground_view_rule.h); with an ipm, the ipm.
+TEST(ConvertTest, CameraWithoutIpmGetsTheBuiltInView) {
+  v1::SessionConfig proto;
+  proto.mutable_camera()->set_fu(730);
+  proto.mutable_camera()->set_fv(730);
+  proto.mutable_camera()->set_cu(256);
+  proto.mutable_camera()->set_cv(144);
+  proto.mutable_camera()->set_pitch_deg(2.9);
+  proto.mutable_camera()->set_height_m(1.67);
+  proto.mutable_camera()->set_image_width(512);
+  proto.mutable_camera()->set_image_height(288);
+  absl::StatusOr<lane::Config> config = ConfigFromProto(proto);
+  ASSERT_TRUE(config.ok()) << config.status();
+  const absl::StatusOr<lane::IpmOptions> built_in = lane::BuiltInIpm(config->camera);
+  ASSERT_TRUE(built_in.ok()) << built_in.status();
+  EXPECT_EQ(config->ipm.view, lane::IpmView::kGround);
+  EXPECT_DOUBLE_EQ(config->ipm.ground.y_min_m, built_in->ground.y_min_m);
+  EXPECT_DOUBLE_EQ(config->ipm.ground.y_max_m, built_in->ground.y_max_m);
+  // The same camera as JSON gives the same config.
+  v1::SessionConfig json;
+  json.set_config_json(R"({"camera": {"fu": 730, "fv": 730, "cu": 256, "cv": 144,
+      "pitch_deg": 2.9, "height_m": 1.67, "image_width": 512, "image_height": 288}})");
+  absl::StatusOr<lane::Config> from_json = ConfigFromProto(json);
+  ASSERT_TRUE(from_json.ok()) << from_json.status();
+  EXPECT_EQ(lane::ConfigToJson(*from_json), lane::ConfigToJson(*config));
+  proto.mutable_ipm()->set_width(160);
+  config = ConfigFromProto(proto);
+  ASSERT_TRUE(config.ok()) << config.status();
+  EXPECT_EQ(config->ipm.view, lane::IpmView::kRoi);
+  // A camera that sees no road is refused.
+  proto.clear_ipm();
+  proto.mutable_camera()->set_pitch_deg(-40);
+  EXPECT_EQ(ConfigFromProto(proto).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
 TEST(ConvertTest, ModeSelectsItsDefaultsThenFieldsOverride) {

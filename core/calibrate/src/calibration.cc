@@ -48,6 +48,7 @@ void RoadRowFinder::Add(const cv::Mat& frame) {
     m2_ = cv::Mat::zeros(x.size(), CV_64F);
     frames_ = 0;
     height_ = grey.rows;
+    width_ = grey.cols;
   }
   ++frames_;
   const cv::Mat delta = x - mean_;
@@ -67,15 +68,18 @@ std::vector<double> RoadRowFinder::RowSpread() const {
   return spread;
 }
 
+double RoadRowFinder::RoadLevel(const std::vector<double>& spread) const {
+  const int rows = static_cast<int>(spread.size());
+  std::vector<double> road(spread.begin() + rows / 2, spread.begin() + rows * 7 / 8);
+  return UpperMedian(road);
+}
+
 int RoadRowFinder::RoadBottomRow() const {
   if (frames_ < kMinFrames) return height_;
   int bottom = height_;
   const std::vector<double> spread = RowSpread();
   const int rows = static_cast<int>(spread.size());
-  // The road's level: the median spread of the rows of the image's lower
-  // half above its last eighth (road in every mounting seen so far).
-  std::vector<double> road(spread.begin() + rows / 2, spread.begin() + rows * 7 / 8);
-  const double level = UpperMedian(road);
+  const double level = RoadLevel(spread);
   if (level <= 0) return bottom;
   // From the bottom up: the first run of 2 rows at half the road's level or
   // more ends the still band.
@@ -89,34 +93,71 @@ int RoadRowFinder::RoadBottomRow() const {
   return bottom;
 }
 
+RoadOutline RoadRowFinder::Outline() const {
+  RoadOutline outline;
+  if (frames_ < kMinFrames) return outline;
+  const double level = RoadLevel(RowSpread());
+  if (level <= 0) return outline;
+  const int rows = m2_.rows, cols = m2_.cols;
+  const int bands = std::max(1, cols / kBandColumns);
+  // Per band, the still rows at its bottom, as RoadBottomRow finds them for
+  // the whole image: the band's spread per row is the median over its columns.
+  std::vector<double> band_bottom(static_cast<size_t>(bands));
+  std::vector<double> s;
+  for (int b = 0; b < bands; ++b) {
+    const int c0 = b * cols / bands, c1 = (b + 1) * cols / bands;
+    auto band_spread = [&](int r) {
+      s.clear();
+      const double* m = m2_.ptr<double>(r);
+      for (int c = c0; c < c1; ++c) s.push_back(std::sqrt(m[c] / (frames_ - 1)));
+      return UpperMedian(s);
+    };
+    // No moving rows at all: the band shows no road (outside a lens's
+    // image circle, a mount).
+    band_bottom[static_cast<size_t>(b)] = 0;
+    bool previous = band_spread(rows - 1) >= 0.5 * level;
+    for (int r = rows - 2; r >= 0; --r) {
+      const bool moving = band_spread(r) >= 0.5 * level;
+      if (moving && previous) {
+        band_bottom[static_cast<size_t>(b)] = r + 1 < rows - 1 ? (r + 2) * kScale : height_;
+        break;
+      }
+      previous = moving;
+    }
+  }
+  // A hood is smooth across the image: a band's lone value is noise.
+  std::vector<double> smooth(band_bottom.size());
+  for (int b = 0; b < bands; ++b) {
+    std::vector<double> w;
+    for (int k = std::max(0, b - 2); k <= std::min(bands - 1, b + 2); ++k) {
+      w.push_back(band_bottom[static_cast<size_t>(k)]);
+    }
+    smooth[static_cast<size_t>(b)] = UpperMedian(std::move(w));
+  }
+  // Linear between the bands' centres (in full-size columns).
+  outline.first_row_below.resize(static_cast<size_t>(width_));
+  const double band_width = static_cast<double>(width_) / bands;
+  for (int u = 0; u < width_; ++u) {
+    const double t = std::clamp((u + 0.5) / band_width - 0.5, 0.0, bands - 1.0);
+    const int b0 = static_cast<int>(std::floor(t));
+    const int b1 = std::min(bands - 1, b0 + 1);
+    const double f = t - b0;
+    outline.first_row_below[static_cast<size_t>(u)] =
+        (1 - f) * smooth[static_cast<size_t>(b0)] + f * smooth[static_cast<size_t>(b1)];
+  }
+  return outline;
+}
+
 // ---------------------------------------------------------------------------
 // Ground view
 
 absl::StatusOr<GroundView> ChooseGroundView(const CameraModel& camera, double lane_width_m,
-                                            int road_bottom_row) {
-  if (absl::Status s = camera.Validate(); !s.ok()) return s;
-  if (!(lane_width_m > 1.0 && lane_width_m < 10.0)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("lane width must lie in (1, 10) metres, got ", lane_width_m));
-  }
-  const double horizon = camera.HorizonRow();
-  const double row = std::min<double>(road_bottom_row, camera.image_height) - 1.0;
-  if (!(row > horizon + 2.0)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "the road's lowest row ", row, " does not lie below the horizon (row ", horizon, ")"));
-  }
-  GroundView g;
-  g.x_max_m = 2.0 * lane_width_m + 0.5;
-  g.x_min_m = -g.x_max_m;
-  const double near = camera.ImageToGround({camera.cu, row}).y();
-  // Exactly the last road row's ground, not rounded: rounding to a tidy
-  // figure moved the edge into the hood or off the nearest road (up to
-  // 0.25 m at 0.5 m steps).
-  g.y_min_m = std::max(0.5, near);
-  g.y_max_m = g.y_min_m + 10.0;
-  g.metres_per_px_x = 0.0625;
-  g.metres_per_px_y = 0.125;
-  return g;
+                                            const RoadOutline& outline) {
+  GroundViewRule rule;
+  rule.lane_width_m = lane_width_m;
+  absl::StatusOr<DerivedGroundView> d = DeriveGroundView(camera, outline, rule);
+  if (!d.ok()) return d.status();
+  return d->view;
 }
 
 // ---------------------------------------------------------------------------
@@ -167,7 +208,11 @@ absl::Status CameraCalibrator::AddFirstPass(const cv::Mat& frame) {
 
 absl::Status CameraCalibrator::FinishFirstPass() {
   road_bottom_ = road_rows_.RoadBottomRow();
-  if (options_.road_bottom_row) road_bottom_ = std::clamp(*options_.road_bottom_row, 1, height_);
+  outline_ = road_rows_.Outline();
+  if (options_.road_bottom_row) {
+    road_bottom_ = std::clamp(*options_.road_bottom_row, 1, height_);
+    outline_ = RoadOutline::Flat(road_bottom_, width_);
+  }
   std::vector<std::vector<ImageSegment>> moving;
   for (size_t i = 0; i < first_segments_.size(); ++i) {
     if (stationary_[i]) continue;
@@ -287,6 +332,7 @@ absl::StatusOr<CalibrationResult> CameraCalibrator::Finish() const {
   r.frames_stationary = stationary_count_;
   r.segments = segments_;
   r.road_bottom_row = road_bottom_;
+  r.outline = outline_;
   r.far_point = r.camera.GroundToImage({0.0, 1e5});
   for (int k : c->used) r.used_frames.push_back(point_frames_[static_cast<size_t>(k)]);
   const Eigen::Vector2d systematic(intrinsics_.fu * std::tan(kSystematicIntervalDeg * kDegToRad),
@@ -300,7 +346,7 @@ absl::StatusOr<CalibrationResult> CameraCalibrator::Finish() const {
       CameraFromVanishingPoint(intrinsics_, c->point + Eigen::Vector2d(0, r.interval_px.y()));
   r.yaw_interval_deg = std::abs(du.yaw_deg - r.camera.yaw_deg);
   r.pitch_interval_deg = std::abs(dv.pitch_deg - r.camera.pitch_deg);
-  absl::StatusOr<GroundView> view = ChooseGroundView(r.camera, options_.lane_width_m, road_bottom_);
+  absl::StatusOr<GroundView> view = ChooseGroundView(r.camera, options_.lane_width_m, outline_);
   if (!view.ok()) return view.status();
   r.view = *view;
   return r;
@@ -308,13 +354,6 @@ absl::StatusOr<CalibrationResult> CameraCalibrator::Finish() const {
 
 // ---------------------------------------------------------------------------
 // Self-check
-
-IpmOptions GroundViewIpm(const GroundView& view, IpmOptions ipm) {
-  ipm.view = IpmView::kGround;
-  ipm.ground = view;
-  ipm.interpolation = Interpolation::kArea;
-  return ipm;
-}
 
 LaneGeometryCheckOptions GeometryCheckForWidth(double lane_width_m) {
   LaneGeometryCheckOptions o;

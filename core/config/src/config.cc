@@ -16,6 +16,7 @@
 #include "absl/strings/str_cat.h"
 #include "lane/base/excerpt.h"
 #include "lane/config/config_fields.h"
+#include "lane/geometry/ground_view_rule.h"
 
 namespace lane {
 namespace {
@@ -159,6 +160,19 @@ absl::StatusOr<Config> ConfigFromJson(const Json& doc) {
     config.ipm.view = IpmView::kGround;
   }
   if (absl::Status s = ReadObject(doc, "", config); !s.ok()) return s;
+  // A camera and no top view: the view the camera needs, by lane
+  // calibrate's rule (lane/geometry/ground_view_rule.h).
+  if (doc.is_object() && doc.contains("camera") && !doc.contains("ipm")) {
+    if (absl::Status s = config.camera.Validate(); !s.ok()) return s;
+    absl::StatusOr<IpmOptions> built_in = BuiltInIpm(config.camera);
+    if (!built_in.ok()) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("the config gives a camera and no \"ipm\", and the built-in top view does "
+                       "not fit the camera: ",
+                       built_in.status().message()));
+    }
+    config.ipm = *std::move(built_in);
+  }
   if (absl::Status s = config.Validate(); !s.ok()) return s;
   return config;
 }

@@ -61,7 +61,25 @@ struct SyntheticOptions {
   double truth_near_m = 0.0;  // 0 = the bottom of the image
   // ... to this far ahead (metres).
   double truth_far_m = 40.0;
+  // The car's hood: a dark, smooth, glossy region (a static reflection of
+  // the sky, the same in every frame) below a parabola through row
+  // `hood_top_row` at the principal point's column and `hood_side_row` at
+  // the image's left and right edges (0: the image's bottom). 0 = no hood.
+  double hood_top_row = 0;
+  double hood_side_row = 0;
+  // Labels stop where the hood hides the road, as a fleet's labels would;
+  // true: they run on to the image's bottom under the hood (CULane's
+  // convention).
+  bool labels_through_hood = false;
+  // Dashed boundaries: > 0 places the dash pattern so that its first dash
+  // ahead begins this far ahead (metres) and nothing is painted nearer
+  // (a dashed line whose nearest dash lies beyond the hood). 0 = a random
+  // phase.
+  double first_dash_m = 0;
 };
+
+// The first image row of the hood in column u (HUGE_VAL without a hood).
+double HoodRow(const CameraModel& camera, const SyntheticOptions& options, double u);
 
 // The clutter of `lane render --clutter` and the calibration clutter test:
 // 10 extra roadside objects, a tree row in 60 % of the frames, a sign and a

@@ -27,6 +27,7 @@
 #include "lane/calibrate/vanishing_point.h"
 #include "lane/detector.h"
 #include "lane/geometry/camera.h"
+#include "lane/geometry/ground_view_rule.h"
 #include "lane/geometry/ipm.h"
 
 namespace lane {
@@ -51,7 +52,9 @@ CameraModel CameraFromVanishingPoint(const CameraModel& intrinsics, const Eigen:
 // The rows of a fixed camera's frames that show road: the car's own hood
 // (and any mount in front of the lens) stays still while the road moves, so
 // its pixels barely change over a drive. Feed frames (any size-consistent
-// 8-bit images) of one camera; RoadBottomRow is the first row below the road.
+// 8-bit images) of one camera; RoadBottomRow is the first row below the road
+// across the image as a whole, Outline the same per column (a hood rises
+// towards the image's centre).
 class RoadRowFinder {
  public:
   void Add(const cv::Mat& frame);
@@ -59,27 +62,36 @@ class RoadRowFinder {
   // The image height when fewer than kMinFrames frames were added or no
   // still band was found.
   int RoadBottomRow() const;
+  // Per column: the first row below the road, from the bottom up the first
+  // rows whose temporal spread reaches half the road's level, in bands of
+  // kBandColumns columns at 1/kScale (median over 5 bands, linear between
+  // the bands' centres). Empty (the image's bottom) when fewer than
+  // kMinFrames frames were added.
+  RoadOutline Outline() const;
   // Per-row temporal spread (median over the row of the per-pixel standard
   // deviation, grey levels), top to bottom, at 1/kScale of the rows.
   std::vector<double> RowSpread() const;
 
   static constexpr int kMinFrames = 8;
   static constexpr int kScale = 4;
+  static constexpr int kBandColumns = 4;
 
  private:
+  // The road's spread: the median row spread of the image's lower half
+  // above its last eighth (road in every mounting seen so far).
+  double RoadLevel(const std::vector<double>& row_spread) const;
+
   cv::Mat mean_, m2_;  // CV_64F, Welford's running moments
   int frames_ = 0;
-  int height_ = 0;
+  int height_ = 0, width_ = 0;
 };
 
-// The top view for a camera (docs/config.md, "Choosing a ground view"):
-// across, +-(2 lane widths + 0.5 m), the ego lane's boundaries and the next
-// on each side with the car half a lane off centre; along, from the nearest
-// visible road (the ground under row road_bottom_row - 1) to 10 m further,
-// the depth of one dash and gap; 0.0625 m x 0.125 m pixels.
-// INVALID_ARGUMENT when the road rows lie above the horizon.
+// The top view for a camera (docs/config.md, "Choosing a ground view"), by
+// the rule of lane/geometry/ground_view_rule.h for `lane_width_m` lanes,
+// with the road ending at `outline` (empty: the image's bottom).
+// INVALID_ARGUMENT when no road shows below the horizon.
 absl::StatusOr<GroundView> ChooseGroundView(const CameraModel& camera, double lane_width_m,
-                                            int road_bottom_row);
+                                            const RoadOutline& outline);
 
 // `lane calibrate`'s estimate from frames of ordinary driving, in two passes
 // over the same frames:
@@ -104,6 +116,10 @@ struct CalibrationOptions {
 
 struct CalibrationResult {
   CameraModel camera;
+  // Pitch and yaw were given (MountedCameraSurvey, lane/calibrate/
+  // mounted_camera.h): no vanishing point was estimated, `vanishing_point`
+  // is the camera's own and its interval 0.
+  bool mounting_given = false;
   CombinedVanishingPoint vanishing_point;
   Eigen::Vector2d first_pass_point = Eigen::Vector2d::Zero();
   bool focal_assumed = false;
@@ -116,6 +132,9 @@ struct CalibrationResult {
   int frames_stationary = 0;  // left out: the same view as the frame before
   int segments = 0;           // segments supporting the used frames' points
   int road_bottom_row = 0;    // first row below the road (hood), or the height
+  // Per column, the first row below the road (RoadRowFinder::Outline, or
+  // flat at --road-bottom-row); the view's rule uses it.
+  RoadOutline outline;
   GroundView view;
   // Far ground point (0, 1e5 m) projected by the camera, for the check
   // against the vanishing point.
@@ -163,6 +182,7 @@ class CameraCalibrator {
   std::vector<std::vector<ImageSegment>> first_segments_;
   Eigen::Vector2d first_point_ = Eigen::Vector2d::Zero();
   int road_bottom_ = 0;
+  RoadOutline outline_;
   bool first_done_ = false;
   static constexpr double kStationaryLevels = 1.5;  // mean absolute change, grey levels
   cv::Mat previous_;
@@ -191,10 +211,6 @@ class CalibrationSelfCheck {
   Detector detector_;
   LaneGeometryCheck check_;
 };
-
-// The IPM options of a calibrated config: `base` (a template's) with its
-// ground view, area-averaged.
-IpmOptions GroundViewIpm(const GroundView& view, IpmOptions base = {});
 
 // Lane pairs `lane_width_m` apart, widened to the default 2.5-4.5 m.
 LaneGeometryCheckOptions GeometryCheckForWidth(double lane_width_m);

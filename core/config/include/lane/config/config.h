@@ -30,8 +30,11 @@ inline constexpr int kMaxConfigDepth = 16;
 
 // Parses a JSON document. Larger or deeper documents than the limits above
 // are INVALID_ARGUMENT before parsing. `mode` in the document (if present) selects the
-// mode's defaults before the other detector keys are applied. Unknown keys
-// are an error (they are usually typos). INVALID_ARGUMENT names the key.
+// mode's defaults before the other detector keys are applied. A document that
+// gives "camera" and no "ipm" gets the top view the camera needs (BuiltInIpm,
+// lane/geometry/ground_view_rule.h; INVALID_ARGUMENT when the camera sees no
+// road). Unknown keys are an error (they are usually typos). INVALID_ARGUMENT
+// names the key.
 absl::StatusOr<Config> ParseConfig(const std::string& json_text);
 absl::StatusOr<Config> LoadConfigFile(const std::string& path);
 // The full document for a config, every key present.
