@@ -96,6 +96,7 @@ SERVER_FLAGS = set(re.findall(r"ABSL_FLAG\([^,]+,\s*([a-z_]+),", main_cc))
 
 metrics_cc = read("server/metrics.cc") + read("server/grpc_metrics.cc")
 METRICS = set(re.findall(r'\.Name\("([a-z_]+)"\)', metrics_cc))
+METRICS |= set(re.findall(r'NewMetrics[A-Za-z]+\(\s*registry,\s*"([a-z_]+)"', metrics_cc))
 METRICS |= set(re.findall(r'Family\("(process_[a-z_]+)"', read("server/process_metrics.cc")))
 METRICS |= set(re.findall(r'\.name = "([a-z_]+)"', read("server/calibration_metrics.cc")))
 check({"lanesvc_frame_latency_seconds", "lanesvc_frames_total", "lanesvc_stage_duration_seconds",
