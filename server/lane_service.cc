@@ -221,17 +221,17 @@ grpc::ServerUnaryReactor* LaneServiceImpl::Detect(grpc::CallbackServerContext* c
                 }
               }
               if (session != nullptr) {
-                StartResponse(request, request.camera_id(), arrival, response);
                 const bool track = session->TracksUnary();
-                std::optional<lane::Detection> detection;
-                LiveFrame sample;
-                status = ProcessFrame(request, *session, options_.frame_limits, arrival, metrics_,
-                                      response, &detection, track,
-                                      options_.live_view != nullptr ? &sample : nullptr);
-                FinishFrame(*session, track, detection, response);
+                ProcessedFrame processed =
+                    ProcessFrame(request, *session, options_.frame_limits, arrival, metrics_, track,
+                                 options_.live_view != nullptr);
+                status = processed.outcome.status;
+                *response = FinishFrame(*session, track,
+                                        StartResponse(request, request.camera_id(), arrival),
+                                        std::move(processed.outcome));
                 response->set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
                 if (options_.live_view != nullptr) {
-                  options_.live_view->Record(session, *response, std::move(sample));
+                  options_.live_view->Record(session, *response, std::move(processed.live_sample));
                 }
               }
               metrics_.FrameAnswered();

@@ -154,11 +154,11 @@ class Workers {
 
 // One frame on its way: read (and decoded) on a worker or by the video
 // reader, detected on a worker, then tracked and written in order. `frame`
-// and `detection` belong to the worker until Finish and to the committer
+// and `measured` belong to the worker until Finish and to the committer
 // after Wait.
 struct Slot {
   InputFrame frame;
-  absl::StatusOr<lane::Detection> detection = lane::Detection();
+  absl::StatusOr<lane::MeasuredFrame> measured = lane::MeasuredFrame();
 
   void Finish() {
     absl::MutexLock lock(&mu);
@@ -292,8 +292,8 @@ class RecordingRun {
     }
     if (!f.error.empty()) return;
     try {
-      slot.detection = tracker_.Measure(detector_, f.bgr, prior);
-      if (!slot.detection.ok()) f.error = std::string(slot.detection.status().message());
+      slot.measured = tracker_.Measure(detector_, f.bgr, prior);
+      if (!slot.measured.ok()) f.error = std::string(slot.measured.status().message());
     } catch (const std::exception& e) {
       f.error = absl::StrCat("detector error: ", e.what());
     }
@@ -305,18 +305,18 @@ class RecordingRun {
     slot->Wait();
     ++frames_;
     const InputFrame& f = slot->frame;
-    const lane::Mode mode = detector_.options().mode;
-    const int width = config_.camera.image_width, height = config_.camera.image_height;
+    const ResultsFrame record{f.name, config_.camera.image_width, config_.camera.image_height,
+                              detector_.options().mode};
     if (!f.error.empty()) {
       ++failed_;
       if (first_error_.empty()) first_error_ = absl::StrCat(f.name, ": ", f.error);
-      out_.WriteLine(ErrorJsonLine(f.name, width, height, mode, f.error));
+      out_.WriteLine(JsonLine(ErrorJson(record, f.error)));
       return;
     }
-    tracker_.Commit(detector_, *slot->detection, std::nullopt);
-    lanes_ += static_cast<long>(slot->detection->lanes.size());
-    out_.WriteLine(
-        DetectionJsonLine(f.name, width, height, mode, *slot->detection, f.decode_ms, true));
+    const lane::TrackedFrame tracked =
+        tracker_.Commit(detector_, *std::move(slot->measured), std::nullopt);
+    lanes_ += static_cast<long>(tracked.lanes.size());
+    out_.WriteLine(JsonLine(DetectionJson(record, tracked, f.decode_ms)));
   }
 
   const lane::Config& config_;

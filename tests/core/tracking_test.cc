@@ -191,7 +191,7 @@ TEST(TrackingTest, EgoLaneGeometryAndDeparture) {
     const double t = f / 30.0;
     const double shift = -0.8 * t;  // the lanes move left as the car moves right
     std::vector<Lane> lanes = {GroundLane(-1.8 + shift, 0, 0), GroundLane(1.8 + shift, 0, 0)};
-    const std::optional<EgoLane> e = sequence.Track(lanes, t);
+    const std::optional<EgoLane> e = sequence.Track(lanes, {}, t).ego;
     if (f + 1 < LaneTrackingOptions().confirm_frames) continue;
     ASSERT_TRUE(e.has_value()) << "frame " << f;
     if (e->departing && e->right_distance_m > 1.2) warned_early = true;
@@ -211,7 +211,7 @@ TEST(TrackingTest, StraightDrivingIsNoDeparture) {
   for (int f = 0; f < 300; ++f) {
     std::vector<Lane> lanes = {GroundLane(-1.7 + noise(rng), 0, 0),
                                GroundLane(1.9 + noise(rng), 0, 0)};
-    const std::optional<EgoLane> e = sequence.Track(lanes, f / 30.0);
+    const std::optional<EgoLane> e = sequence.Track(lanes, {}, f / 30.0).ego;
     // The two boundaries are confirmed after confirm_frames; from then on
     // every frame has the ego lane, and none is a departure.
     if (f + 1 < LaneTrackingOptions().confirm_frames) continue;
@@ -519,8 +519,9 @@ TEST(TrackingRefitTest, AFrameTrackerRefitsBetweenFullSearches) {
       if (i == 16) tracker.Reset();
       absl::StatusOr<SyntheticFrame> frame = RenderSyntheticDriveFrame(config->camera, drive, 7, i);
       ASSERT_TRUE(frame.ok());
-      absl::StatusOr<Detection> d = tracker.Process(*detector, frame->bgr, frame->time_s);
-      ASSERT_TRUE(d.ok());
+      absl::StatusOr<TrackedFrame> tracked = tracker.Process(*detector, frame->bgr, frame->time_s);
+      ASSERT_TRUE(tracked.ok());
+      const Detection* d = &tracked->detection;
       int refit = 0;
       for (const Lane& lane : d->lanes) refit += lane.refit;
       EXPECT_EQ(refit, d->refit_lanes) << "frame " << i;
@@ -532,7 +533,7 @@ TEST(TrackingRefitTest, AFrameTrackerRefitsBetweenFullSearches) {
       EXPECT_LE(in_row, refit_frames) << "frame " << i;
       // Frames 8-15 hold the same confirmed ids, refitted or searched.
       std::vector<int> ids;
-      for (const Lane& lane : d->lanes) {
+      for (const TrackedLane& lane : tracked->lanes) {
         if (lane.confirmed) ids.push_back(lane.id);
       }
       if (i == 8) ids_before = ids;

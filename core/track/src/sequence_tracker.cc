@@ -10,50 +10,55 @@ namespace {
 // A lane drawn from a track's curve over its last extent, near end first
 // (none when it does not project into the image).
 std::optional<Lane> LaneFromCurve(const GroundCurve& curve, const IpmMapping& ipm) {
-  std::optional<Lane> lane = LaneAlongCurve(curve, ipm, /*near_first=*/true);
-  if (lane) lane->predicted = true;
-  return lane;
+  return LaneAlongCurve(curve, ipm, /*near_first=*/true);
 }
 
 }  // namespace
 
-std::optional<EgoLane> SequenceTracker::Track(std::vector<Lane>& lanes,
+SequenceTracker::Frame SequenceTracker::Track(const std::vector<Lane>& lanes,
+                                              const std::vector<Marking>& markings,
                                               std::optional<double> time_s, const IpmMapping* ipm) {
-  std::vector<MarkingColor> colors;
-  std::vector<MarkingType> types;
-  for (const Lane& lane : lanes) {
-    colors.push_back(lane.color);
-    types.push_back(lane.type);
+  std::vector<MarkingColor> colors(lanes.size(), MarkingColor::kUnknown);
+  std::vector<MarkingType> types(lanes.size(), MarkingType::kUnknown);
+  for (size_t i = 0; i < lanes.size() && i < markings.size(); ++i) {
+    colors[i] = markings[i].color;
+    types[i] = markings[i].type;
   }
   const std::vector<LaneIdentity> ids = lanes_.Update(lanes, time_s, colors, types);
+  Frame frame;
+  frame.lanes.reserve(lanes.size());
   for (size_t i = 0; i < lanes.size(); ++i) {
-    lanes[i].id = ids[i].id;
-    lanes[i].confirmed = ids[i].confirmed;
-    lanes[i].color = ids[i].color;
-    lanes[i].type = ids[i].type;
+    TrackedLane& tracked = frame.lanes.emplace_back();
+    tracked.lane = lanes[i];
+    tracked.id = ids[i].id;
+    tracked.confirmed = ids[i].confirmed;
+    tracked.color = ids[i].color;
+    tracked.type = ids[i].type;
   }
   std::vector<LaneIdentity> all = ids;
   if (ipm != nullptr) {
-    DrawFiltered(lanes, ids, *ipm);
-    AddCoasting(lanes, all, *ipm);
-    SortLeftToRight(lanes, all);
+    DrawFiltered(frame.lanes, ids, *ipm);
+    AddCoasting(frame.lanes, all, *ipm);
+    SortLeftToRight(frame.lanes, all);
   }
-  return EgoOfConfirmed(lanes, all);
+  frame.ego = EgoOfConfirmed(all);
+  return frame;
 }
 
-void SequenceTracker::DrawFiltered(std::vector<Lane>& lanes, const std::vector<LaneIdentity>& ids,
+void SequenceTracker::DrawFiltered(std::vector<TrackedLane>& lanes,
+                                   const std::vector<LaneIdentity>& ids,
                                    const IpmMapping& ipm) const {
   for (size_t i = 0; i < lanes.size() && lanes_.options().report_filtered; ++i) {
     if (!ids[i].confirmed) continue;
     const std::optional<Lane> filtered = LaneFromCurve(ids[i].curve, ipm);
     if (!filtered) continue;
-    lanes[i].image = filtered->image;
-    lanes[i].ground = filtered->ground;
-    lanes[i].ipm = filtered->ipm;
+    lanes[i].lane.image = filtered->image;
+    lanes[i].lane.ground = filtered->ground;
+    lanes[i].lane.ipm = filtered->ipm;
   }
 }
 
-void SequenceTracker::AddCoasting(std::vector<Lane>& lanes, std::vector<LaneIdentity>& all,
+void SequenceTracker::AddCoasting(std::vector<TrackedLane>& lanes, std::vector<LaneIdentity>& all,
                                   const IpmMapping& ipm) const {
   const LaneTrackingOptions& o = lanes_.options();
   for (const lane::Track& track : lanes_.tracks()) {
@@ -79,43 +84,45 @@ void SequenceTracker::AddCoasting(std::vector<Lane>& lanes, std::vector<LaneIden
     std::optional<Lane> lane = LaneFromCurve(track.curve, ipm);
     if (!lane) continue;
     const LaneIdentity identity = IdentityOf(track);
-    lane->id = identity.id;
-    lane->confirmed = true;
-    lane->color = identity.color;
-    lane->type = identity.type;
-    lanes.push_back(*lane);
+    TrackedLane predicted;
+    predicted.lane = *lane;
+    predicted.id = identity.id;
+    predicted.confirmed = true;
+    predicted.predicted = true;
+    predicted.color = identity.color;
+    predicted.type = identity.type;
+    lanes.push_back(std::move(predicted));
     all.push_back(identity);
   }
 }
 
-void SequenceTracker::SortLeftToRight(std::vector<Lane>& lanes,
+void SequenceTracker::SortLeftToRight(std::vector<TrackedLane>& lanes,
                                       std::vector<LaneIdentity>& all) const {
   std::vector<size_t> order(lanes.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
   auto key = [&](size_t i) {
     return all[i].id >= 0 ? all[i].curve.X(0.5 * (all[i].curve.y_near + all[i].curve.y_far))
-                          : 0.5 * (lanes[i].ground[0].x() + lanes[i].ground[3].x());
+                          : 0.5 * (lanes[i].lane.ground[0].x() + lanes[i].lane.ground[3].x());
   };
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return key(a) < key(b); });
-  std::vector<Lane> sorted_lanes;
+  std::vector<TrackedLane> sorted_lanes;
   std::vector<LaneIdentity> sorted_ids;
   for (size_t i : order) {
-    sorted_lanes.push_back(lanes[i]);
+    sorted_lanes.push_back(std::move(lanes[i]));
     sorted_ids.push_back(all[i]);
   }
   lanes = std::move(sorted_lanes);
   all = std::move(sorted_ids);
 }
 
-std::optional<EgoLane> SequenceTracker::EgoOfConfirmed(const std::vector<Lane>& lanes,
-                                                       const std::vector<LaneIdentity>& all) {
+std::optional<EgoLane> SequenceTracker::EgoOfConfirmed(const std::vector<LaneIdentity>& all) {
   // The ego lane from the confirmed lanes' filtered curves only: a
   // one-frame streak on a car does not bound it, and the filter steadies
   // the offset whose rate warns of a departure.
-  std::vector<std::optional<GroundCurve>> curves(lanes.size());
-  std::vector<int> track_ids(lanes.size(), -1);
-  std::vector<Eigen::Matrix3d> covariances(lanes.size(), Eigen::Matrix3d::Identity());
-  for (size_t i = 0; i < lanes.size(); ++i) {
+  std::vector<std::optional<GroundCurve>> curves(all.size());
+  std::vector<int> track_ids(all.size(), -1);
+  std::vector<Eigen::Matrix3d> covariances(all.size(), Eigen::Matrix3d::Identity());
+  for (size_t i = 0; i < all.size(); ++i) {
     if (!all[i].confirmed) continue;
     curves[i] = all[i].curve;
     track_ids[i] = all[i].id;
@@ -127,8 +134,7 @@ std::optional<EgoLane> SequenceTracker::EgoOfConfirmed(const std::vector<Lane>& 
     ego_.Reset();
     resets_seen_ = lanes_.resets();
   }
-  ego_.Update(ego, lanes_.time_s());
-  return ego;
+  return ego_.Update(std::move(ego), lanes_.time_s());
 }
 
 DetectionPrior SequenceTracker::Prior(const IpmMapping& ipm) const {
