@@ -118,12 +118,15 @@ std::optional<EgoLane> EgoTracker::Update(std::optional<EgoLane> ego, double tim
   while (history_.front().first < time_s - options_.rate_window_s) history_.pop_front();
   left_id_ = ego->left_id;
   right_id_ = ego->right_id;
-  // Least-squares slope of the offset over the window.
+  // Least-squares slope of the offset over the window, in time from this
+  // frame: capture times are Unix seconds (1.7e9), whose squares hold no
+  // fraction of a second in a double.
   double rate = 0;
   const double span = history_.back().first - history_.front().first;
   if (history_.size() >= 4 && span >= 0.2) {
     double st = 0, so = 0, stt = 0, sto = 0;
-    for (const auto& [t, o] : history_) {
+    for (const auto& [at, o] : history_) {
+      const double t = at - time_s;
       st += t;
       so += o;
       stt += t * t;
