@@ -334,15 +334,22 @@ struct StreamOverlays {
   std::unique_ptr<OverlayDrawer> drawer;
 };
 
-// Opens the overlay video and folder when asked; the exit status on failure (reported).
-std::optional<int> OpenOverlays(const CLI::App& app, const StreamFlags& flags,
-                                StreamOverlays* overlays) {
+// The overlay video and folder when asked, or the exit status of a failure
+// (reported).
+struct OpenedOverlays {
+  StreamOverlays overlays;
+  std::optional<int> exit;
+};
+
+OpenedOverlays OpenOverlays(const CLI::App& app, const StreamFlags& flags) {
+  OpenedOverlays opened;
   if (flags.overlay_video) {
     if (const std::string e = lane_tools::OverlayVideo::CheckPath(*flags.overlay_video);
         !e.empty()) {
-      return lane_tools::UsageError(app, e);
+      opened.exit = lane_tools::UsageError(app, e);
+      return opened;
     }
-    overlays->video = std::make_unique<lane_tools::OverlayVideo>(
+    opened.overlays.video = std::make_unique<lane_tools::OverlayVideo>(
         *flags.overlay_video, flags.read.fps > 0 ? flags.read.fps : 10.0);
   }
   std::string overlay_dir;
@@ -350,15 +357,17 @@ std::optional<int> OpenOverlays(const CLI::App& app, const StreamFlags& flags,
     std::error_code ec;
     std::filesystem::create_directories(*overlay, ec);
     if (ec || !std::filesystem::is_directory(*overlay)) {
-      return Failure("stream", absl::StrCat("cannot create overlay folder ", *overlay));
+      opened.exit = Failure("stream", absl::StrCat("cannot create overlay folder ", *overlay));
+      return opened;
     }
     overlay_dir = *overlay;
   }
   if (flags.overlay || flags.overlay_video) {
-    overlays->writer = std::make_unique<OverlayWriter>(overlay_dir, overlays->video.get());
-    overlays->drawer = std::make_unique<OverlayDrawer>(overlays->writer.get());
+    opened.overlays.writer =
+        std::make_unique<OverlayWriter>(overlay_dir, opened.overlays.video.get());
+    opened.overlays.drawer = std::make_unique<OverlayDrawer>(opened.overlays.writer.get());
   }
-  return std::nullopt;
+  return opened;
 }
 
 // Draws the queued overlays and closes the video; true if every overlay was written.
@@ -397,8 +406,9 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
     return Failure("stream", absl::StrCat("cannot write ", *flags.output));
   }
   std::ostream& out = file.is_open() ? static_cast<std::ostream&>(file) : std::cout;
-  StreamOverlays overlays;
-  if (const std::optional<int> exit = OpenOverlays(app, flags, &overlays)) return *exit;
+  OpenedOverlays opened = OpenOverlays(app, flags);
+  if (opened.exit) return *opened.exit;
+  StreamOverlays overlays = std::move(opened.overlays);
 
   FrameSource frames(flags.inputs, flags.raw, flags.read.Options());
   Streamer streamer(MakeChannel(targets->front()), options,

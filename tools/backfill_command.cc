@@ -270,7 +270,12 @@ class RecordingRun {
       // slot is finished whatever happens (the committer waits for it).
       try {
         if (decode) decode(&slot->frame);
-        Detect(*slot, prior);
+        if (slot->frame.error.empty()) {
+          slot->measured = Measure(slot->frame, prior);
+          if (!slot->measured.ok()) {
+            slot->frame.error = std::string(slot->measured.status().message());
+          }
+        }
       } catch (const std::exception& e) {
         slot->frame.bgr.release();
         slot->frame.error = absl::StrCat("error: ", e.what());
@@ -282,20 +287,20 @@ class RecordingRun {
     });
   }
 
-  void Detect(Slot& slot, const lane::DetectionPrior& prior) const {
-    InputFrame& f = slot.frame;
-    if (f.error.empty() &&
-        (f.bgr.cols != config_.camera.image_width || f.bgr.rows != config_.camera.image_height)) {
-      f.error = absl::StrCat("frame is ", f.bgr.cols, "x", f.bgr.rows, " but the camera expects ",
-                             config_.camera.image_width, "x", config_.camera.image_height,
-                             " (camera.image_width/image_height)");
+  // The frame measured with `prior`, or why it was not: the frame has the
+  // wrong size, or the detector failed.
+  absl::StatusOr<lane::MeasuredFrame> Measure(const InputFrame& f,
+                                              const lane::DetectionPrior& prior) const {
+    if (f.bgr.cols != config_.camera.image_width || f.bgr.rows != config_.camera.image_height) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("frame is ", f.bgr.cols, "x", f.bgr.rows, " but the camera expects ",
+                       config_.camera.image_width, "x", config_.camera.image_height,
+                       " (camera.image_width/image_height)"));
     }
-    if (!f.error.empty()) return;
     try {
-      slot.measured = tracker_.Measure(detector_, f.bgr, prior);
-      if (!slot.measured.ok()) f.error = std::string(slot.measured.status().message());
+      return tracker_.Measure(detector_, f.bgr, prior);
     } catch (const std::exception& e) {
-      f.error = absl::StrCat("detector error: ", e.what());
+      return absl::InternalError(absl::StrCat("detector error: ", e.what()));
     }
   }
 

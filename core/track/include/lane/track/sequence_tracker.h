@@ -61,18 +61,21 @@ class SequenceTracker {
   DetectionPrior Prior(const IpmMapping& ipm) const;
 
  private:
-  // Track's steps after the lane tracker's update. With a top view: the
+  // A lane of the frame being tracked and its track's identity (id -1:
+  // none).
+  struct Entry {
+    TrackedLane lane;
+    LaneIdentity identity;
+  };
+  // Track's steps after the lane tracker's update, with a top view: the
   // confirmed lanes of the frame drawn from their filtered curves
   // (report_filtered), the confirmed tracks missed for up to coast_frames
-  // frames added from their prediction, and all sorted left to right. `all`
-  // holds each lane's identity, in the order of `lanes`.
-  void DrawFiltered(std::vector<TrackedLane>& lanes, const std::vector<LaneIdentity>& ids,
-                    const IpmMapping& ipm) const;
-  void AddCoasting(std::vector<TrackedLane>& lanes, std::vector<LaneIdentity>& all,
-                   const IpmMapping& ipm) const;
-  void SortLeftToRight(std::vector<TrackedLane>& lanes, std::vector<LaneIdentity>& all) const;
+  // frames added from their prediction, and all sorted left to right.
+  std::vector<Entry> DrawFiltered(std::vector<Entry> entries, const IpmMapping& ipm) const;
+  std::vector<Entry> WithCoasting(std::vector<Entry> entries, const IpmMapping& ipm) const;
+  static std::vector<Entry> SortedLeftToRight(std::vector<Entry> entries);
   // The ego lane of the confirmed lanes, followed over frames.
-  std::optional<EgoLane> EgoOfConfirmed(const std::vector<LaneIdentity>& all);
+  std::optional<EgoLane> EgoOfConfirmed(const std::vector<Entry>& entries);
 
   CameraModel camera_;
   LaneTracker lanes_;
