@@ -414,14 +414,15 @@ void BM_TrackedVsUntracked(benchmark::State& state) {
     lane::FrameTracker tracker(seq->detector->ipm().camera(), tracking);
     for (size_t i = 0; i < seq->frames.size(); ++i) {
       const auto t0 = std::chrono::steady_clock::now();
-      auto d = tracker.Process(*seq->detector, seq->frames[i], seq->times_s[i]);
+      auto frame = tracker.Process(*seq->detector, seq->frames[i], seq->times_s[i]);
       process.push_back(
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-      tracked.push_back(d->timings.total_ms);
-      refit += d->refit_lanes;
-      failed += d->refit_failed;
+      const lane::Detection& d = frame->detection;
+      tracked.push_back(d.timings.total_ms);
+      refit += d.refit_lanes;
+      failed += d.refit_failed;
       // Lanes found, refitted or searched (as lane detect --track counts).
-      const lane::LanePathCounts paths = lane::CountLanePaths(*d);
+      const lane::LanePathCounts paths = lane::CountLanePaths(d);
       lanes += paths.refit + paths.searched;
     }
   }

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
@@ -57,6 +58,13 @@ void DrawBezier(cv::Mat& canvas, const std::array<Eigen::Vector2d, 4>& control,
   }
 }
 
+// An untracked detection's lanes, as a tracked frame's without ids.
+std::vector<lane::TrackedLane> Untracked(const std::vector<lane::Lane>& lanes) {
+  std::vector<lane::TrackedLane> out(lanes.size());
+  for (size_t i = 0; i < lanes.size(); ++i) out[i].lane = lanes[i];
+  return out;
+}
+
 cv::Mat ToBgr(const cv::Mat& image) {
   cv::Mat bgr;
   if (image.channels() == 1) {
@@ -101,9 +109,12 @@ cv::Point DrawCaption(cv::Mat& canvas, const std::string& text, int x, int y,
   return corner;
 }
 
-cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
-                         const lane::Detector& detector, const std::string& frame_name,
-                         const std::string& details) {
+namespace {
+
+// DrawLanesOnImage of `lanes` (labelled when they have ids) and `ego`.
+cv::Mat DrawOnImage(const cv::Mat& frame, const std::vector<lane::TrackedLane>& lanes,
+                    const std::optional<lane::EgoLane>& ego, const lane::Detector& detector,
+                    const std::string& frame_name, const std::string& details) {
   cv::Mat canvas = ToBgr(frame);
   if (canvas.empty()) return canvas;
 
@@ -120,23 +131,25 @@ cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
   cv::rectangle(canvas, Fixed({roi.left, roi.top}), Fixed({roi.right, roi.bottom}), {0, 0, 255}, 1,
                 cv::LINE_AA, kShift);
 
-  for (size_t i = 0; i < detection.lanes.size(); ++i) {
-    const lane::Lane& lane = detection.lanes[i];
+  for (size_t i = 0; i < lanes.size(); ++i) {
+    const lane::TrackedLane& tracked = lanes[i];
+    const lane::Lane& lane = tracked.lane;
     DrawBezier(
         canvas, lane.image, LaneColour(static_cast<int>(i)),
         [](const Eigen::Vector2d& p) { return p; }, lane.inferred);
-    if (lane.id >= 0) {
+    if (tracked.id >= 0) {
       // Tracked: "#id colour type" at the lane's lower end, '?' until
       // confirmed, "predicted" for a track's prediction (not detected).
       const Eigen::Vector2d& low =
           lane.image[0].y() > lane.image[3].y() ? lane.image[0] : lane.image[3];
       const int x = std::clamp(static_cast<int>(low.x()), 0, std::max(0, canvas.cols - 80));
       const int y = std::clamp(static_cast<int>(low.y()) - canvas.rows / 12, 0, canvas.rows - 1);
-      DrawCaption(canvas,
-                  absl::StrCat(
-                      "#", lane.id, lane.confirmed ? " " : "? ", lane::MarkingColorName(lane.color),
-                      " ", lane::MarkingTypeName(lane.type), lane.predicted ? " predicted" : ""),
-                  x, y, LaneColour(static_cast<int>(i)));
+      DrawCaption(
+          canvas,
+          absl::StrCat("#", tracked.id, tracked.confirmed ? " " : "? ",
+                       lane::MarkingColorName(tracked.color), " ",
+                       lane::MarkingTypeName(tracked.type), tracked.predicted ? " predicted" : ""),
+          x, y, LaneColour(static_cast<int>(i)));
     }
   }
   // Caption: the frame's name; the mode, the lane count and the lanes'
@@ -145,32 +158,33 @@ cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
   int y = margin;
   if (!frame_name.empty()) y = DrawCaption(canvas, frame_name, margin, y).y;
   const char* mode = detector.options().mode == lane::Mode::kTwo ? "2-lanes" : "all lanes";
-  cv::Point at = DrawCaption(canvas,
-                             absl::StrCat(mode, ": ", detection.lanes.size(),
-                                          detection.lanes.size() == 1 ? " lane" : " lanes",
-                                          detection.lanes.empty() ? "" : ", scores:"),
-                             margin, y);
-  for (size_t i = 0; i < detection.lanes.size(); ++i) {
+  cv::Point at =
+      DrawCaption(canvas,
+                  absl::StrCat(mode, ": ", lanes.size(), lanes.size() == 1 ? " lane" : " lanes",
+                               lanes.empty() ? "" : ", scores:"),
+                  margin, y);
+  for (size_t i = 0; i < lanes.size(); ++i) {
     char score[32];
-    std::snprintf(score, sizeof(score), "%.1f", detection.lanes[i].score);
+    std::snprintf(score, sizeof(score), "%.1f", lanes[i].lane.score);
     at = DrawCaption(canvas, score, at.x, y, LaneColour(static_cast<int>(i)));
   }
   if (!details.empty()) at.y = DrawCaption(canvas, details, margin, at.y).y;
-  if (detection.ego) {
-    const lane::EgoLane& e = *detection.ego;
-    char ego[160];
-    std::snprintf(ego, sizeof(ego),
+  if (ego) {
+    const lane::EgoLane& e = *ego;
+    char caption[160];
+    std::snprintf(caption, sizeof(caption),
                   "ego: offset %+.2f m, width %.2f m, heading %+.1f deg, lanes #%d|#%d%s",
                   e.offset_m, e.width_m, e.heading_deg, e.left_id, e.right_id,
                   e.departing ? "  DEPARTING" : "");
-    DrawCaption(canvas, ego, margin, at.y,
+    DrawCaption(canvas, caption, margin, at.y,
                 e.departing ? cv::Scalar(0, 0, 255) : cv::Scalar(255, 255, 255));
   }
   return canvas;
 }
 
-cv::Mat DrawIpmView(const cv::Mat& frame, const lane::Detection& detection,
-                    const lane::Detector& detector, int scale) {
+// DrawIpmView of `lanes`.
+cv::Mat DrawInTopView(const cv::Mat& frame, const std::vector<lane::TrackedLane>& lanes,
+                      const lane::Detector& detector, int scale) {
   scale = std::max(1, scale);
   const cv::Mat top = detector.ipm().Apply(detector.ExtractChannel(frame));
   if (top.empty()) return cv::Mat();
@@ -183,35 +197,78 @@ cv::Mat DrawIpmView(const cv::Mat& frame, const lane::Detection& detection,
   // IPM pixel (col, row) covers [scale*col, scale*(col+1)) in the canvas;
   // its centre is at scale*(col+0.5) - 0.5 in OpenCV's pixel coordinates.
   const double s = scale;
-  for (size_t i = 0; i < detection.lanes.size(); ++i) {
+  for (size_t i = 0; i < lanes.size(); ++i) {
     DrawBezier(
-        canvas, detection.lanes[i].ipm, LaneColour(static_cast<int>(i)),
+        canvas, lanes[i].lane.ipm, LaneColour(static_cast<int>(i)),
         [s](const Eigen::Vector2d& p) {
           return Eigen::Vector2d((p.x() + 0.5) * s - 0.5, (p.y() + 0.5) * s - 0.5);
         },
-        detection.lanes[i].inferred);
+        lanes[i].lane.inferred);
   }
   return canvas;
 }
 
-std::string WriteOverlays(const std::filesystem::path& dir, const std::string& stem,
-                          const cv::Mat& frame, const lane::Detection& detection,
-                          const lane::Detector& detector, const std::string& frame_name,
-                          const std::string& details) {
+}  // namespace
+
+cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
+                         const lane::Detector& detector, const std::string& frame_name,
+                         const std::string& details) {
+  return DrawOnImage(frame, Untracked(detection.lanes), std::nullopt, detector, frame_name,
+                     details);
+}
+
+cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::TrackedFrame& tracked,
+                         const lane::Detector& detector, const std::string& frame_name,
+                         const std::string& details) {
+  return DrawOnImage(frame, tracked.lanes, tracked.ego, detector, frame_name, details);
+}
+
+cv::Mat DrawIpmView(const cv::Mat& frame, const lane::Detection& detection,
+                    const lane::Detector& detector, int scale) {
+  return DrawInTopView(frame, Untracked(detection.lanes), detector, scale);
+}
+
+cv::Mat DrawIpmView(const cv::Mat& frame, const lane::TrackedFrame& tracked,
+                    const lane::Detector& detector, int scale) {
+  return DrawInTopView(frame, tracked.lanes, detector, scale);
+}
+
+namespace {
+
+// Writes the two pictures of `drawn` (a Detection or a TrackedFrame).
+template <typename Drawn>
+std::string WriteBoth(const std::filesystem::path& dir, const std::string& stem,
+                      const cv::Mat& frame, const Drawn& drawn, const lane::Detector& detector,
+                      const std::string& frame_name, const std::string& details) {
   const std::string image_path = (dir / (stem + ".png")).string();
   const std::string ipm_path = (dir / (stem + "_ipm.png")).string();
   try {
-    if (!cv::imwrite(image_path,
-                     DrawLanesOnImage(frame, detection, detector, frame_name, details))) {
+    if (!cv::imwrite(image_path, DrawLanesOnImage(frame, drawn, detector, frame_name, details))) {
       return absl::StrCat("cannot write ", image_path);
     }
-    if (!cv::imwrite(ipm_path, DrawIpmView(frame, detection, detector))) {
+    if (!cv::imwrite(ipm_path, DrawIpmView(frame, drawn, detector))) {
       return absl::StrCat("cannot write ", ipm_path);
     }
   } catch (const cv::Exception& e) {
     return absl::StrCat("cannot write overlay ", image_path, ": ", e.what());
   }
   return "";
+}
+
+}  // namespace
+
+std::string WriteOverlays(const std::filesystem::path& dir, const std::string& stem,
+                          const cv::Mat& frame, const lane::Detection& detection,
+                          const lane::Detector& detector, const std::string& frame_name,
+                          const std::string& details) {
+  return WriteBoth(dir, stem, frame, detection, detector, frame_name, details);
+}
+
+std::string WriteOverlays(const std::filesystem::path& dir, const std::string& stem,
+                          const cv::Mat& frame, const lane::TrackedFrame& tracked,
+                          const lane::Detector& detector, const std::string& frame_name,
+                          const std::string& details) {
+  return WriteBoth(dir, stem, frame, tracked, detector, frame_name, details);
 }
 
 }  // namespace lane_tools

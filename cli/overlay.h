@@ -8,6 +8,7 @@
 #include <string>
 
 #include "lane/detector.h"
+#include "lane/track/tracked_frame.h"
 
 namespace lane_tools {
 
@@ -20,7 +21,13 @@ cv::Scalar LaneColour(int i);
 // points as small circles, and a caption in the top-left corner: the frame's
 // name (when given); the mode, the lane count and each lane's score, left to
 // right, in the lane's colour; then `details` (when given: the latency).
+// A tracked frame's lanes are also labelled "#id colour type" at their lower
+// end ('?' until confirmed, "predicted" for a track's prediction), and its
+// ego lane is captioned.
 cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::Detection& detection,
+                         const lane::Detector& detector, const std::string& frame_name = "",
+                         const std::string& details = "");
+cv::Mat DrawLanesOnImage(const cv::Mat& frame, const lane::TrackedFrame& tracked,
                          const lane::Detector& detector, const std::string& frame_name = "",
                          const std::string& details = "");
 
@@ -34,12 +41,18 @@ cv::Point DrawCaption(cv::Mat& canvas, const std::string& text, int x, int y,
 // with each lane's IPM Bezier drawn in its colour.
 cv::Mat DrawIpmView(const cv::Mat& frame, const lane::Detection& detection,
                     const lane::Detector& detector, int scale = 4);
+cv::Mat DrawIpmView(const cv::Mat& frame, const lane::TrackedFrame& tracked,
+                    const lane::Detector& detector, int scale = 4);
 
 // Writes DIR/STEM.png (DrawLanesOnImage) and DIR/STEM_ipm.png
 // (DrawIpmView), captioned with `frame_name` and `details`; an error message
 // or "".
 std::string WriteOverlays(const std::filesystem::path& dir, const std::string& stem,
                           const cv::Mat& frame, const lane::Detection& detection,
+                          const lane::Detector& detector, const std::string& frame_name = "",
+                          const std::string& details = "");
+std::string WriteOverlays(const std::filesystem::path& dir, const std::string& stem,
+                          const cv::Mat& frame, const lane::TrackedFrame& tracked,
                           const lane::Detector& detector, const std::string& frame_name = "",
                           const std::string& details = "");
 

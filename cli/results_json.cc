@@ -2,9 +2,6 @@
 
 #include <array>
 #include <cmath>
-#include <nlohmann/json.hpp>
-
-#include "cli/tracking_json.h"
 
 namespace lane_tools {
 namespace {
@@ -12,6 +9,7 @@ namespace {
 using Json = nlohmann::ordered_json;
 
 double Round(double v, double scale) {
+  if (!std::isfinite(v)) return v;
   const double r = std::round(v * scale) / scale;
   return r == 0 ? 0.0 : r;  // no "-0.0"
 }
@@ -24,30 +22,38 @@ Json Points(const std::array<Eigen::Vector2d, 4>& points, double scale) {
   return out;
 }
 
-Json Header(const std::string& frame, int width, int height, lane::Mode mode) {
+Json Header(const ResultsFrame& frame) {
   Json out = Json::object();
   out["schema"] = kResultsSchema;
-  out["frame"] = frame;
-  if (width > 0 && height > 0) {
-    out["width"] = width;
-    out["height"] = height;
+  out["frame"] = frame.name;
+  if (frame.width > 0 && frame.height > 0) {
+    out["width"] = frame.width;
+    out["height"] = frame.height;
   }
-  out["mode"] = lane::ModeName(mode);
+  out["mode"] = lane::ModeName(frame.mode);
   return out;
 }
 
-// Invalid UTF-8 (file names) would make dump() throw: replace it.
-std::string Dump(const Json& j) { return j.dump(-1, ' ', false, Json::error_handler_t::replace); }
+// What the detector found of a lane.
+Json LaneJson(const lane::Lane& lane) {
+  Json l = Json::object();
+  l["image"] = Points(lane.image, 1e3);
+  l["ipm"] = Points(lane.ipm, 1e3);
+  l["ground"] = Points(lane.ground, 1e4);
+  l["score"] = Round(lane.score, 1e4);
+  l["inferred"] = lane.inferred;
+  return l;
+}
 
-}  // namespace
-
-void AddLaneTrackingFields(const lane::Lane& lane, Json& l) {
-  l["id"] = lane.id;
-  l["confirmed"] = lane.confirmed;
-  l["predicted"] = lane.predicted;
-  l["color"] = lane::MarkingColorName(lane.color);
-  l["type"] = lane::MarkingTypeName(lane.type);
-  l["refit"] = lane.refit;
+Json TrackedLaneJson(const lane::TrackedLane& tracked) {
+  Json l = LaneJson(tracked.lane);
+  l["id"] = tracked.id;
+  l["confirmed"] = tracked.confirmed;
+  l["predicted"] = tracked.predicted;
+  l["color"] = lane::MarkingColorName(tracked.color);
+  l["type"] = lane::MarkingTypeName(tracked.type);
+  l["refit"] = tracked.lane.refit;
+  return l;
 }
 
 Json EgoJson(const std::optional<lane::EgoLane>& ego) {
@@ -66,38 +72,47 @@ Json EgoJson(const std::optional<lane::EgoLane>& ego) {
   return e;
 }
 
-std::string DetectionJsonLine(const std::string& frame, int width, int height, lane::Mode mode,
-                              const lane::Detection& detection, double decode_ms, bool tracked) {
-  Json out = Header(frame, width, height, mode);
-  Json lanes = Json::array();
-  for (const lane::Lane& lane : detection.lanes) {
-    Json l = Json::object();
-    l["image"] = Points(lane.image, 1e3);
-    l["ipm"] = Points(lane.ipm, 1e3);
-    l["ground"] = Points(lane.ground, 1e4);
-    l["score"] = Round(lane.score, 1e4);
-    l["inferred"] = lane.inferred;
-    if (tracked) AddLaneTrackingFields(lane, l);
-    lanes.push_back(std::move(l));
-  }
-  out["lanes"] = std::move(lanes);
-  if (tracked) out["ego"] = EgoJson(detection.ego);
-  const lane::StageTimings& t = detection.timings;
+Json TimingJson(const lane::StageTimings& t, double decode_ms) {
   Json timing = Json::object();
   timing["decode"] = Round(decode_ms, 1e3);
   for (size_t i = 0; i < lane::DetectorStageCount(); ++i) {
     timing[lane::DetectorStageName(i)] = Round(t.stage_ms[i], 1e3);
   }
   timing["total"] = Round(t.total_ms, 1e3);
-  out["timing_ms"] = std::move(timing);
-  return Dump(out);
+  return timing;
 }
 
-std::string ErrorJsonLine(const std::string& frame, int width, int height, lane::Mode mode,
-                          const std::string& error) {
-  Json out = Header(frame, width, height, mode);
-  out["error"] = error;
-  return Dump(out);
+}  // namespace
+
+Json DetectionJson(const ResultsFrame& frame, const lane::Detection& detection, double decode_ms) {
+  Json out = Header(frame);
+  Json lanes = Json::array();
+  for (const lane::Lane& lane : detection.lanes) lanes.push_back(LaneJson(lane));
+  out["lanes"] = std::move(lanes);
+  out["timing_ms"] = TimingJson(detection.timings, decode_ms);
+  return out;
 }
+
+Json DetectionJson(const ResultsFrame& frame, const lane::TrackedFrame& tracked, double decode_ms) {
+  Json out = Header(frame);
+  Json lanes = Json::array();
+  for (const lane::TrackedLane& lane : tracked.lanes) lanes.push_back(TrackedLaneJson(lane));
+  out["lanes"] = std::move(lanes);
+  out["ego"] = EgoJson(tracked.ego);
+  out["timing_ms"] = TimingJson(tracked.detection.timings, decode_ms);
+  return out;
+}
+
+Json ErrorJson(const ResultsFrame& frame, const std::string& error) {
+  Json out = Header(frame);
+  out["error"] = error;
+  return out;
+}
+
+std::string JsonLine(const Json& record) {
+  return record.dump(-1, ' ', false, Json::error_handler_t::replace);
+}
+
+double RoundTo(double value, int decimals) { return Round(value, std::pow(10.0, decimals)); }
 
 }  // namespace lane_tools

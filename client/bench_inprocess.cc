@@ -59,11 +59,9 @@ void RunWorker(InprocessRun& run) {
     absl::StatusOr<cv::Mat> image = lane::wire::DecodeFrame(frame.request, run.decode, run.needs);
     absl::Status status = image.status();
     if (image.ok()) {
-      absl::StatusOr<lane::Detection> detection =
-          run.tracked ? tracker.Process(run.detector, *image, std::nullopt)
-                      : run.detector.Detect(*image);
-      status = detection.status();
-      if (detection.ok() && run.tracked && t0 >= run.measure_start) {
+      status = run.tracked ? tracker.Process(run.detector, *image, std::nullopt).status()
+                           : run.detector.Detect(*image).status();
+      if (status.ok() && run.tracked && t0 >= run.measure_start) {
         run.tracked_frames.fetch_add(1, std::memory_order_relaxed);
       }
     }

@@ -31,6 +31,7 @@
 #include "streamer.h"
 #include "wire/camera_id.h"
 #include "wire/config_proto.h"
+#include "wire/detection_proto.h"
 
 namespace lane_client {
 namespace {
@@ -99,24 +100,35 @@ class OverlayWriter {
     }
     const cv::Mat frame = DecodeRequestImage(*item.request);
     if (frame.empty()) return "cannot decode the frame for the overlay";
-    const lane::Detection detection = DetectionFromResponse(response);
     // The round trip as the client measured it; the server's own time.
     const std::string details =
         absl::StrFormat("round trip %.1f ms, server %.1f ms", latency_ms,
                         static_cast<double>(response.server_send_time_unix_ns() -
                                             response.server_receive_time_unix_ns()) *
                             1e-6);
-    if (video_ != nullptr) {
-      const std::string error = video_->Add(
-          lane_tools::DrawLanesOnImage(frame, detection, *detector_, item.name, details));
-      if (!error.empty()) return error;
+    // A tracked session's lanes are drawn with their ids and the ego lane,
+    // as by lane detect --track.
+    if (!session->config().tracking().disabled()) {
+      return Draw(item, frame, lane::wire::TrackedFrameFromProto(response), details);
     }
-    if (dir_.empty()) return "";
-    return lane_tools::WriteOverlays(dir_, lane_tools::UniqueStem(item.stem, used_), frame,
-                                     detection, *detector_, item.name, details);
+    return Draw(item, frame, lane::wire::DetectionFromProto(response), details);
   }
 
  private:
+  // `drawn`: a lane::Detection or a lane::TrackedFrame.
+  template <typename Drawn>
+  std::string Draw(const StreamItem& item, const cv::Mat& frame, const Drawn& drawn,
+                   const std::string& details) {
+    if (video_ != nullptr) {
+      const std::string error =
+          video_->Add(lane_tools::DrawLanesOnImage(frame, drawn, *detector_, item.name, details));
+      if (!error.empty()) return error;
+    }
+    if (dir_.empty()) return "";
+    return lane_tools::WriteOverlays(dir_, lane_tools::UniqueStem(item.stem, used_), frame, drawn,
+                                     *detector_, item.name, details);
+  }
+
   const std::filesystem::path dir_;
   lane_tools::OverlayVideo* const video_;
   std::optional<lane::Detector> detector_;
@@ -128,18 +140,20 @@ class OverlayWriter {
 // `fps`: the --fps pace, or 0.
 Streamer::Source MakeSource(FrameSource* frames, const std::string& camera_id, double fps) {
   return [frames, camera_id, fps, first_ns = int64_t{-1},
-          count = int64_t{0}](StreamItem* item) mutable {
+          count = int64_t{0}](uint64_t frame_id) mutable -> std::optional<StreamItem> {
     ClientFrame frame;
-    if (!frames->Next(&frame)) return false;
-    item->name = frame.name;
-    item->stem = frame.stem;
+    if (!frames->Next(&frame)) return std::nullopt;
+    StreamItem item;
+    item.frame_id = frame_id;
+    item.name = frame.name;
+    item.stem = frame.stem;
     if (!frame.error.empty()) {
-      item->local_error = frame.error;
-      return true;
+      item.local_error = frame.error;
+      return item;
     }
     auto request = std::make_shared<v1::FrameRequest>();
     request->set_camera_id(camera_id);
-    request->set_frame_id(item->frame_id);
+    request->set_frame_id(frame_id);
     // Recorded frames carry no capture time: the time they were read, or
     // paced at --fps, the first frame's plus i / fps (the recording's own
     // clock, which a reconnection's pause does not stretch: the tracker then
@@ -150,8 +164,8 @@ Streamer::Source MakeSource(FrameSource* frames, const std::string& camera_id, d
         fps > 0 ? first_ns + static_cast<int64_t>(static_cast<double>(count) * 1e9 / fps) : now_ns);
     ++count;
     SetRequestImage(frame, request.get());
-    item->request = std::move(request);
-    return true;
+    item.request = std::move(request);
+    return item;
   };
 }
 
@@ -242,7 +256,8 @@ class StreamSink {
       Note("stream", absl::StrCat(item.name, ": ", item.local_error));
       out_ << ClientErrorJsonLine(item.name, camera_id_, item.frame_id, item.local_error) << '\n';
     } else {
-      out_ << ResponseJsonLine(item.name, *response, latency_ms, item.attempts, item.connection)
+      out_ << ResponseJsonLine(item.name, *response, SessionFor(*response), latency_ms,
+                               item.attempts, item.connection)
            << '\n';
       if (response->status().code() == v1::FRAME_CODE_OK) {
         ++ok_;
@@ -264,6 +279,27 @@ class StreamSink {
   uint64_t failed() const { return failed_; }
 
  private:
+  // What the records say of the session that answered `response` (its
+  // frame size, mode and tracking), worked out once per session version.
+  const StreamSession& SessionFor(const v1::FrameResponse& response) {
+    if (!session_ || session_version_ != response.calibration_version()) {
+      session_version_ = response.calibration_version();
+      absl::StatusOr<StreamSession> session = streamer_.session()
+                                                  ? StreamSessionOf(*streamer_.session())
+                                                  : absl::FailedPreconditionError("no session");
+      if (!session.ok()) {
+        // Never expected (the server's own resolved config): the records
+        // then lack the frame size, and the lanes' tracking fields.
+        progress_.Clear();
+        Note("stream",
+             absl::StrCat("cannot read the session's config: ", session.status().message()));
+        session = StreamSession{0, 0, lane::Mode::kAll, false};
+      }
+      session_ = *session;
+    }
+    return *session_;
+  }
+
   std::ostream& out_;
   const std::string camera_id_;
   OverlayDrawer* const overlays_;
@@ -271,6 +307,8 @@ class StreamSink {
   lane_tools::ProgressBar& progress_;
   const int total_;
   int answered_ = 0;
+  std::optional<StreamSession> session_;
+  uint64_t session_version_ = 0;
   uint64_t ok_ = 0;
   uint64_t failed_ = 0;
 };
@@ -296,15 +334,22 @@ struct StreamOverlays {
   std::unique_ptr<OverlayDrawer> drawer;
 };
 
-// Opens the overlay video and folder when asked; the exit status on failure (reported).
-std::optional<int> OpenOverlays(const CLI::App& app, const StreamFlags& flags,
-                                StreamOverlays* overlays) {
+// The overlay video and folder when asked, or the exit status of a failure
+// (reported).
+struct OpenedOverlays {
+  StreamOverlays overlays;
+  std::optional<int> exit;
+};
+
+OpenedOverlays OpenOverlays(const CLI::App& app, const StreamFlags& flags) {
+  OpenedOverlays opened;
   if (flags.overlay_video) {
     if (const std::string e = lane_tools::OverlayVideo::CheckPath(*flags.overlay_video);
         !e.empty()) {
-      return lane_tools::UsageError(app, e);
+      opened.exit = lane_tools::UsageError(app, e);
+      return opened;
     }
-    overlays->video = std::make_unique<lane_tools::OverlayVideo>(
+    opened.overlays.video = std::make_unique<lane_tools::OverlayVideo>(
         *flags.overlay_video, flags.read.fps > 0 ? flags.read.fps : 10.0);
   }
   std::string overlay_dir;
@@ -312,15 +357,17 @@ std::optional<int> OpenOverlays(const CLI::App& app, const StreamFlags& flags,
     std::error_code ec;
     std::filesystem::create_directories(*overlay, ec);
     if (ec || !std::filesystem::is_directory(*overlay)) {
-      return Failure("stream", absl::StrCat("cannot create overlay folder ", *overlay));
+      opened.exit = Failure("stream", absl::StrCat("cannot create overlay folder ", *overlay));
+      return opened;
     }
     overlay_dir = *overlay;
   }
   if (flags.overlay || flags.overlay_video) {
-    overlays->writer = std::make_unique<OverlayWriter>(overlay_dir, overlays->video.get());
-    overlays->drawer = std::make_unique<OverlayDrawer>(overlays->writer.get());
+    opened.overlays.writer =
+        std::make_unique<OverlayWriter>(overlay_dir, opened.overlays.video.get());
+    opened.overlays.drawer = std::make_unique<OverlayDrawer>(opened.overlays.writer.get());
   }
-  return std::nullopt;
+  return opened;
 }
 
 // Draws the queued overlays and closes the video; true if every overlay was written.
@@ -359,8 +406,9 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
     return Failure("stream", absl::StrCat("cannot write ", *flags.output));
   }
   std::ostream& out = file.is_open() ? static_cast<std::ostream&>(file) : std::cout;
-  StreamOverlays overlays;
-  if (const std::optional<int> exit = OpenOverlays(app, flags, &overlays)) return *exit;
+  OpenedOverlays opened = OpenOverlays(app, flags);
+  if (opened.exit) return *opened.exit;
+  StreamOverlays overlays = std::move(opened.overlays);
 
   FrameSource frames(flags.inputs, flags.raw, flags.read.Options());
   Streamer streamer(MakeChannel(targets->front()), options,

@@ -101,7 +101,9 @@ absl::Status Streamer::Run(const Source& source, const Sink& sink) {
     grpc::Status status = PrepareSession(first_connection);
     if (status.ok()) {
       first_connection = false;
-      status = RunAttempt(source, sink, &progress);
+      Attempt attempt = RunAttempt(source, sink);
+      status = std::move(attempt.status);
+      progress = attempt.progress;
     }
     EmitLocalErrors(sink);
     {
@@ -153,29 +155,31 @@ void Streamer::EmitLocalErrors(const Sink& sink) {
   }
 }
 
-std::string Streamer::TakeAnswered(uint64_t frame_id, Clock::time_point now,
-                                   std::vector<std::shared_ptr<StreamItem>>* ready) {
+Streamer::Answered Streamer::TakeAnswered(uint64_t frame_id, Clock::time_point now) {
+  Answered answered;
   absl::MutexLock lock(&mu_);
   while (!pending_.empty() && pending_.front()->request == nullptr && passed_ > 0) {
-    ready->push_back(std::move(pending_.front()));
+    answered.ready.push_back(std::move(pending_.front()));
     pending_.pop_front();
     --passed_;
   }
   if (pending_.empty() || passed_ == 0 || written_ == 0 || pending_.front()->frame_id != frame_id) {
-    return absl::StrCat(
+    answered.protocol_error = absl::StrCat(
         "response for frame_id ", frame_id, " but the oldest unanswered frame is ",
         pending_.empty() ? std::string("none") : absl::StrCat(pending_.front()->frame_id));
+    return answered;
   }
-  ready->push_back(std::move(pending_.front()));
+  answered.ready.push_back(std::move(pending_.front()));
   pending_.pop_front();
   --passed_;
   --unanswered_;
   --written_;
   last_activity_ = now;
-  return "";
+  return answered;
 }
 
-grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* progress) {
+Streamer::Attempt Streamer::RunAttempt(const Source& source, const Sink& sink) {
+  Attempt attempt;
   grpc::ClientContext context;
   context.AddMetadata(kCameraIdHeader, options_.camera_id);
   std::unique_ptr<Stream> stream = stub_->StreamFrames(&context);
@@ -197,11 +201,12 @@ grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* 
   v1::FrameResponse response;
   while (stream->Read(&response)) {
     const auto now = Clock::now();
-    std::vector<std::shared_ptr<StreamItem>> ready;
-    protocol_error = TakeAnswered(response.frame_id(), now, &ready);
+    Answered answered = TakeAnswered(response.frame_id(), now);
     cv_.SignalAll();
+    protocol_error = std::move(answered.protocol_error);
     if (!protocol_error.empty()) break;
     Remember(response);
+    const std::vector<std::shared_ptr<StreamItem>>& ready = answered.ready;
     for (size_t i = 0; i < ready.size(); ++i) {
       ready[i]->connection = stats_.connections;
       const StreamItem& item = *ready[i];
@@ -209,7 +214,7 @@ grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* 
         sink(item, nullptr, 0.0);
       } else {
         sink(item, &response, MillisecondsBetween(item.last_sent, now));
-        *progress = true;
+        attempt.progress = true;
       }
       ++stats_.frames;
     }
@@ -231,20 +236,23 @@ grpc::Status Streamer::RunAttempt(const Source& source, const Sink& sink, bool* 
   if (writer_running || !protocol_error.empty()) context.TryCancel();
   writer.join();
   watchdog.join();
-  grpc::Status status = stream->Finish();
-  if (!protocol_error.empty()) return grpc::Status(grpc::StatusCode::INTERNAL, protocol_error);
+  attempt.status = stream->Finish();
+  if (!protocol_error.empty()) {
+    attempt.status = grpc::Status(grpc::StatusCode::INTERNAL, protocol_error);
+    return attempt;
+  }
   bool stalled = false;
   {
     absl::MutexLock lock(&mu_);
     stalled = stalled_;
   }
   if (stalled) {
-    status =
+    attempt.status =
         grpc::Status(grpc::StatusCode::CANCELLED,
                      absl::StrCat("no response for ", absl::FormatDuration(options_.stall_timeout),
                                   " with frames in flight"));
   }
-  return status;
+  return attempt;
 }
 
 void Streamer::Remember(const v1::FrameResponse& response) {
@@ -299,14 +307,15 @@ void Streamer::WriterLoop(Stream* stream, const Source& source) {
       continue;
     }
     if (!source_done_ && unanswered_ < options_.window) {
-      auto item = std::make_shared<StreamItem>();
-      item->frame_id = next_frame_id_;
+      const uint64_t frame_id = next_frame_id_;
       mu_.Unlock();
-      const bool got = source(item.get());
+      std::optional<StreamItem> got = source(frame_id);
       mu_.Lock();
       if (!got) {
         source_done_ = true;
       } else {
+        auto item = std::make_shared<StreamItem>(*std::move(got));
+        item->frame_id = frame_id;
         ++next_frame_id_;
         if (item->request != nullptr) ++unanswered_;
         pending_.push_back(std::move(item));

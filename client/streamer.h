@@ -43,7 +43,7 @@
 namespace lane_client {
 
 struct StreamItem {
-  uint64_t frame_id = 0;  // set by the streamer before the source fills the rest
+  uint64_t frame_id = 0;  // set by the streamer
   std::string name;
   std::string stem;
   // What is sent; null when the frame could not be read (local_error).
@@ -99,9 +99,10 @@ struct StreamerStats {
 
 class Streamer {
  public:
-  // Fills `item` (name, stem, request with item->frame_id, or local_error);
-  // false when there are no more frames. Runs on the writer thread.
-  using Source = std::function<bool(StreamItem* item)>;
+  // The frame with id `frame_id` (its name, stem and request, or
+  // local_error); none when there are no more frames. Runs on the writer
+  // thread.
+  using Source = std::function<std::optional<StreamItem>(uint64_t frame_id)>;
   // Called once per frame, in frame order, on Run's thread. `response` is
   // null for a frame with a local_error. `latency_ms`: last send to response.
   using Sink = std::function<void(const StreamItem& item, const lane::v1::FrameResponse* response,
@@ -127,13 +128,20 @@ class Streamer {
   using Stream = grpc::ClientReaderWriter<lane::v1::FrameRequest, lane::v1::FrameResponse>;
 
   grpc::Status PrepareSession(bool first_connection);
-  // One StreamFrames call. `progress`: some frame was answered.
-  grpc::Status RunAttempt(const Source& source, const Sink& sink, bool* progress);
-  // Moves the frames a response for `frame_id` answers (local errors before
-  // it, then its own) from pending_ to `ready`; a protocol error message
-  // when it answers no frame in flight, else "".
-  std::string TakeAnswered(uint64_t frame_id, Clock::time_point now,
-                           std::vector<std::shared_ptr<StreamItem>>* ready);
+  // How one StreamFrames call ended, and whether it answered some frame.
+  struct Attempt {
+    grpc::Status status;
+    bool progress = false;
+  };
+  Attempt RunAttempt(const Source& source, const Sink& sink);
+  // The frames a response for `frame_id` answers (local errors before it,
+  // then its own), taken from pending_; or, when it answers no frame in
+  // flight, a protocol error message.
+  struct Answered {
+    std::vector<std::shared_ptr<StreamItem>> ready;
+    std::string protocol_error;  // "" when it answered a frame
+  };
+  Answered TakeAnswered(uint64_t frame_id, Clock::time_point now);
   void WriterLoop(Stream* stream, const Source& source);
   void WatchdogLoop(grpc::ClientContext* context);
   void EmitLocalErrors(const Sink& sink);

@@ -5,7 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <optional>
+#include <utility>
 
 #include "frame_processor.h"
 #include "fuzz_common.h"
@@ -24,13 +24,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (request.has_session_config()) {
     (void)lane::server::SessionSpecFromProto(request.session_config());
   }
-  lane::v1::FrameResponse response;
   const lane::server::Arrival arrival = lane::server::Arrival::Now();
-  lane::server::StartResponse(request, request.camera_id(), arrival, &response);
-  std::optional<lane::Detection> detection;
-  (void)lane::server::ProcessFrame(
+  lane::server::ProcessedFrame processed = lane::server::ProcessFrame(
       request, *session, lane::server::FrameLimits{int64_t{1920} * 1080, absl::Milliseconds(500)},
-      arrival, *metrics, &response, &detection);
-  lane::server::FinishFrame(*session, /*tracked=*/false, detection, &response);
+      arrival, *metrics);
+  (void)lane::server::FinishFrame(
+      *session, /*tracked=*/false,
+      lane::server::StartResponse(request, request.camera_id(), arrival),
+      std::move(processed.outcome));
   return 0;
 }

@@ -13,6 +13,7 @@
 #include "absl/status/status.h"
 #include "absl/time/time.h"
 #include "lane/detector.h"
+#include "lane/track/tracked_frame.h"
 #include "lane/v1/lane_service.pb.h"
 #include "live_feed.h"
 #include "metrics.h"
@@ -31,10 +32,10 @@ struct Arrival {
 
 double SecondsSince(SteadyTime start);
 
-// The fields of a response that do not depend on processing: frame id,
+// A response with the fields that do not depend on processing: frame id,
 // capture time, camera id, receive time.
-void StartResponse(const v1::FrameRequest& request, const std::string& camera_id,
-                   const Arrival& arrival, v1::FrameResponse* response);
+v1::FrameResponse StartResponse(const v1::FrameRequest& request, const std::string& camera_id,
+                                const Arrival& arrival);
 
 // Server-wide bounds on one frame's work.
 struct FrameLimits {
@@ -46,36 +47,52 @@ struct FrameLimits {
   absl::Duration decode_cpu_budget = absl::Milliseconds(500);
 };
 
-// Decodes and detects `request`'s frame with the session's detector: an OK
-// frame's detection goes into `detection` (its lanes stay lanes until
-// FinishFrame), and `response` gets the status, timings and calibration
-// version. A bad frame is not an error of the call: its status goes into the
-// response and is also returned. Records queue wait, stage durations, frame
-// latency and the frame's result in `metrics`.
+// What processing made of a frame, kept until its response is written
+// (FinishFrame).
+struct FrameOutcome {
+  // OK, or why the frame failed (bad data, too large, a detector error): the
+  // frame's status, not the call's.
+  absl::Status status;
+  uint64_t calibration_version = 0;  // the session version used
+  v1::StageTimings timings;          // queue wait, decode and the detector's stages
+  // An OK frame's detection (its lanes stay lanes until FinishFrame) and,
+  // for a tracked session, each lane's marking for the tracker's vote.
+  std::optional<lane::MeasuredFrame> measured;
+};
+
+struct ProcessedFrame {
+  FrameOutcome outcome;
+  // With `sample_live`, when the session's camera is watched and its draw
+  // interval has passed (LiveFeed::ClaimDrawTurn): the decoded frame's rows
+  // (LiveFrame: the rows the detector read, or the whole frame for raw
+  // frames and full_decode sessions). Otherwise empty, and nothing is copied.
+  LiveFrame live_sample;
+};
+
+// Decodes and detects `request`'s frame with the session's detector. A bad
+// frame is not an error of the call: its status is the outcome's. Records
+// queue wait, stage durations, frame latency and the frame's result in
+// `metrics`.
 // With `tracked` (a tracked session's frame), this is the session tracker's
 // Measure: the detector also searches the predicted lanes, and each lane's
 // colour and type are read for FinishFrame's vote.
-// With `live_sample` (the live view is on): when the session's camera is
-// watched and its draw interval has passed (LiveFeed::ClaimDrawTurn), the
-// decoded frame's rows go there (LiveFrame: the rows the detector read, or
-// the whole frame for raw frames and full_decode sessions); otherwise it is
-// left empty, and nothing is copied.
-absl::Status ProcessFrame(const v1::FrameRequest& request, Session& session,
-                          const FrameLimits& limits, const Arrival& arrival, Metrics& metrics,
-                          v1::FrameResponse* response, std::optional<lane::Detection>* detection,
-                          bool tracked = false, LiveFrame* live_sample = nullptr);
+ProcessedFrame ProcessFrame(const v1::FrameRequest& request, Session& session,
+                            const FrameLimits& limits, const Arrival& arrival, Metrics& metrics,
+                            bool tracked = false, bool sample_live = false);
 
 // In frame order, after ProcessFrame, when the response is about to be
-// written: with `tracked`, an OK frame's detection goes through the session
-// tracker's Commit (ids, confirmed flags, voted colours and types, predicted
-// lanes, the ego lane; time: the frame's capture time when it has one); then
-// its lanes and ego lane go into `response`. Nothing for a failed frame.
-void FinishFrame(Session& session, bool tracked, std::optional<lane::Detection>& detection,
-                 v1::FrameResponse* response);
+// written: `response` (StartResponse's) completed with `outcome`'s status,
+// calibration version and timings and, for an OK frame, its lanes. With
+// `tracked`, an OK frame goes through the session tracker's Commit first
+// (ids, confirmed flags, voted colours and types, predicted lanes, the ego
+// lane; time: the frame's capture time when it has one).
+v1::FrameResponse FinishFrame(Session& session, bool tracked, v1::FrameResponse response,
+                              FrameOutcome outcome);
 
 // Answers a frame without processing it (dropped, or refused before
-// processing): sets the status and counts the result.
-void AnswerUnprocessed(const absl::Status& status, Metrics& metrics, v1::FrameResponse* response);
+// processing): `response` with the status set; counts the result.
+v1::FrameResponse AnswerUnprocessed(const absl::Status& status, Metrics& metrics,
+                                    v1::FrameResponse response);
 
 }  // namespace lane::server
 

@@ -38,9 +38,10 @@ absl::Status StreamAged() {
 struct FrameStream::Slot {
   std::unique_ptr<v1::FrameRequest> request;  // released once processed
   v1::FrameResponse response;
-  // An OK frame's lanes, kept as lanes until the response is written (and,
-  // for a tracked session, committed to its tracker in stream order then).
-  std::optional<lane::Detection> detection;
+  // What processing made of the frame, once processed: an OK frame's lanes
+  // stay lanes until the response is written (and, for a tracked session,
+  // are committed to its tracker in stream order then).
+  std::optional<FrameOutcome> outcome;
   // The live view's copy of the frame, when its camera is watched and due.
   LiveFrame live_sample;
   grpc::ByteBuffer wire;  // the response, serialized for the write
@@ -129,7 +130,7 @@ void FrameStream::ReceiveLocked() {
   first_request_ = false;
   if (camera_id_.empty()) camera_id_ = request.camera_id();
   slot->camera_id = request.camera_id().empty() ? camera_id_ : request.camera_id();
-  StartResponse(request, slot->camera_id, slot->arrival, &slot->response);
+  slot->response = StartResponse(request, slot->camera_id, slot->arrival);
 
   if (slot->camera_id.empty()) {
     AnswerLocked(*slot, wire::InvalidRequest("frame without camera_id"));
@@ -202,11 +203,12 @@ void FrameStream::Process(const std::shared_ptr<Slot>& slot) {
       wire::ToFrameStatus(resumed.status, slot->response.mutable_resume_status());
     }
     if (slot->session != nullptr) {
-      // A bad frame's status is in its response; the stream goes on.
-      ProcessFrame(request, *slot->session, deps_.limits, slot->arrival, deps_.metrics,
-                   &slot->response, &slot->detection, slot->session->TracksStreams(),
-                   deps_.live_view != nullptr ? &slot->live_sample : nullptr)
-          .IgnoreError();
+      // A bad frame's status goes into its response; the stream goes on.
+      ProcessedFrame processed =
+          ProcessFrame(request, *slot->session, deps_.limits, slot->arrival, deps_.metrics,
+                       slot->session->TracksStreams(), deps_.live_view != nullptr);
+      slot->outcome = std::move(processed.outcome);
+      slot->live_sample = std::move(processed.live_sample);
     }
   }
   slot->request.reset();  // the frame's bytes are no longer needed
@@ -274,7 +276,7 @@ void FrameStream::ApplyPolicyLocked(const Session& session) {
 }
 
 void FrameStream::AnswerLocked(Slot& slot, const absl::Status& status) {
-  AnswerUnprocessed(status, deps_.metrics, &slot.response);
+  slot.response = AnswerUnprocessed(status, deps_.metrics, std::move(slot.response));
   slot.done = true;
 }
 
@@ -311,8 +313,11 @@ void FrameStream::MaybeWriteLocked() {
     }
     // Tracking sees the frames in the stream's order.
     if (front.session != nullptr) {
-      FinishFrame(*front.session, front.session->TracksStreams(), front.detection, &front.response);
-      front.detection.reset();
+      if (front.outcome) {
+        front.response = FinishFrame(*front.session, front.session->TracksStreams(),
+                                     std::move(front.response), *std::move(front.outcome));
+        front.outcome.reset();
+      }
       MaybeAttachResumeStateLocked(front);
     }
     front.response.set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());

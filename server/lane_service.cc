@@ -28,13 +28,16 @@ v1::CreateOutcome OutcomeToProto(SessionRegistry::Outcome outcome) {
   return v1::CREATE_OUTCOME_UNSPECIFIED;
 }
 
-void DefaultConfigToProto(lane::Mode mode, uint32_t max_inflight, v1::SessionConfig* out) {
+// A session config of the defaults for `mode`.
+v1::SessionConfig DefaultConfigProto(lane::Mode mode, uint32_t max_inflight) {
   lane::Config config;
   config.detector = lane::DetectorOptions::ForMode(mode);
-  wire::ConfigToProto(config, out);
+  v1::SessionConfig out;
+  wire::ConfigToProto(config, &out);
   StreamPolicy stream;
   stream.max_inflight_frames = max_inflight;
-  StreamPolicyToProto(stream, out->mutable_stream());
+  StreamPolicyToProto(stream, out.mutable_stream());
+  return out;
 }
 
 }  // namespace
@@ -221,17 +224,17 @@ grpc::ServerUnaryReactor* LaneServiceImpl::Detect(grpc::CallbackServerContext* c
                 }
               }
               if (session != nullptr) {
-                StartResponse(request, request.camera_id(), arrival, response);
                 const bool track = session->TracksUnary();
-                std::optional<lane::Detection> detection;
-                LiveFrame sample;
-                status = ProcessFrame(request, *session, options_.frame_limits, arrival, metrics_,
-                                      response, &detection, track,
-                                      options_.live_view != nullptr ? &sample : nullptr);
-                FinishFrame(*session, track, detection, response);
+                ProcessedFrame processed =
+                    ProcessFrame(request, *session, options_.frame_limits, arrival, metrics_, track,
+                                 options_.live_view != nullptr);
+                status = processed.outcome.status;
+                *response = FinishFrame(*session, track,
+                                        StartResponse(request, request.camera_id(), arrival),
+                                        std::move(processed.outcome));
                 response->set_server_send_time_unix_ns(absl::GetCurrentTimeNanos());
                 if (options_.live_view != nullptr) {
-                  options_.live_view->Record(session, *response, std::move(sample));
+                  options_.live_view->Record(session, *response, std::move(processed.live_sample));
                 }
               }
               metrics_.FrameAnswered();
@@ -253,26 +256,27 @@ grpc::ServerUnaryReactor* LaneServiceImpl::GetServerInfo(grpc::CallbackServerCon
         if (absl::Status s = CheckBearerToken(call->context(), options_.auth_tokens); !s.ok()) {
           return call->Reply(s);
         }
-        FillServerInfo(call->response());
+        *call->response() = ServerInfo();
         call->Reply(absl::OkStatus());
       });
 }
 
-void LaneServiceImpl::FillServerInfo(v1::ServerInfo* response) const {
+v1::ServerInfo LaneServiceImpl::ServerInfo() const {
+  v1::ServerInfo info;
   const BuildInfo& build = options_.build;
-  response->set_version(build.version);
-  response->set_build("git " + build.git_revision + ", " + build.build_type + ", gRPC " +
-                      build.grpc_version + ", OpenCV " + build.opencv_version);
-  response->set_process_cpu_seconds(ProcessCpuSeconds());
-  response->set_live_view_port(
+  info.set_version(build.version);
+  info.set_build("git " + build.git_revision + ", " + build.build_type + ", gRPC " +
+                 build.grpc_version + ", OpenCV " + build.opencv_version);
+  info.set_process_cpu_seconds(ProcessCpuSeconds());
+  info.set_live_view_port(
       static_cast<uint32_t>(std::max(0, live_view_port_.load(std::memory_order_relaxed))));
-  response->add_encoded_formats("jpeg");
-  response->add_encoded_formats("png");
-  response->add_raw_formats(v1::PIXEL_FORMAT_BGR8);
-  response->add_raw_formats(v1::PIXEL_FORMAT_RGB8);
-  response->add_raw_formats(v1::PIXEL_FORMAT_GRAY8);
+  info.add_encoded_formats("jpeg");
+  info.add_encoded_formats("png");
+  info.add_raw_formats(v1::PIXEL_FORMAT_BGR8);
+  info.add_raw_formats(v1::PIXEL_FORMAT_RGB8);
+  info.add_raw_formats(v1::PIXEL_FORMAT_GRAY8);
   const SessionRegistry::Options& registry = sessions_.options();
-  v1::ServerLimits* limits = response->mutable_limits();
+  v1::ServerLimits* limits = info.mutable_limits();
   limits->set_max_receive_message_bytes(options_.max_receive_message_bytes);
   limits->set_max_frame_pixels(static_cast<uint64_t>(options_.frame_limits.max_frame_pixels));
   limits->set_max_sessions(static_cast<uint32_t>(registry.max_sessions));
@@ -280,10 +284,11 @@ void LaneServiceImpl::FillServerInfo(v1::ServerInfo* response) const {
       registry.ttl == absl::InfiniteDuration() ? 0.0 : absl::ToDoubleSeconds(registry.ttl));
   limits->set_max_inflight_frames(registry.default_max_inflight_frames);
   limits->set_workers(static_cast<uint32_t>(pool_.threads()));
-  DefaultConfigToProto(lane::Mode::kAll, registry.default_max_inflight_frames,
-                       response->mutable_default_config_all());
-  DefaultConfigToProto(lane::Mode::kTwo, registry.default_max_inflight_frames,
-                       response->mutable_default_config_two());
+  *info.mutable_default_config_all() =
+      DefaultConfigProto(lane::Mode::kAll, registry.default_max_inflight_frames);
+  *info.mutable_default_config_two() =
+      DefaultConfigProto(lane::Mode::kTwo, registry.default_max_inflight_frames);
+  return info;
 }
 
 }  // namespace lane::server

@@ -111,7 +111,8 @@ class LaneServiceImpl final : public RawLaneService {
   // The one check of every call: the Bearer token (auth.h), then the
   // serving state.
   absl::Status Admission(const grpc::ServerContextBase& context) const;
-  void FillServerInfo(v1::ServerInfo* response) const;
+  // GetServerInfo's answer.
+  v1::ServerInfo ServerInfo() const;
   // Drops a finished stream from streams_ (its on_done callback).
   void Unregister(FrameStream* stream);
 

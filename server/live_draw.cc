@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
@@ -104,15 +105,6 @@ int TopViewScale(const lane::Detector& detector) {
   return std::clamp(kLiveTopViewWidth / std::max(1, detector.ipm().width()), 1, 8);
 }
 
-// Index into `lanes` of the lane with tracking id `id`, or -1.
-int IndexOfId(const std::vector<lane::Lane>& lanes, int id) {
-  if (id <= 0) return -1;
-  for (size_t i = 0; i < lanes.size(); ++i) {
-    if (lanes[i].id == id) return static_cast<int>(i);
-  }
-  return -1;
-}
-
 constexpr int kLiveSlots = 8;
 
 }  // namespace
@@ -188,8 +180,8 @@ void DrawHorizonAndVanishingPoint(cv::Mat& canvas, const lane::CameraModel& came
 // lanes (ego lane shaded between `ego_left` and `ego_right`, -1: none); an
 // empty picture when there is none.
 cv::Mat DrawLiveTopView(const LiveFrame& frame, const lane::Detector& detector,
-                        const std::vector<lane::Lane>& lanes, const std::vector<int>& slots,
-                        int ego_left, int ego_right) {
+                        const std::vector<lane::TrackedLane>& lanes,
+                        const std::vector<int>& slots, int ego_left, int ego_right) {
   const cv::Mat view = detector.ipm().Apply(detector.ExtractChannel(DetectorInput(frame)));
   if (view.empty()) return cv::Mat();
   cv::Mat stretched;
@@ -204,13 +196,14 @@ cv::Mat DrawLiveTopView(const LiveFrame& frame, const lane::Detector& detector,
     return Eigen::Vector2d((p.x() + 0.5) * s - 0.5, (p.y() + 0.5) * s - 0.5);
   };
   if (ego_left >= 0 && ego_right >= 0) {
-    ShadeBetween(top, CurvePoints(lanes[size_t(ego_left)].ipm, to_top),
-                 CurvePoints(lanes[size_t(ego_right)].ipm, to_top), cv::Scalar(80, 200, 80), 0.25);
+    ShadeBetween(top, CurvePoints(lanes[size_t(ego_left)].lane.ipm, to_top),
+                 CurvePoints(lanes[size_t(ego_right)].lane.ipm, to_top), cv::Scalar(80, 200, 80),
+                 0.25);
   }
   for (size_t i = 0; i < lanes.size(); ++i) {
-    const lane::Lane& lane = lanes[i];
+    const lane::Lane& lane = lanes[i].lane;
     DrawCurve(top, CurvePoints(lane.ipm, to_top), LiveSlotColour(slots[i]), 2,
-              lane.predicted || lane.inferred);
+              lanes[i].predicted || lane.inferred);
   }
   return top;
 }
@@ -220,7 +213,7 @@ cv::Mat DrawLiveTopView(const LiveFrame& frame, const lane::Detector& detector,
 LiveDrawing DrawLiveSample(const LiveSample& sample, const lane::Detector& detector) {
   LiveDrawing out;
   const LiveFrame& frame = sample.frame;
-  const std::vector<lane::Lane> lanes = lane::wire::LanesFromProto(sample.response);
+  const std::vector<lane::TrackedLane> lanes = lane::wire::LanesFromProto(sample.response);
   const std::vector<int> slots = LiveLaneSlots(sample.response);
   const lane::CameraModel& camera = detector.ipm().camera();
   const auto identity = [](const Eigen::Vector2d& p) { return p; };
@@ -234,26 +227,28 @@ LiveDrawing DrawLiveSample(const LiveSample& sample, const lane::Detector& detec
                          " (what the detector reads)"),
             {4, 20}, cv::Scalar(200, 200, 200));
   }
-  const bool has_ego = sample.response.has_ego();
-  const int ego_left = has_ego ? IndexOfId(lanes, sample.response.ego().left_lane_id()) : -1;
-  const int ego_right = has_ego ? IndexOfId(lanes, sample.response.ego().right_lane_id()) : -1;
+  // The ego lane's boundaries, found among the lanes by their ids.
+  const std::optional<lane::EgoLane> ego_lane = lane::wire::EgoFromProto(sample.response);
+  const int ego_left = ego_lane ? ego_lane->left_index : -1;
+  const int ego_right = ego_lane ? ego_lane->right_index : -1;
   if (ego_left >= 0 && ego_right >= 0) {
-    ShadeBetween(canvas, CurvePoints(lanes[size_t(ego_left)].image, identity),
-                 CurvePoints(lanes[size_t(ego_right)].image, identity), cv::Scalar(80, 200, 80),
-                 0.25);
+    ShadeBetween(canvas, CurvePoints(lanes[size_t(ego_left)].lane.image, identity),
+                 CurvePoints(lanes[size_t(ego_right)].lane.image, identity),
+                 cv::Scalar(80, 200, 80), 0.25);
   }
   DrawHorizonAndVanishingPoint(canvas, camera);
   for (size_t i = 0; i < lanes.size(); ++i) {
-    const lane::Lane& lane = lanes[i];
+    const lane::TrackedLane& tracked = lanes[i];
+    const lane::Lane& lane = tracked.lane;
     const cv::Scalar colour = LiveSlotColour(slots[i]);
     const bool ego = static_cast<int>(i) == ego_left || static_cast<int>(i) == ego_right;
     DrawCurve(canvas, CurvePoints(lane.image, identity), colour, ego ? 3 : 2,
-              lane.predicted || lane.inferred);
-    if (lane.id > 0) {
+              tracked.predicted || lane.inferred);
+    if (tracked.id > 0) {
       const Eigen::Vector2d& low =
           lane.image[0].y() > lane.image[3].y() ? lane.image[0] : lane.image[3];
       if (Drawable(low)) {
-        DrawTag(canvas, absl::StrCat("#", lane.id),
+        DrawTag(canvas, absl::StrCat("#", tracked.id),
                 {static_cast<int>(low.x()) - 12, static_cast<int>(low.y()) - canvas.rows / 10},
                 colour);
       }

@@ -35,11 +35,11 @@ constexpr int64_t kMaxBackfillConfigBytes = int64_t{1} << 20;
 
 // One frame on its way: read (and decoded) on a worker or by the video
 // reader, detected on a worker, then tracked and written in order. `frame`
-// and `detection` belong to the worker until Finish and to the committer
+// and `measured` belong to the worker until Finish and to the committer
 // after Wait.
 struct Slot {
   InputFrame frame;
-  absl::StatusOr<lane::Detection> detection = lane::Detection();
+  absl::StatusOr<lane::MeasuredFrame> measured = lane::MeasuredFrame();
 
   void Finish() {
     absl::MutexLock lock(&mu);
@@ -139,7 +139,12 @@ class RecordingRun {
       // slot is finished whatever happens (the committer waits for it).
       try {
         if (decode) decode(&slot->frame);
-        Detect(*slot, prior);
+        if (slot->frame.error.empty()) {
+          slot->measured = Measure(slot->frame, prior);
+          if (!slot->measured.ok()) {
+            slot->frame.error = std::string(slot->measured.status().message());
+          }
+        }
       } catch (const std::exception& e) {
         slot->frame.bgr.release();
         slot->frame.error = absl::StrCat("error: ", e.what());
@@ -151,20 +156,20 @@ class RecordingRun {
     });
   }
 
-  void Detect(Slot& slot, const lane::DetectionPrior& prior) const {
-    InputFrame& f = slot.frame;
-    if (f.error.empty() &&
-        (f.bgr.cols != config_.camera.image_width || f.bgr.rows != config_.camera.image_height)) {
-      f.error = absl::StrCat("frame is ", f.bgr.cols, "x", f.bgr.rows, " but the camera expects ",
-                             config_.camera.image_width, "x", config_.camera.image_height,
-                             " (camera.image_width/image_height)");
+  // The frame measured with `prior`, or why it was not: the frame has the
+  // wrong size, or the detector failed.
+  absl::StatusOr<lane::MeasuredFrame> Measure(const InputFrame& f,
+                                              const lane::DetectionPrior& prior) const {
+    if (f.bgr.cols != config_.camera.image_width || f.bgr.rows != config_.camera.image_height) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("frame is ", f.bgr.cols, "x", f.bgr.rows, " but the camera expects ",
+                       config_.camera.image_width, "x", config_.camera.image_height,
+                       " (camera.image_width/image_height)"));
     }
-    if (!f.error.empty()) return;
     try {
-      slot.detection = tracker_.Measure(detector_, f.bgr, prior);
-      if (!slot.detection.ok()) f.error = std::string(slot.detection.status().message());
+      return tracker_.Measure(detector_, f.bgr, prior);
     } catch (const std::exception& e) {
-      f.error = absl::StrCat("detector error: ", e.what());
+      return absl::InternalError(absl::StrCat("detector error: ", e.what()));
     }
   }
 
@@ -174,18 +179,18 @@ class RecordingRun {
     slot->Wait();
     ++frames_;
     const InputFrame& f = slot->frame;
-    const lane::Mode mode = detector_.options().mode;
-    const int width = config_.camera.image_width, height = config_.camera.image_height;
+    const ResultsFrame record{f.name, config_.camera.image_width, config_.camera.image_height,
+                              detector_.options().mode};
     if (!f.error.empty()) {
       ++failed_;
       if (first_error_.empty()) first_error_ = absl::StrCat(f.name, ": ", f.error);
-      out_.WriteLine(ErrorJsonLine(f.name, width, height, mode, f.error));
+      out_.WriteLine(JsonLine(ErrorJson(record, f.error)));
       return;
     }
-    tracker_.Commit(detector_, *slot->detection, std::nullopt);
-    lanes_ += static_cast<long>(slot->detection->lanes.size());
-    out_.WriteLine(
-        DetectionJsonLine(f.name, width, height, mode, *slot->detection, f.decode_ms, true));
+    const lane::TrackedFrame tracked =
+        tracker_.Commit(detector_, *std::move(slot->measured), std::nullopt);
+    lanes_ += static_cast<long>(tracked.lanes.size());
+    out_.WriteLine(JsonLine(DetectionJson(record, tracked, f.decode_ms)));
   }
 
   const lane::Config& config_;

@@ -68,12 +68,17 @@ double Median(std::vector<double> values) {
   return 0.5 * (upper + *std::max_element(values.begin(), values.begin() + mid));
 }
 
+// The effective config and its detector.
+struct ConfiguredDetector {
+  lane::Config config;
+  lane::Detector detector;
+};
+
 // The detector of the effective config; prints the top view's scale, which
 // users need to read the IPM coordinates.
-absl::StatusOr<lane::Detector> MakeDetector(const DetectFlags& flags, lane::Config* config) {
-  absl::StatusOr<lane::Config> loaded = LoadEffectiveConfig(flags.config, flags.mode);
-  if (!loaded.ok()) return loaded.status();
-  *config = *std::move(loaded);
+absl::StatusOr<ConfiguredDetector> MakeDetector(const DetectFlags& flags) {
+  absl::StatusOr<lane::Config> config = LoadEffectiveConfig(flags.config, flags.mode);
+  if (!config.ok()) return config.status();
   if (flags.seed) config->detector.seed = *flags.seed;
   absl::StatusOr<lane::Detector> detector =
       lane::Detector::Create(config->camera, config->ipm, config->detector);
@@ -82,14 +87,15 @@ absl::StatusOr<lane::Detector> MakeDetector(const DetectFlags& flags, lane::Conf
                         absl::StrCat("cannot build the detector: ", detector.status().message()));
   }
   const lane::IpmMapping& ipm = detector->ipm();
-  if (flags.quiet) return detector;
-  std::fprintf(stderr,
-               "lane detect: top view %dx%d px covering x %.2f..%.2f m, y %.2f..%.2f m ahead: "
-               "%.4f m/px across, %.4f m/px along; filter sigmas %.2f x %.2f px\n",
-               ipm.width(), ipm.height(), ipm.x_min(), ipm.x_max(), ipm.y_min(), ipm.y_max(),
-               ipm.metres_per_px_x(), ipm.metres_per_px_y(), detector->kernels().sigma_x_px,
-               detector->kernels().sigma_y_px);
-  return detector;
+  if (!flags.quiet) {
+    std::fprintf(stderr,
+                 "lane detect: top view %dx%d px covering x %.2f..%.2f m, y %.2f..%.2f m ahead: "
+                 "%.4f m/px across, %.4f m/px along; filter sigmas %.2f x %.2f px\n",
+                 ipm.width(), ipm.height(), ipm.x_min(), ipm.x_max(), ipm.y_min(), ipm.y_max(),
+                 ipm.metres_per_px_x(), ipm.metres_per_px_y(), detector->kernels().sigma_x_px,
+                 detector->kernels().sigma_y_px);
+  }
+  return ConfiguredDetector{*std::move(config), *std::move(detector)};
 }
 
 // Creates the overlay folder; an error message or "".
@@ -130,7 +136,6 @@ class DetectRun {
   void Process(const InputFrame& frame) {
     ++frames_;
     std::string error = frame.error;
-    absl::StatusOr<lane::Detection> detection = lane::Detection();
     if (error.empty() &&
         (frame.bgr.cols != expected_width_ || frame.bgr.rows != expected_height_)) {
       error = absl::StrCat("frame is ", frame.bgr.cols, "x", frame.bgr.rows,
@@ -141,54 +146,33 @@ class DetectRun {
       try {
         // Tracked: the tracker's predicted lanes are searched too, and the
         // lanes' markings read and tracked in frame order.
-        detection = tracker_ ? tracker_->Process(detector_, frame.bgr, std::nullopt)
-                             : detector_.Detect(frame.bgr);
-        if (!detection.ok()) error = std::string(detection.status().message());
+        if (tracker_) {
+          absl::StatusOr<lane::TrackedFrame> tracked =
+              tracker_->Process(detector_, frame.bgr, std::nullopt);
+          if (tracked.ok()) return Report(frame, *tracked, tracked->detection);
+          error = std::string(tracked.status().message());
+        } else {
+          absl::StatusOr<lane::Detection> detection = detector_.Detect(frame.bgr);
+          if (detection.ok()) return Report(frame, *detection, *detection);
+          error = std::string(detection.status().message());
+        }
       } catch (const std::exception& e) {  // e.g. a cv::Exception: this frame fails, not the run
         error = absl::StrCat("detector error: ", e.what());
       }
     }
-    if (!error.empty()) {
-      ++failures_;
-      if (on_message_) on_message_();
-      std::fprintf(stderr, "lane detect: %s: %s\n", frame.name.c_str(), error.c_str());
-      if (!frame.bgr.empty()) {  // the video keeps its timing: the frame, captioned
-        cv::Mat canvas = frame.bgr.channels() == 3 ? frame.bgr.clone() : cv::Mat();
-        if (!canvas.empty()) {
-          DrawCaption(canvas, frame.name, 4, 4);
-          DrawCaption(canvas, "error: " + error, 4, 4 + canvas.rows / 20, {0, 0, 255});
-          AddToVideo(frame, canvas);
-        }
+    ++failures_;
+    if (on_message_) on_message_();
+    std::fprintf(stderr, "lane detect: %s: %s\n", frame.name.c_str(), error.c_str());
+    if (!frame.bgr.empty()) {  // the video keeps its timing: the frame, captioned
+      cv::Mat canvas = frame.bgr.channels() == 3 ? frame.bgr.clone() : cv::Mat();
+      if (!canvas.empty()) {
+        DrawCaption(canvas, frame.name, 4, 4);
+        DrawCaption(canvas, "error: " + error, 4, 4 + canvas.rows / 20, {0, 0, 255});
+        AddToVideo(frame, canvas);
       }
-      out_ << ErrorJsonLine(frame.name, frame.bgr.cols, frame.bgr.rows, mode_, error) << '\n';
-      out_.flush();
-      return;
     }
-    out_ << DetectionJsonLine(frame.name, frame.bgr.cols, frame.bgr.rows, mode_, *detection,
-                              frame.decode_ms, tracker_.has_value())
-         << '\n';
+    out_ << JsonLine(ErrorJson(ResultsOf(frame), error)) << '\n';
     out_.flush();
-    total_lanes_ += static_cast<long>(detection->lanes.size());
-    const lane::LanePathCounts paths = lane::CountLanePaths(*detection);
-    refit_lanes_ += paths.refit;
-    searched_lanes_ += paths.searched;
-    refits_failed_ += detection->refit_failed;
-    total_ms_.push_back(detection->timings.total_ms);
-    const std::string details = absl::StrFormat("detect %.2f ms, decode %.2f ms",
-                                                detection->timings.total_ms, frame.decode_ms);
-    if (overlay_video_path_) {
-      AddToVideo(frame, DrawLanesOnImage(frame.bgr, *detection, detector_, frame.name, details));
-    }
-    if (!overlay_dir_.empty()) {
-      const std::string message =
-          WriteOverlays(overlay_dir_, UniqueStem(frame.stem, used_stems_), frame.bgr, *detection,
-                        detector_, frame.name, details);
-      if (!message.empty()) {
-        overlay_failed_ = true;
-        if (on_message_) on_message_();
-        std::fprintf(stderr, "lane detect: %s: %s\n", frame.name.c_str(), message.c_str());
-      }
-    }
   }
 
   // Finishes the overlay video; false (after saying why) if it failed.
@@ -232,6 +216,40 @@ class DetectRun {
   }
 
  private:
+  ResultsFrame ResultsOf(const InputFrame& frame) const {
+    return {frame.name, frame.bgr.cols, frame.bgr.rows, mode_};
+  }
+
+  // A processed frame's record, counts and overlays: `result` is the
+  // detection, or the tracked frame with `detection` its own.
+  template <typename Result>
+  void Report(const InputFrame& frame, const Result& result, const lane::Detection& detection) {
+    out_ << JsonLine(DetectionJson(ResultsOf(frame), result, frame.decode_ms)) << '\n';
+    out_.flush();
+    total_lanes_ += static_cast<long>(LaneCount(result));
+    const lane::LanePathCounts paths = lane::CountLanePaths(detection);
+    refit_lanes_ += paths.refit;
+    searched_lanes_ += paths.searched;
+    refits_failed_ += detection.refit_failed;
+    total_ms_.push_back(detection.timings.total_ms);
+    const std::string details = absl::StrFormat("detect %.2f ms, decode %.2f ms",
+                                                detection.timings.total_ms, frame.decode_ms);
+    if (overlay_video_path_) {
+      AddToVideo(frame, DrawLanesOnImage(frame.bgr, result, detector_, frame.name, details));
+    }
+    if (!overlay_dir_.empty()) {
+      const std::string message = WriteOverlays(overlay_dir_, UniqueStem(frame.stem, used_stems_),
+                                                frame.bgr, result, detector_, frame.name, details);
+      if (!message.empty()) {
+        overlay_failed_ = true;
+        if (on_message_) on_message_();
+        std::fprintf(stderr, "lane detect: %s: %s\n", frame.name.c_str(), message.c_str());
+      }
+    }
+  }
+  static size_t LaneCount(const lane::Detection& detection) { return detection.lanes.size(); }
+  static size_t LaneCount(const lane::TrackedFrame& tracked) { return tracked.lanes.size(); }
+
   void AddToVideo(const InputFrame& frame, const cv::Mat& drawn) {
     if (!overlay_video_path_ || video_failed_) return;
     if (!video_) {
@@ -272,9 +290,10 @@ class DetectRun {
 };
 
 int RunDetect(const DetectFlags& flags) {
-  lane::Config config;
-  const absl::StatusOr<lane::Detector> detector = MakeDetector(flags, &config);
-  if (!detector.ok()) return Failure("detect", std::string(detector.status().message()));
+  const absl::StatusOr<ConfiguredDetector> made = MakeDetector(flags);
+  if (!made.ok()) return Failure("detect", std::string(made.status().message()));
+  const lane::Config& config = made->config;
+  const lane::Detector& detector = made->detector;
 
   std::ofstream file;
   if (flags.output && !OpenOutputFile(*flags.output, &file)) {
@@ -292,7 +311,7 @@ int RunDetect(const DetectFlags& flags) {
       return Failure("detect", e);
     }
   }
-  DetectRun run(*detector, config, out, flags.overlay.value_or(""), flags.overlay_video,
+  DetectRun run(detector, config, out, flags.overlay.value_or(""), flags.overlay_video,
                 flags.read.fps, flags.quiet);
   if (flags.track) run.EnableTracking(config.camera, flags.read.fps);
   FrameReader reader(flags.inputs, flags.read.Options());
@@ -300,7 +319,7 @@ int RunDetect(const DetectFlags& flags) {
   // reads (the same lanes), unless asked not to; overlays draw on the whole
   // frame.
   if (!flags.full_decode && !flags.overlay && !flags.overlay_video) {
-    reader.DecodeOnly(detector->Needs(), config.camera.image_width, config.camera.image_height);
+    reader.DecodeOnly(detector.Needs(), config.camera.image_width, config.camera.image_height);
   }
   // A bar when the frame count is known (files), else a counter; only on a
   // terminal, never with --quiet or --no-progress.

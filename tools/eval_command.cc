@@ -149,7 +149,7 @@ std::string FlagsError(const EvalFlags& flags) {
 }
 
 // The data set, only the --clip clip when given.
-absl::Status LoadSelectedDataset(const EvalFlags& flags, lane::eval::Dataset* out) {
+absl::StatusOr<lane::eval::Dataset> LoadSelectedDataset(const EvalFlags& flags) {
   const std::string& dataset_dir = flags.dataset;
   std::optional<lane::eval::DatasetFormat> format;
   if (flags.format) format = lane::eval::ParseDatasetFormat(*flags.format);
@@ -177,8 +177,7 @@ absl::Status LoadSelectedDataset(const EvalFlags& flags, lane::eval::Dataset* ou
       }
     }
   }
-  *out = *std::move(dataset);
-  return absl::OkStatus();
+  return dataset;
 }
 
 // --rule and --count.
@@ -196,49 +195,52 @@ lane::eval::EvalOptions ScoringOptions(const EvalFlags& flags) {
   return options;
 }
 
-// What is scored: the detector's output (with --config and no --results) or
-// a results file; the config (when given) and its ROI.
+// What is scored: the detectors' output (with --config and no --results) or
+// a results file; the config (when given) and its ROI; the mode.
 struct EvalSource {
   std::optional<lane::Config> config;
   std::optional<lane::Roi> roi;
-  std::optional<lane::Detector> detector;
-  // --seeds: the detectors of the second seed onwards, and every seed.
-  std::vector<lane::Detector> more_seeds;
-  std::vector<uint64_t> seeds;
+  // The config's detector, and with --seeds one per seed (the first: the
+  // config's or --seed's seed); empty with --results.
+  std::vector<lane::Detector> detectors;
+  std::vector<uint64_t> seeds;  // --seeds: every detector's seed
   std::vector<lane::eval::FrameResult> records;
+  lane::Mode mode = lane::Mode::kAll;  // the detectors', or the records'
 };
 
-// The config and the ROI, when --config is given.
-absl::Status LoadConfig(const EvalFlags& flags, lane::eval::EvalOptions* options,
-                        EvalSource* source) {
-  if (const auto& config_path = flags.config) {
-    absl::StatusOr<lane::Config> loaded = LoadEffectiveConfig(config_path, flags.mode);
-    if (!loaded.ok()) return loaded.status();
-    if (flags.seed) loaded->detector.seed = *flags.seed;
-    source->config = *loaded;
-    const absl::StatusOr<lane::IpmMapping> ipm =
-        lane::IpmMapping::Create(source->config->camera, source->config->ipm);
-    if (!ipm.ok()) return ipm.status();
-    source->roi = ipm->roi();
-    options->ego_row = source->roi->bottom;
-    options->default_width = source->config->camera.image_width;
-    options->default_height = source->config->camera.image_height;
-  }
-  return absl::OkStatus();
+// The config, when --config is given, and its ROI.
+struct LoadedConfig {
+  lane::Config config;
+  lane::Roi roi;
+};
+
+absl::StatusOr<std::optional<LoadedConfig>> LoadConfig(const EvalFlags& flags) {
+  const auto& config_path = flags.config;
+  if (!config_path) return std::nullopt;
+  absl::StatusOr<lane::Config> config = LoadEffectiveConfig(config_path, flags.mode);
+  if (!config.ok()) return config.status();
+  if (flags.seed) config->detector.seed = *flags.seed;
+  const absl::StatusOr<lane::IpmMapping> ipm =
+      lane::IpmMapping::Create(config->camera, config->ipm);
+  if (!ipm.ok()) return ipm.status();
+  return LoadedConfig{*std::move(config), ipm->roi()};
 }
 
 // --results: the records and the mode they are scored in: --mode, else the
 // records' (when they agree), else all.
-absl::Status ReadResults(const EvalFlags& flags, lane::eval::EvalOptions* options,
-                         EvalSource* source) {
+struct ResultsRecords {
+  std::vector<lane::eval::FrameResult> records;
+  lane::Mode mode = lane::Mode::kAll;
+};
+
+absl::StatusOr<ResultsRecords> ReadResults(const EvalFlags& flags) {
   const std::string& results_path = *flags.results;
   const bool txt = absl::AsciiStrToLower(fs::path(results_path).extension().string()) == ".txt";
   absl::StatusOr<std::vector<lane::eval::FrameResult>> read =
       txt ? lane::eval::ReadResultsTxt(results_path) : lane::eval::ReadResultsJsonl(results_path);
   if (!read.ok()) return read.status();
-  source->records = std::move(*read);
   std::set<std::string> modes;
-  for (const auto& r : source->records) {
+  for (const auto& r : *read) {
     if (!r.mode.empty()) modes.insert(r.mode);
   }
   const std::optional<std::string>& mode = flags.mode;
@@ -252,16 +254,19 @@ absl::Status ReadResults(const EvalFlags& flags, lane::eval::EvalOptions* option
     return absl::InvalidArgumentError(
         absl::StrCat("the results' mode \"", chosen, "\" is neither all nor two: give --mode"));
   }
-  options->mode = *parsed;
-  return absl::OkStatus();
+  return ResultsRecords{*std::move(read), *parsed};
 }
 
 // Without --results: the detector of the config, and with --seeds K one per
 // seed (N, N+1, ..., N+K-1; N the config's or --seed's).
-absl::Status MakeDetectors(const EvalFlags& flags, lane::eval::EvalOptions* options,
-                           EvalSource* source) {
-  const lane::Config& config = *source->config;
+struct SeedDetectors {
+  std::vector<lane::Detector> detectors;
+  std::vector<uint64_t> seeds;  // with --seeds
+};
+
+absl::StatusOr<SeedDetectors> MakeDetectors(const EvalFlags& flags, const lane::Config& config) {
   const uint64_t count = flags.seeds ? *flags.seeds : 0;
+  SeedDetectors out;
   for (uint64_t k = 0; k < std::max<uint64_t>(count, 1); ++k) {
     lane::DetectorOptions detector_options = config.detector;
     detector_options.seed = config.detector.seed + k;
@@ -271,15 +276,48 @@ absl::Status MakeDetectors(const EvalFlags& flags, lane::eval::EvalOptions* opti
       return absl::Status(created.status().code(),
                           absl::StrCat("cannot build the detector: ", created.status().message()));
     }
-    if (count > 0) source->seeds.push_back(detector_options.seed);
-    if (k == 0) {
-      source->detector = std::move(*created);
-    } else {
-      source->more_seeds.push_back(std::move(*created));
-    }
+    if (count > 0) out.seeds.push_back(detector_options.seed);
+    out.detectors.push_back(*std::move(created));
   }
-  options->mode = source->detector->options().mode;
-  return absl::OkStatus();
+  return out;
+}
+
+// The config (when given) and what is scored: the records of --results, or
+// the detectors of the config.
+absl::StatusOr<EvalSource> LoadSource(const EvalFlags& flags) {
+  EvalSource source;
+  absl::StatusOr<std::optional<LoadedConfig>> loaded = LoadConfig(flags);
+  if (!loaded.ok()) return loaded.status();
+  if (*loaded) {
+    source.config = std::move((*loaded)->config);
+    source.roi = (*loaded)->roi;
+  }
+  if (flags.results) {
+    absl::StatusOr<ResultsRecords> read = ReadResults(flags);
+    if (!read.ok()) return read.status();
+    source.records = std::move(read->records);
+    source.mode = read->mode;
+  } else {
+    absl::StatusOr<SeedDetectors> made = MakeDetectors(flags, *source.config);
+    if (!made.ok()) return made.status();
+    source.detectors = std::move(made->detectors);
+    source.seeds = std::move(made->seeds);
+    source.mode = source.detectors.front().options().mode;
+  }
+  return source;
+}
+
+// The scoring options: --rule and --count, the mode, and with a config its
+// ROI's bottom (the 2-lanes ego row) and frame size.
+lane::eval::EvalOptions OptionsFor(const EvalFlags& flags, const EvalSource& source) {
+  lane::eval::EvalOptions options = ScoringOptions(flags);
+  if (source.roi) {
+    options.ego_row = source.roi->bottom;
+    options.default_width = source.config->camera.image_width;
+    options.default_height = source.config->camera.image_height;
+  }
+  options.mode = source.mode;
+  return options;
 }
 
 // The files written while frames are scored (--output, --overlay), the
@@ -316,10 +354,11 @@ class EvalOutputs {
       ReportProblem(absl::StrCat(o.frame->name, ": ", o.error));
     }
     if (jsonl_.is_open()) {
-      jsonl_ << (o.detection != nullptr ? DetectionJsonLine(o.frame->name, o.width, o.height,
-                                                            options.mode, *o.detection, o.decode_ms)
-                                        : ErrorJsonLine(o.frame->name, o.image.cols, o.image.rows,
-                                                        options.mode, o.error))
+      jsonl_ << JsonLine(o.detection != nullptr
+                             ? DetectionJson({o.frame->name, o.width, o.height, options.mode},
+                                             *o.detection, o.decode_ms)
+                             : ErrorJson({o.frame->name, o.image.cols, o.image.rows, options.mode},
+                                         o.error))
              << '\n';
     }
     if (txt_.is_open()) txt_ << lane::eval::ResultsTxtFrame(o.index, o.lanes);
@@ -422,22 +461,31 @@ int RunDriveFlags(const EvalFlags& flags) {
   return RunDriveEval(args);
 }
 
-// Scores the detectors (the first seed's report; summary over --seeds) or the results records.
-absl::StatusOr<lane::eval::EvalReport> Score(const lane::eval::Dataset& dataset,
-                                             const lane::eval::EvalOptions& options,
-                                             const EvalSource& source,
-                                             const lane::eval::FrameCallback& on_frame,
-                                             std::optional<lane::eval::SeedSummary>* summary) {
-  if (!source.detector) {
-    return lane::eval::EvaluateResults(dataset, source.records, options, on_frame);
+// What Score reports: the first seed's report, and with --seeds the summary
+// over the seeds.
+struct Scored {
+  lane::eval::EvalReport report;
+  std::optional<lane::eval::SeedSummary> summary;
+};
+
+// Scores the detectors or the results records.
+absl::StatusOr<Scored> Score(const lane::eval::Dataset& dataset,
+                             const lane::eval::EvalOptions& options, const EvalSource& source,
+                             const lane::eval::FrameCallback& on_frame) {
+  if (source.detectors.empty()) {
+    absl::StatusOr<lane::eval::EvalReport> report =
+        lane::eval::EvaluateResults(dataset, source.records, options, on_frame);
+    if (!report.ok()) return report.status();
+    return Scored{*std::move(report), std::nullopt};
   }
-  std::vector<const lane::Detector*> all = {&*source.detector};
-  for (const lane::Detector& d : source.more_seeds) all.push_back(&d);
+  std::vector<const lane::Detector*> all;
+  for (const lane::Detector& d : source.detectors) all.push_back(&d);
   absl::StatusOr<std::vector<lane::eval::EvalReport>> reports =
       lane::eval::EvaluateDetectors(dataset, all, options, on_frame);
   if (!reports.ok()) return reports.status();
-  if (!source.seeds.empty()) *summary = lane::eval::SummariseSeeds(*reports, source.seeds);
-  return std::move(reports->front());
+  std::optional<lane::eval::SeedSummary> summary;
+  if (!source.seeds.empty()) summary = lane::eval::SummariseSeeds(*reports, source.seeds);
+  return Scored{std::move(reports->front()), std::move(summary)};
 }
 
 // The one-line totals on stderr, and with --seeds their spread.
@@ -465,33 +513,26 @@ int RunEval(const CLI::App& app, const EvalFlags& flags, const std::vector<std::
   if (const std::string e = FlagsError(flags); !e.empty()) return UsageError(app, e);
   if (flags.drive) return RunDriveFlags(flags);
 
-  lane::eval::Dataset dataset;
-  if (const absl::Status s = LoadSelectedDataset(flags, &dataset); !s.ok()) {
-    return Failure("eval", std::string(s.message()));
-  }
-  lane::eval::EvalOptions options = ScoringOptions(flags);
-  EvalSource source;
-  absl::Status status = LoadConfig(flags, &options, &source);
-  if (status.ok()) {
-    status = flags.results ? ReadResults(flags, &options, &source)
-                           : MakeDetectors(flags, &options, &source);
-  }
-  if (!status.ok()) return Failure("eval", std::string(status.message()));
-  const bool detector = source.detector.has_value();
+  const absl::StatusOr<lane::eval::Dataset> dataset = LoadSelectedDataset(flags);
+  if (!dataset.ok()) return Failure("eval", std::string(dataset.status().message()));
+  const absl::StatusOr<EvalSource> source = LoadSource(flags);
+  if (!source.ok()) return Failure("eval", std::string(source.status().message()));
+  const lane::eval::EvalOptions options = OptionsFor(flags, *source);
+  const bool detector = !source->detectors.empty();
 
   EvalOutputs outputs(flags);
   if (const std::string e = outputs.Open(flags, detector); !e.empty()) return Failure("eval", e);
   const lane::eval::FrameCallback on_frame = [&](const lane::eval::FrameOutcome& o) {
-    outputs.OnFrame(o, options, source.roi, detector);
+    outputs.OnFrame(o, options, source->roi, detector);
   };
-  std::optional<lane::eval::SeedSummary> summary;
-  absl::StatusOr<lane::eval::EvalReport> report =
-      Score(dataset, options, source, on_frame, &summary);
+  absl::StatusOr<Scored> scored = Score(*dataset, options, *source, on_frame);
   outputs.ClearProgress();
+  if (!scored.ok()) return Failure("eval", std::string(scored.status().message()));
+  lane::eval::EvalReport* report = &scored->report;
+  const std::optional<lane::eval::SeedSummary>& summary = scored->summary;
   const lane::eval::SeedSummary* seeds_summary = summary ? &*summary : nullptr;
-  if (!report.ok()) return Failure("eval", std::string(report.status().message()));
   report->source = detector ? absl::StrCat("detector, config ", *flags.config, ", seed ",
-                                           source.config->detector.seed)
+                                           source->config->detector.seed)
                             : absl::StrCat("results ", *flags.results);
 
   const std::string markdown = lane::eval::ReportMarkdown(*report, seeds_summary);

@@ -7,13 +7,15 @@
 namespace lane::wire {
 namespace {
 
-void BezierToProto(const std::array<Eigen::Vector2d, 4>& points, v1::Bezier* out) {
-  out->mutable_control_points()->Reserve(4);
+v1::Bezier BezierToProto(const std::array<Eigen::Vector2d, 4>& points) {
+  v1::Bezier out;
+  out.mutable_control_points()->Reserve(4);
   for (const Eigen::Vector2d& p : points) {
-    v1::Point2* q = out->add_control_points();
+    v1::Point2* q = out.add_control_points();
     q->set_x(p.x());
     q->set_y(p.y());
   }
+  return out;
 }
 
 v1::MarkingColor ColorToProto(lane::MarkingColor c) {
@@ -49,69 +51,88 @@ std::array<Eigen::Vector2d, 4> BezierFromProto(const v1::Bezier& b) {
   return out;
 }
 
-void IdentityToProto(const lane::Lane& lane, v1::Lane* l) {
-  l->set_id(lane.id > 0 ? lane.id : 0);
-  l->set_confirmed(lane.confirmed);
-  l->set_color(ColorToProto(lane.color));
+lane::MarkingType TypeFromProto(v1::MarkingType t) {
   // MarkingType's order is the proto's.
-  l->set_type(static_cast<v1::MarkingType>(static_cast<int>(lane.type)));
-  l->set_predicted(lane.predicted);
-  l->set_inferred(lane.inferred);
-  l->set_refit(lane.refit);
+  return t >= v1::MARKING_TYPE_UNKNOWN && t <= v1::MARKING_TYPE_ROAD_EDGE
+             ? static_cast<lane::MarkingType>(static_cast<int>(t))
+             : lane::MarkingType::kUnknown;
 }
 
-void LaneToProto(const lane::Lane& lane, v1::Lane* l) {
-  BezierToProto(lane.image, l->mutable_image());
-  BezierToProto(lane.ipm, l->mutable_ipm());
-  BezierToProto(lane.ground, l->mutable_ground());
-  l->set_score(lane.score);
-  IdentityToProto(lane, l);
+v1::Lane LaneToProto(const lane::Lane& lane) {
+  v1::Lane l;
+  *l.mutable_image() = BezierToProto(lane.image);
+  *l.mutable_ipm() = BezierToProto(lane.ipm);
+  *l.mutable_ground() = BezierToProto(lane.ground);
+  l.set_score(lane.score);
+  l.set_inferred(lane.inferred);
+  l.set_refit(lane.refit);
+  return l;
 }
 
-void EgoToProto(const std::optional<lane::EgoLane>& ego, v1::FrameResponse* out) {
-  if (!ego) {
-    out->clear_ego();
-    return;
-  }
-  v1::EgoLane* e = out->mutable_ego();
-  e->set_offset_m(ego->offset_m);
-  e->set_width_m(ego->width_m);
-  e->set_heading_deg(ego->heading_deg);
-  e->set_curvature_per_m(ego->curvature_per_m);
-  e->set_left_lane_id(ego->left_id > 0 ? ego->left_id : 0);
-  e->set_right_lane_id(ego->right_id > 0 ? ego->right_id : 0);
-  e->set_left_distance_m(ego->left_distance_m);
-  e->set_right_distance_m(ego->right_distance_m);
-  e->set_offset_rate_mps(ego->offset_rate_mps);
-  e->set_departing(ego->departing);
+v1::Lane LaneToProto(const lane::TrackedLane& tracked) {
+  v1::Lane l = LaneToProto(tracked.lane);
+  l.set_id(tracked.id > 0 ? tracked.id : 0);
+  l.set_confirmed(tracked.confirmed);
+  l.set_predicted(tracked.predicted);
+  l.set_color(ColorToProto(tracked.color));
+  l.set_type(static_cast<v1::MarkingType>(static_cast<int>(tracked.type)));
+  return l;
+}
+
+v1::EgoLane EgoToProto(const lane::EgoLane& ego) {
+  v1::EgoLane e;
+  e.set_offset_m(ego.offset_m);
+  e.set_width_m(ego.width_m);
+  e.set_heading_deg(ego.heading_deg);
+  e.set_curvature_per_m(ego.curvature_per_m);
+  e.set_left_lane_id(ego.left_id > 0 ? ego.left_id : 0);
+  e.set_right_lane_id(ego.right_id > 0 ? ego.right_id : 0);
+  e.set_left_distance_m(ego.left_distance_m);
+  e.set_right_distance_m(ego.right_distance_m);
+  e.set_offset_rate_mps(ego.offset_rate_mps);
+  e.set_departing(ego.departing);
+  return e;
+}
+
+lane::Lane LaneFromProto(const v1::Lane& l) {
+  lane::Lane lane;
+  lane.image = BezierFromProto(l.image());
+  lane.ipm = BezierFromProto(l.ipm());
+  lane.ground = BezierFromProto(l.ground());
+  lane.score = l.score();
+  lane.inferred = l.inferred();
+  lane.refit = l.refit();
+  return lane;
 }
 
 }  // namespace
 
-void LanesToProto(const lane::Detection& detection, v1::FrameResponse* out) {
-  out->mutable_lanes()->Reserve(static_cast<int>(detection.lanes.size()));
-  for (const lane::Lane& lane : detection.lanes) LaneToProto(lane, out->add_lanes());
-  if (detection.ego) EgoToProto(detection.ego, out);
+v1::FrameResponse LanesToProto(const lane::Detection& detection) {
+  v1::FrameResponse out;
+  out.mutable_lanes()->Reserve(static_cast<int>(detection.lanes.size()));
+  for (const lane::Lane& lane : detection.lanes) out.mutable_lanes()->Add(LaneToProto(lane));
+  return out;
 }
 
-std::vector<lane::Lane> LanesFromProto(const v1::FrameResponse& response) {
-  std::vector<lane::Lane> lanes;
+v1::FrameResponse LanesToProto(const lane::TrackedFrame& frame) {
+  v1::FrameResponse out;
+  out.mutable_lanes()->Reserve(static_cast<int>(frame.lanes.size()));
+  for (const lane::TrackedLane& lane : frame.lanes) out.mutable_lanes()->Add(LaneToProto(lane));
+  if (frame.ego) *out.mutable_ego() = EgoToProto(*frame.ego);
+  return out;
+}
+
+std::vector<lane::TrackedLane> LanesFromProto(const v1::FrameResponse& response) {
+  std::vector<lane::TrackedLane> lanes;
+  lanes.reserve(static_cast<size_t>(response.lanes_size()));
   for (const v1::Lane& l : response.lanes()) {
-    lane::Lane lane;
-    lane.image = BezierFromProto(l.image());
-    lane.ipm = BezierFromProto(l.ipm());
-    lane.ground = BezierFromProto(l.ground());
-    lane.score = l.score();
+    lane::TrackedLane& lane = lanes.emplace_back();
+    lane.lane = LaneFromProto(l);
     lane.id = l.id() > 0 ? l.id() : -1;
     lane.confirmed = l.confirmed();
     lane.predicted = l.predicted();
-    lane.inferred = l.inferred();
-    lane.refit = l.refit();
     lane.color = ColorFromProto(l.color());
-    lane.type = l.type() >= v1::MARKING_TYPE_UNKNOWN && l.type() <= v1::MARKING_TYPE_ROAD_EDGE
-                    ? static_cast<lane::MarkingType>(static_cast<int>(l.type()))
-                    : lane::MarkingType::kUnknown;
-    lanes.push_back(lane);
+    lane.type = TypeFromProto(l.type());
   }
   return lanes;
 }
@@ -130,7 +151,37 @@ std::optional<lane::EgoLane> EgoFromProto(const v1::FrameResponse& response) {
   ego.right_distance_m = e.right_distance_m();
   ego.offset_rate_mps = e.offset_rate_mps();
   ego.departing = e.departing();
+  for (int i = response.lanes_size() - 1; i >= 0; --i) {
+    const int id = response.lanes(i).id();
+    if (id <= 0) continue;
+    if (id == e.left_lane_id()) ego.left_index = i;
+    if (id == e.right_lane_id()) ego.right_index = i;
+  }
   return ego;
+}
+
+lane::TrackedFrame TrackedFrameFromProto(const v1::FrameResponse& response) {
+  lane::TrackedFrame frame;
+  frame.lanes = LanesFromProto(response);
+  frame.ego = EgoFromProto(response);
+  for (const lane::TrackedLane& lane : frame.lanes) {
+    if (lane.predicted) continue;
+    frame.detection.lanes.push_back(lane.lane);
+    frame.detection.refit_lanes += lane.lane.refit ? 1 : 0;
+  }
+  frame.detection.timings = TimingsFromProto(response.timings());
+  return frame;
+}
+
+lane::Detection DetectionFromProto(const v1::FrameResponse& response) {
+  lane::Detection detection;
+  detection.lanes.reserve(static_cast<size_t>(response.lanes_size()));
+  for (const v1::Lane& l : response.lanes()) {
+    detection.lanes.push_back(LaneFromProto(l));
+    detection.refit_lanes += l.refit() ? 1 : 0;
+  }
+  detection.timings = TimingsFromProto(response.timings());
+  return detection;
 }
 
 const std::vector<const google::protobuf::FieldDescriptor*>& StageTimingFields() {
@@ -146,13 +197,15 @@ const std::vector<const google::protobuf::FieldDescriptor*>& StageTimingFields()
   return fields;
 }
 
-void TimingsToProto(const lane::StageTimings& timings, v1::StageTimings* out) {
-  const google::protobuf::Reflection* reflection = out->GetReflection();
+v1::StageTimings TimingsToProto(const lane::StageTimings& timings) {
+  v1::StageTimings out;
+  const google::protobuf::Reflection* reflection = out.GetReflection();
   const std::vector<const google::protobuf::FieldDescriptor*>& fields = StageTimingFields();
   for (size_t i = 0; i < fields.size(); ++i) {
-    if (fields[i] != nullptr) reflection->SetDouble(out, fields[i], timings.stage_ms[i]);
+    if (fields[i] != nullptr) reflection->SetDouble(&out, fields[i], timings.stage_ms[i]);
   }
-  out->set_detect_ms(timings.total_ms);
+  out.set_detect_ms(timings.total_ms);
+  return out;
 }
 
 lane::StageTimings TimingsFromProto(const v1::StageTimings& timings) {

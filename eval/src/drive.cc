@@ -18,9 +18,18 @@ absl::Status DriveRunner::Add(const cv::Mat& frame, double time_s) {
   absl::StatusOr<Detection> alone = detector_.Detect(frame);
   if (!alone.ok()) return alone.status();
   const FrameNeeds& needs = detector_.Needs();
-  ReadMarkings(frame, camera, alone->lanes, needs.top, needs.bottom);
-  untracked_.push_back({alone->lanes, ComputeEgoLane(alone->lanes, camera)});
-  absl::StatusOr<Detection> tracked = tracker_.Process(detector_, frame, time_s);
+  const std::vector<Marking> markings =
+      ReadMarkings(frame, camera, alone->lanes, needs.top, needs.bottom);
+  DriveOutput untracked;
+  for (size_t i = 0; i < alone->lanes.size(); ++i) {
+    TrackedLane& lane = untracked.lanes.emplace_back();
+    lane.lane = alone->lanes[i];
+    lane.color = markings[i].color;
+    lane.type = markings[i].type;
+  }
+  untracked.ego = ComputeEgoLane(alone->lanes, camera);
+  untracked_.push_back(std::move(untracked));
+  absl::StatusOr<TrackedFrame> tracked = tracker_.Process(detector_, frame, time_s);
   if (!tracked.ok()) return tracked.status();
   tracked_.push_back({std::move(tracked->lanes), tracked->ego});
   return absl::OkStatus();
@@ -67,7 +76,7 @@ FrameMatch MatchFrame(const DriveTruthFrame& t, const DriveOutput& out,
   for (int i = 0; i < static_cast<int>(out.lanes.size()); ++i) {
     if (options.confirmed_only && !out.lanes[i].confirmed) continue;
     fm.counted.push_back(i);
-    curves.push_back(Curve::FromBezier(out.lanes[i].image));
+    curves.push_back(Curve::FromBezier(out.lanes[i].lane.image));
   }
   std::vector<Curve> labels;
   for (const DriveTruthBoundary& b : t.boundaries) labels.push_back(b.curve);
@@ -109,7 +118,7 @@ void CountLanes(size_t f, const DriveOutput& out, const FrameMatch& fm, DriveSco
 }
 
 // Scores a matched lane's colour and type against its true boundary.
-void ScoreMarking(const Lane& lane, const DriveTruthBoundary& b, DriveScore& score) {
+void ScoreMarking(const TrackedLane& lane, const DriveTruthBoundary& b, DriveScore& score) {
   ++score.colour_scored;
   if (lane.color == (b.yellow ? MarkingColor::kYellow : MarkingColor::kWhite)) {
     ++score.colour_right;
@@ -133,7 +142,7 @@ std::vector<int> ScoreBoundaries(size_t f, const DriveTruthFrame& t, const Drive
   for (size_t k = 0; k < t.boundaries.size(); ++k) {
     const int d = fm.m.label_detection[k];
     if (d < 0) continue;
-    const Lane& lane = out.lanes[static_cast<size_t>(fm.counted[static_cast<size_t>(d)])];
+    const TrackedLane& lane = out.lanes[static_cast<size_t>(fm.counted[static_cast<size_t>(d)])];
     lane_of[k] = fm.counted[static_cast<size_t>(d)];
     const DriveTruthBoundary& b = t.boundaries[k];
     ScoreMarking(lane, b, score);

@@ -152,8 +152,9 @@ absl::StatusOr<DriveResults> ParseDriveResults(absl::string_view text, absl::str
           }
           for (size_t i = 0; i < j["lanes"].size(); ++i) {
             const Json& l = j["lanes"][i];
-            Lane lane;
-            if (!l.is_object() || !l.contains("image") || !ControlPoints(l["image"], lane.image)) {
+            TrackedLane lane;
+            if (!l.is_object() || !l.contains("image") ||
+                !ControlPoints(l["image"], lane.lane.image)) {
               return error(absl::StrCat("lanes[", i, "].image must hold 4 [x, y] points"));
             }
             if (l.contains("id") && l["id"].is_number_integer()) {
@@ -163,7 +164,7 @@ absl::StatusOr<DriveResults> ParseDriveResults(absl::string_view text, absl::str
             std::string colour = "unknown", type = "unknown";
             if (!OptionalBool(l, "confirmed", lane.confirmed) ||
                 !OptionalBool(l, "predicted", lane.predicted) ||
-                !OptionalBool(l, "inferred", lane.inferred) ||
+                !OptionalBool(l, "inferred", lane.lane.inferred) ||
                 !OptionalString(l, "color", colour) || !OptionalString(l, "type", type)) {
               return error(
                   absl::StrCat("lanes[", i,

@@ -17,6 +17,7 @@
 #include <fstream>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -106,15 +107,16 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
 
 // Frames that are never looked at by the fake: a few bytes each.
 Streamer::Source FakeFrames(int count) {
-  return [count](StreamItem* item) {
-    if (static_cast<int>(item->frame_id) >= count) return false;
+  return [count](uint64_t frame_id) -> std::optional<StreamItem> {
+    if (static_cast<int>(frame_id) >= count) return std::nullopt;
     auto request = std::make_shared<v1::FrameRequest>();
     request->set_camera_id("cam");
-    request->set_frame_id(item->frame_id);
+    request->set_frame_id(frame_id);
     request->set_encoded("not a frame");
-    item->name = absl::StrCat("frame", item->frame_id);
-    item->request = std::move(request);
-    return true;
+    StreamItem item;
+    item.name = absl::StrCat("frame", frame_id);
+    item.request = std::move(request);
+    return item;
   };
 }
 

@@ -76,10 +76,11 @@ TEST(DriveTest, TrackingOnARenderedDriveMeetsTheTargets) {
       std::printf("FP frame %d ego lane %d offset %.2f:", f,
                   run.truth[f].ego ? run.truth[f].ego->lane : -1,
                   run.truth[f].ego ? run.truth[f].ego->offset_m : 0.0);
-      for (const Lane& l : run.tracked[f].lanes) {
+      for (const TrackedLane& l : run.tracked[f].lanes) {
         if (!l.confirmed) continue;
+        const Lane& g = l.lane;
         std::printf(" [id %d%s x %.2f..%.2f y %.1f..%.1f %s]", l.id, l.predicted ? " P" : "",
-                    l.ground[0].x(), l.ground[3].x(), l.ground[0].y(), l.ground[3].y(),
+                    g.ground[0].x(), g.ground[3].x(), g.ground[0].y(), g.ground[3].y(),
                     MarkingTypeName(l.type));
       }
       std::printf("\n");

@@ -221,8 +221,9 @@ TEST(TrackingRefitTest, AFrameTrackerRefitsBetweenFullSearches) {
       if (i == 16) tracker.Reset();
       absl::StatusOr<SyntheticFrame> frame = RenderSyntheticDriveFrame(config->camera, drive, 7, i);
       ASSERT_TRUE(frame.ok());
-      absl::StatusOr<Detection> d = tracker.Process(*detector, frame->bgr, frame->time_s);
-      ASSERT_TRUE(d.ok());
+      absl::StatusOr<TrackedFrame> tracked = tracker.Process(*detector, frame->bgr, frame->time_s);
+      ASSERT_TRUE(tracked.ok());
+      const Detection* d = &tracked->detection;
       int refit = 0;
       for (const Lane& lane : d->lanes) refit += lane.refit;
       EXPECT_EQ(refit, d->refit_lanes) << "frame " << i;
@@ -234,7 +235,7 @@ TEST(TrackingRefitTest, AFrameTrackerRefitsBetweenFullSearches) {
       EXPECT_LE(in_row, refit_frames) << "frame " << i;
       // Frames 8-15 hold the same confirmed ids, refitted or searched.
       std::vector<int> ids;
-      for (const Lane& lane : d->lanes) {
+      for (const TrackedLane& lane : tracked->lanes) {
         if (lane.confirmed) ids.push_back(lane.id);
       }
       if (i == 8) ids_before = ids;

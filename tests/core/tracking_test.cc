@@ -181,7 +181,7 @@ TEST(TrackingTest, EgoLaneGeometryAndDeparture) {
     const double t = f / 30.0;
     const double shift = -0.8 * t;  // the lanes move left as the car moves right
     std::vector<Lane> lanes = {GroundLane(-1.8 + shift, 0, 0), GroundLane(1.8 + shift, 0, 0)};
-    const std::optional<EgoLane> e = sequence.Track(lanes, t);
+    const std::optional<EgoLane> e = sequence.Track(lanes, {}, t).ego;
     if (f + 1 < LaneTrackingOptions().confirm_frames) continue;
     ASSERT_TRUE(e.has_value()) << "frame " << f;
     if (e->departing && e->right_distance_m > 1.2) warned_early = true;
@@ -201,13 +201,35 @@ TEST(TrackingTest, StraightDrivingIsNoDeparture) {
   for (int f = 0; f < 300; ++f) {
     std::vector<Lane> lanes = {GroundLane(-1.7 + noise(rng), 0, 0),
                                GroundLane(1.9 + noise(rng), 0, 0)};
-    const std::optional<EgoLane> e = sequence.Track(lanes, f / 30.0);
+    const std::optional<EgoLane> e = sequence.Track(lanes, {}, f / 30.0).ego;
     // The two boundaries are confirmed after confirm_frames; from then on
     // every frame has the ego lane, and none is a departure.
     if (f + 1 < LaneTrackingOptions().confirm_frames) continue;
     ASSERT_TRUE(e.has_value()) << "frame " << f;
     EXPECT_FALSE(e->departing) << "frame " << f;
   }
+}
+
+// A service's frames carry Unix capture times (1.7e9 s): the lateral speed
+// and the departure warning are those of the same drive timed from 0.
+TEST(TrackingTest, LateralSpeedDoesNotDependOnTheClocksOrigin) {
+  SequenceTracker from_zero(CameraModel{});
+  SequenceTracker unix_time(CameraModel{});
+  int compared = 0;
+  for (int f = 0; f < 45; ++f) {
+    const double t = f / 30.0;
+    const double shift = -0.8 * t;
+    const std::vector<Lane> lanes = {GroundLane(-1.8 + shift, 0, 0), GroundLane(1.8 + shift, 0, 0)};
+    const std::optional<EgoLane> a = from_zero.Track(lanes, {}, t).ego;
+    const std::optional<EgoLane> b = unix_time.Track(lanes, {}, 1.7e9 + t).ego;
+    ASSERT_EQ(a.has_value(), b.has_value()) << "frame " << f;
+    if (!a || f < 20) continue;
+    EXPECT_NEAR(a->offset_rate_mps, 0.8, 0.1) << "frame " << f;
+    EXPECT_NEAR(b->offset_rate_mps, a->offset_rate_mps, 0.01) << "frame " << f;
+    EXPECT_EQ(b->departing, a->departing) << "frame " << f;
+    ++compared;
+  }
+  EXPECT_GT(compared, 20);
 }
 
 // Colour against rendered truth, also under a strong colour cast (a white

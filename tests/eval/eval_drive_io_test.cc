@@ -102,7 +102,7 @@ TEST(DriveResultsTest, TrackedRecordsKeepIdsAttributesAndTheEgoLanesBoundaries) 
   EXPECT_EQ(first.lanes[0].type, MarkingType::kDouble);
   EXPECT_TRUE(first.lanes[1].predicted);
   EXPECT_EQ(first.lanes[1].type, MarkingType::kDashed);
-  EXPECT_TRUE(first.lanes[1].image[3].isApprox(Eigen::Vector2d(250, 250)));
+  EXPECT_TRUE(first.lanes[1].lane.image[3].isApprox(Eigen::Vector2d(250, 250)));
   ASSERT_TRUE(first.ego.has_value());
   EXPECT_EQ(first.ego->left_index, 1);  // the lane with id 7
   EXPECT_EQ(first.ego->right_index, 0);

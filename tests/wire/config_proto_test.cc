@@ -185,9 +185,8 @@ TEST(ConvertTest, Lanes) {
   detection.lanes = {lane, lane};
   detection.lanes[1].inferred = true;
   detection.timings.total_ms = 3;
-  v1::FrameResponse response;
-  LanesToProto(detection, &response);
-  TimingsToProto(detection.timings, response.mutable_timings());
+  v1::FrameResponse response = LanesToProto(detection);
+  *response.mutable_timings() = TimingsToProto(detection.timings);
   ASSERT_EQ(response.lanes_size(), 2);
   const v1::Lane& l = response.lanes(0);
   ASSERT_EQ(l.image().control_points_size(), 4);
@@ -197,7 +196,108 @@ TEST(ConvertTest, Lanes) {
   EXPECT_DOUBLE_EQ(l.score(), 4.5);
   EXPECT_FALSE(l.inferred());
   EXPECT_TRUE(response.lanes(1).inferred());
+  EXPECT_FALSE(response.has_ego());
+  EXPECT_EQ(l.id(), 0);  // untracked
   EXPECT_DOUBLE_EQ(response.timings().detect_ms(), 3);
+  // And back, as lane-client reads an untracked session's response.
+  const lane::Detection back = DetectionFromProto(response);
+  ASSERT_EQ(back.lanes.size(), 2u);
+  EXPECT_EQ(back.lanes[0].image, lane.image);
+  EXPECT_EQ(back.lanes[0].ipm, lane.ipm);
+  EXPECT_EQ(back.lanes[0].ground, lane.ground);
+  EXPECT_DOUBLE_EQ(back.lanes[0].score, 4.5);
+  EXPECT_FALSE(back.lanes[0].inferred);
+  EXPECT_TRUE(back.lanes[1].inferred);
+  EXPECT_DOUBLE_EQ(back.timings.total_ms, 3);
+}
+
+// A tracked frame goes onto the wire and comes back with every field: the
+// lanes' curves, score, inferred and refit flags, ids, confirmed and
+// predicted flags, colours and types, and the ego lane (its boundaries found
+// again by their ids). What the server sends is what lane-client writes.
+TEST(ConvertTest, TrackedFrameRoundTrip) {
+  lane::TrackedFrame frame;
+  for (int k = 0; k < 3; ++k) {
+    lane::TrackedLane& tracked = frame.lanes.emplace_back();
+    for (int i = 0; i < 4; ++i) {
+      tracked.lane.image[i] = {100.0 * k + i, 10.0 * i + 0.125};
+      tracked.lane.ipm[i] = {2.0 * i + k, 3.5};
+      tracked.lane.ground[i] = {-1.8 + 3.6 * k, 5.0 * i};
+    }
+    tracked.lane.score = 1.5 + k;
+    tracked.id = 7 + k;
+  }
+  frame.lanes[0].confirmed = true;
+  frame.lanes[0].color = lane::MarkingColor::kYellow;
+  frame.lanes[0].type = lane::MarkingType::kDouble;
+  frame.lanes[0].lane.refit = true;
+  frame.lanes[1].predicted = true;
+  frame.lanes[1].confirmed = true;
+  frame.lanes[1].color = lane::MarkingColor::kWhite;
+  frame.lanes[1].type = lane::MarkingType::kDashed;
+  frame.lanes[1].lane.score = 0;
+  frame.lanes[2].lane.inferred = true;
+  frame.lanes[2].type = lane::MarkingType::kRoadEdge;
+  lane::EgoLane ego;
+  ego.offset_m = -0.25;
+  ego.width_m = 3.5;
+  ego.heading_deg = 1.25;
+  ego.curvature_per_m = 1e-4;
+  ego.left_index = 0;
+  ego.right_index = 1;
+  ego.left_id = 7;
+  ego.right_id = 8;
+  ego.left_distance_m = 1.5;
+  ego.right_distance_m = 2.0;
+  ego.offset_rate_mps = -0.5;
+  ego.departing = true;
+  frame.ego = ego;
+  frame.detection.timings.stage_ms[0] = 0.5;
+  frame.detection.timings.total_ms = 2.5;
+
+  v1::FrameResponse response = LanesToProto(frame);
+  *response.mutable_timings() = TimingsToProto(frame.detection.timings);
+  const lane::TrackedFrame back = TrackedFrameFromProto(response);
+  ASSERT_EQ(back.lanes.size(), frame.lanes.size());
+  for (size_t k = 0; k < frame.lanes.size(); ++k) {
+    const lane::TrackedLane& a = frame.lanes[k];
+    const lane::TrackedLane& b = back.lanes[k];
+    EXPECT_EQ(b.lane.image, a.lane.image) << k;
+    EXPECT_EQ(b.lane.ipm, a.lane.ipm) << k;
+    EXPECT_EQ(b.lane.ground, a.lane.ground) << k;
+    EXPECT_EQ(b.lane.score, a.lane.score) << k;
+    EXPECT_EQ(b.lane.inferred, a.lane.inferred) << k;
+    EXPECT_EQ(b.lane.refit, a.lane.refit) << k;
+    EXPECT_EQ(b.id, a.id) << k;
+    EXPECT_EQ(b.confirmed, a.confirmed) << k;
+    EXPECT_EQ(b.predicted, a.predicted) << k;
+    EXPECT_EQ(b.color, a.color) << k;
+    EXPECT_EQ(b.type, a.type) << k;
+  }
+  ASSERT_TRUE(back.ego.has_value());
+  EXPECT_EQ(back.ego->offset_m, ego.offset_m);
+  EXPECT_EQ(back.ego->width_m, ego.width_m);
+  EXPECT_EQ(back.ego->heading_deg, ego.heading_deg);
+  EXPECT_EQ(back.ego->curvature_per_m, ego.curvature_per_m);
+  EXPECT_EQ(back.ego->left_index, ego.left_index);
+  EXPECT_EQ(back.ego->right_index, ego.right_index);
+  EXPECT_EQ(back.ego->left_id, ego.left_id);
+  EXPECT_EQ(back.ego->right_id, ego.right_id);
+  EXPECT_EQ(back.ego->left_distance_m, ego.left_distance_m);
+  EXPECT_EQ(back.ego->right_distance_m, ego.right_distance_m);
+  EXPECT_EQ(back.ego->offset_rate_mps, ego.offset_rate_mps);
+  EXPECT_EQ(back.ego->departing, ego.departing);
+  // The detection: the lanes the frame showed (not the predicted one), its
+  // refit count and timings.
+  ASSERT_EQ(back.detection.lanes.size(), 2u);
+  EXPECT_EQ(back.detection.lanes[1].image, frame.lanes[2].lane.image);
+  EXPECT_EQ(back.detection.refit_lanes, 1);
+  EXPECT_DOUBLE_EQ(back.detection.timings.stage_ms[0], 0.5);
+  EXPECT_DOUBLE_EQ(back.detection.timings.total_ms, 2.5);
+  // A tracked frame without an ego lane sends none.
+  frame.ego.reset();
+  EXPECT_FALSE(LanesToProto(frame).has_ego());
+  EXPECT_FALSE(TrackedFrameFromProto(LanesToProto(frame)).ego.has_value());
 }
 
 // Every stage of the detector's table has its timing field in the proto
@@ -213,8 +313,7 @@ TEST(ConvertTest, EveryDetectorStageHasATimingField) {
     timings.stage_ms[i] = 1.5 + static_cast<double>(i);
     timings.ran[i] = true;
   }
-  v1::StageTimings proto;
-  TimingsToProto(timings, &proto);
+  const v1::StageTimings proto = TimingsToProto(timings);
   EXPECT_DOUBLE_EQ(proto.ipm_ms(), timings.Ms("ipm"));
   EXPECT_DOUBLE_EQ(proto.postprocess_ms(), timings.Ms("postprocess"));
   const lane::StageTimings back = TimingsFromProto(proto);

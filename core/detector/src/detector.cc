@@ -22,7 +22,7 @@ double MsSince(Clock::time_point t0) {
 LanePathCounts CountLanePaths(const Detection& detection) {
   LanePathCounts counts;
   for (const Lane& lane : detection.lanes) {
-    if (lane.predicted || lane.inferred) continue;
+    if (lane.inferred) continue;
     ++(lane.refit ? counts.refit : counts.searched);
   }
   return counts;
@@ -63,34 +63,6 @@ std::optional<Mode> ParseMode(const std::string& name) {
   if (name == "all") return Mode::kAll;
   if (name == "two") return Mode::kTwo;
   return std::nullopt;
-}
-
-const char* MarkingColorName(MarkingColor color) {
-  switch (color) {
-    case MarkingColor::kWhite:
-      return "white";
-    case MarkingColor::kYellow:
-      return "yellow";
-    case MarkingColor::kUnknown:
-      break;
-  }
-  return "unknown";
-}
-
-const char* MarkingTypeName(MarkingType type) {
-  switch (type) {
-    case MarkingType::kSolid:
-      return "solid";
-    case MarkingType::kDashed:
-      return "dashed";
-    case MarkingType::kDouble:
-      return "double";
-    case MarkingType::kRoadEdge:
-      return "road_edge";
-    case MarkingType::kUnknown:
-      break;
-  }
-  return "unknown";
 }
 
 const char* ChannelName(Channel channel) {

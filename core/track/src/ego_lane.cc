@@ -14,12 +14,8 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 std::optional<EgoLane> ComputeEgoLane(const std::vector<Lane>& lanes, const CameraModel& camera,
                                       const EgoOptions& options) {
   std::vector<std::optional<GroundCurve>> curves;
-  std::vector<int> ids;
-  for (const Lane& lane : lanes) {
-    curves.push_back(FitGroundCurve(lane));
-    ids.push_back(lane.id);
-  }
-  return EgoLaneOfCurves(curves, ids, camera, options);
+  for (const Lane& lane : lanes) curves.push_back(FitGroundCurve(lane));
+  return EgoLaneOfCurves(curves, /*ids=*/{}, camera, options);
 }
 
 std::optional<EgoLane> EgoLaneOfCurves(const std::vector<std::optional<GroundCurve>>& given,
@@ -90,10 +86,10 @@ std::optional<EgoLane> EgoLaneOfCurves(const std::vector<std::optional<GroundCur
 
 void EgoTracker::Reset() { history_.clear(); }
 
-void EgoTracker::Update(std::optional<EgoLane>& ego, double time_s) {
+std::optional<EgoLane> EgoTracker::Update(std::optional<EgoLane> ego, double time_s) {
   // A frame without the ego lane keeps the history: the window drops what
   // is too old.
-  if (!ego) return;
+  if (!ego) return ego;
   if (!history_.empty() && time_s <= history_.back().first) history_.clear();
   if (!history_.empty()) {
     // A lane change: the new lane's left boundary is the old one's right
@@ -122,12 +118,15 @@ void EgoTracker::Update(std::optional<EgoLane>& ego, double time_s) {
   while (history_.front().first < time_s - options_.rate_window_s) history_.pop_front();
   left_id_ = ego->left_id;
   right_id_ = ego->right_id;
-  // Least-squares slope of the offset over the window.
+  // Least-squares slope of the offset over the window, in time from this
+  // frame: capture times are Unix seconds (1.7e9), whose squares hold no
+  // fraction of a second in a double.
   double rate = 0;
   const double span = history_.back().first - history_.front().first;
   if (history_.size() >= 4 && span >= 0.2) {
     double st = 0, so = 0, stt = 0, sto = 0;
-    for (const auto& [t, o] : history_) {
+    for (const auto& [at, o] : history_) {
+      const double t = at - time_s;
       st += t;
       so += o;
       stt += t * t;
@@ -141,6 +140,7 @@ void EgoTracker::Update(std::optional<EgoLane>& ego, double time_s) {
   const double min_rate = options_.departure_min_rate_mps;
   ego->departing = (rate > min_rate && ego->right_distance_m / rate < options_.departure_tlc_s) ||
                    (rate < -min_rate && ego->left_distance_m / -rate < options_.departure_tlc_s);
+  return ego;
 }
 
 }  // namespace lane

@@ -21,33 +21,38 @@ DetectionPrior FrameTracker::Prior(const Detector& detector) const {
   return prior;
 }
 
-absl::StatusOr<Detection> FrameTracker::Measure(const Detector& detector,
-                                                const cv::Mat& frame) const {
+absl::StatusOr<MeasuredFrame> FrameTracker::Measure(const Detector& detector,
+                                                    const cv::Mat& frame) const {
   return Measure(detector, frame, Prior(detector));
 }
 
-absl::StatusOr<Detection> FrameTracker::Measure(const Detector& detector, const cv::Mat& frame,
-                                                const DetectionPrior& prior) const {
+absl::StatusOr<MeasuredFrame> FrameTracker::Measure(const Detector& detector, const cv::Mat& frame,
+                                                    const DetectionPrior& prior) const {
   absl::StatusOr<Detection> detection = detector.Detect(frame, &prior);
-  if (!detection.ok()) return detection;
+  if (!detection.ok()) return detection.status();
   const FrameNeeds& needs = detector.Needs();
-  ReadMarkings(frame, detector.ipm().camera(), detection->lanes, needs.top, needs.bottom);
-  return detection;
+  MeasuredFrame measured;
+  measured.markings =
+      ReadMarkings(frame, detector.ipm().camera(), detection->lanes, needs.top, needs.bottom);
+  measured.detection = *std::move(detection);
+  return measured;
 }
 
-void FrameTracker::Commit(const Detector& detector, Detection& detection,
-                          std::optional<double> time_s) {
+TrackedFrame FrameTracker::Commit(const Detector& detector, MeasuredFrame measured,
+                                  std::optional<double> time_s) {
   absl::MutexLock lock(&mu_);
-  detection.ego = tracker_.Track(detection.lanes, time_s, &detector.ipm());
+  SequenceTracker::Frame tracked =
+      tracker_.Track(measured.detection.lanes, measured.markings, time_s, &detector.ipm());
   ++frames_;
-  refits_in_row_ = detection.refit_lanes > 0 ? refits_in_row_ + 1 : 0;
+  refits_in_row_ = measured.detection.refit_lanes > 0 ? refits_in_row_ + 1 : 0;
+  return TrackedFrame{std::move(measured.detection), std::move(tracked.lanes), tracked.ego};
 }
 
-absl::StatusOr<Detection> FrameTracker::Process(const Detector& detector, const cv::Mat& frame,
-                                                std::optional<double> time_s) {
-  absl::StatusOr<Detection> detection = Measure(detector, frame);
-  if (detection.ok()) Commit(detector, *detection, time_s);
-  return detection;
+absl::StatusOr<TrackedFrame> FrameTracker::Process(const Detector& detector, const cv::Mat& frame,
+                                                   std::optional<double> time_s) {
+  absl::StatusOr<MeasuredFrame> measured = Measure(detector, frame);
+  if (!measured.ok()) return measured.status();
+  return Commit(detector, *std::move(measured), time_s);
 }
 
 void FrameTracker::Reset() {

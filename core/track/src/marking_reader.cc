@@ -332,17 +332,47 @@ MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraMo
   return TypeWithMaps(frame, lane, camera, PlaneMaps(camera), top_row, bottom_row);
 }
 
-void ReadMarkings(const cv::Mat& frame, const CameraModel& camera, std::vector<Lane>& lanes,
-                  int top_row, int bottom_row) {
-  if (lanes.empty()) return;
+std::vector<Marking> ReadMarkings(const cv::Mat& frame, const CameraModel& camera,
+                                  const std::vector<Lane>& lanes, int top_row, int bottom_row) {
+  std::vector<Marking> markings(lanes.size());
+  if (lanes.empty()) return markings;
   const PlaneMaps maps(camera);  // one per frame, for every lane
-  for (Lane& lane : lanes) {
+  for (size_t i = 0; i < lanes.size(); ++i) {
     // An inferred boundary is hidden (by a vehicle): what lies there is not
     // its paint.
-    if (lane.inferred) continue;
-    lane.color = ColorWithMaps(frame, lane, camera, maps, top_row, bottom_row);
-    lane.type = TypeWithMaps(frame, lane, camera, maps, top_row, bottom_row);
+    if (lanes[i].inferred) continue;
+    markings[i].color = ColorWithMaps(frame, lanes[i], camera, maps, top_row, bottom_row);
+    markings[i].type = TypeWithMaps(frame, lanes[i], camera, maps, top_row, bottom_row);
   }
+  return markings;
+}
+
+const char* MarkingColorName(MarkingColor color) {
+  switch (color) {
+    case MarkingColor::kWhite:
+      return "white";
+    case MarkingColor::kYellow:
+      return "yellow";
+    case MarkingColor::kUnknown:
+      break;
+  }
+  return "unknown";
+}
+
+const char* MarkingTypeName(MarkingType type) {
+  switch (type) {
+    case MarkingType::kSolid:
+      return "solid";
+    case MarkingType::kDashed:
+      return "dashed";
+    case MarkingType::kDouble:
+      return "double";
+    case MarkingType::kRoadEdge:
+      return "road_edge";
+    case MarkingType::kUnknown:
+      break;
+  }
+  return "unknown";
 }
 
 }  // namespace lane

@@ -10,51 +10,57 @@ namespace {
 // A lane drawn from a track's curve over its last extent, near end first
 // (none when it does not project into the image).
 std::optional<Lane> LaneFromCurve(const GroundCurve& curve, const IpmMapping& ipm) {
-  std::optional<Lane> lane = LaneAlongCurve(curve, ipm, /*near_first=*/true);
-  if (lane) lane->predicted = true;
-  return lane;
+  return LaneAlongCurve(curve, ipm, /*near_first=*/true);
 }
 
 }  // namespace
 
-std::optional<EgoLane> SequenceTracker::Track(std::vector<Lane>& lanes,
+SequenceTracker::Frame SequenceTracker::Track(const std::vector<Lane>& lanes,
+                                              const std::vector<Marking>& markings,
                                               std::optional<double> time_s, const IpmMapping* ipm) {
-  std::vector<MarkingColor> colors;
-  std::vector<MarkingType> types;
-  for (const Lane& lane : lanes) {
-    colors.push_back(lane.color);
-    types.push_back(lane.type);
+  std::vector<MarkingColor> colors(lanes.size(), MarkingColor::kUnknown);
+  std::vector<MarkingType> types(lanes.size(), MarkingType::kUnknown);
+  for (size_t i = 0; i < lanes.size() && i < markings.size(); ++i) {
+    colors[i] = markings[i].color;
+    types[i] = markings[i].type;
   }
   const std::vector<LaneIdentity> ids = lanes_.Update(lanes, time_s, colors, types);
+  std::vector<Entry> entries(lanes.size());
   for (size_t i = 0; i < lanes.size(); ++i) {
-    lanes[i].id = ids[i].id;
-    lanes[i].confirmed = ids[i].confirmed;
-    lanes[i].color = ids[i].color;
-    lanes[i].type = ids[i].type;
+    TrackedLane& tracked = entries[i].lane;
+    tracked.lane = lanes[i];
+    tracked.id = ids[i].id;
+    tracked.confirmed = ids[i].confirmed;
+    tracked.color = ids[i].color;
+    tracked.type = ids[i].type;
+    entries[i].identity = ids[i];
   }
-  std::vector<LaneIdentity> all = ids;
   if (ipm != nullptr) {
-    DrawFiltered(lanes, ids, *ipm);
-    AddCoasting(lanes, all, *ipm);
-    SortLeftToRight(lanes, all);
+    entries = SortedLeftToRight(WithCoasting(DrawFiltered(std::move(entries), *ipm), *ipm));
   }
-  return EgoOfConfirmed(lanes, all);
+  Frame frame;
+  frame.ego = EgoOfConfirmed(entries);
+  frame.lanes.reserve(entries.size());
+  for (Entry& entry : entries) frame.lanes.push_back(std::move(entry.lane));
+  return frame;
 }
 
-void SequenceTracker::DrawFiltered(std::vector<Lane>& lanes, const std::vector<LaneIdentity>& ids,
-                                   const IpmMapping& ipm) const {
-  for (size_t i = 0; i < lanes.size() && lanes_.options().report_filtered; ++i) {
-    if (!ids[i].confirmed) continue;
-    const std::optional<Lane> filtered = LaneFromCurve(ids[i].curve, ipm);
+std::vector<SequenceTracker::Entry> SequenceTracker::DrawFiltered(std::vector<Entry> entries,
+                                                                  const IpmMapping& ipm) const {
+  if (!lanes_.options().report_filtered) return entries;
+  for (Entry& entry : entries) {
+    if (!entry.identity.confirmed) continue;
+    const std::optional<Lane> filtered = LaneFromCurve(entry.identity.curve, ipm);
     if (!filtered) continue;
-    lanes[i].image = filtered->image;
-    lanes[i].ground = filtered->ground;
-    lanes[i].ipm = filtered->ipm;
+    entry.lane.lane.image = filtered->image;
+    entry.lane.lane.ground = filtered->ground;
+    entry.lane.lane.ipm = filtered->ipm;
   }
+  return entries;
 }
 
-void SequenceTracker::AddCoasting(std::vector<Lane>& lanes, std::vector<LaneIdentity>& all,
-                                  const IpmMapping& ipm) const {
+std::vector<SequenceTracker::Entry> SequenceTracker::WithCoasting(std::vector<Entry> entries,
+                                                                  const IpmMapping& ipm) const {
   const LaneTrackingOptions& o = lanes_.options();
   for (const lane::Track& track : lanes_.tracks()) {
     if (!track.Reported() || track.misses < 1 || track.misses > o.coast_frames) continue;
@@ -64,13 +70,14 @@ void SequenceTracker::AddCoasting(std::vector<Lane>& lanes, std::vector<LaneIden
     // one was last seen is another boundary (the asphalt's edge beside a
     // solid line) and does not stand in for it.
     bool found = false;
-    for (size_t i = 0; i < lanes.size() && !found; ++i) {
-      if (all[i].id < 0) continue;
-      const double distance = LateralDistance(track.curve, all[i].curve);
+    for (size_t i = 0; i < entries.size() && !found; ++i) {
+      const LaneIdentity& other_identity = entries[i].identity;
+      if (other_identity.id < 0) continue;
+      const double distance = LateralDistance(track.curve, other_identity.curve);
       if (distance >= o.coast_clearance_m) continue;
       const lane::Track* other = nullptr;
       for (const lane::Track& t : lanes_.tracks()) {
-        if (t.id == all[i].id) other = &t;
+        if (t.id == other_identity.id) other = &t;
       }
       const bool coexisted = other != nullptr && other->born_frame <= track.last_hit_frame;
       found = !(coexisted && distance >= o.duplicate_m);
@@ -78,48 +85,43 @@ void SequenceTracker::AddCoasting(std::vector<Lane>& lanes, std::vector<LaneIden
     if (found) continue;
     std::optional<Lane> lane = LaneFromCurve(track.curve, ipm);
     if (!lane) continue;
-    const LaneIdentity identity = IdentityOf(track);
-    lane->id = identity.id;
-    lane->confirmed = true;
-    lane->color = identity.color;
-    lane->type = identity.type;
-    lanes.push_back(*lane);
-    all.push_back(identity);
+    Entry predicted;
+    predicted.identity = IdentityOf(track);
+    predicted.lane.lane = *lane;
+    predicted.lane.id = predicted.identity.id;
+    predicted.lane.confirmed = true;
+    predicted.lane.predicted = true;
+    predicted.lane.color = predicted.identity.color;
+    predicted.lane.type = predicted.identity.type;
+    entries.push_back(std::move(predicted));
   }
+  return entries;
 }
 
-void SequenceTracker::SortLeftToRight(std::vector<Lane>& lanes,
-                                      std::vector<LaneIdentity>& all) const {
-  std::vector<size_t> order(lanes.size());
-  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  auto key = [&](size_t i) {
-    return all[i].id >= 0 ? all[i].curve.X(0.5 * (all[i].curve.y_near + all[i].curve.y_far))
-                          : 0.5 * (lanes[i].ground[0].x() + lanes[i].ground[3].x());
+std::vector<SequenceTracker::Entry> SequenceTracker::SortedLeftToRight(std::vector<Entry> entries) {
+  auto key = [](const Entry& e) {
+    const GroundCurve& curve = e.identity.curve;
+    return e.identity.id >= 0 ? curve.X(0.5 * (curve.y_near + curve.y_far))
+                              : 0.5 * (e.lane.lane.ground[0].x() + e.lane.lane.ground[3].x());
   };
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return key(a) < key(b); });
-  std::vector<Lane> sorted_lanes;
-  std::vector<LaneIdentity> sorted_ids;
-  for (size_t i : order) {
-    sorted_lanes.push_back(lanes[i]);
-    sorted_ids.push_back(all[i]);
-  }
-  lanes = std::move(sorted_lanes);
-  all = std::move(sorted_ids);
+  std::stable_sort(entries.begin(), entries.end(),
+                   [&](const Entry& a, const Entry& b) { return key(a) < key(b); });
+  return entries;
 }
 
-std::optional<EgoLane> SequenceTracker::EgoOfConfirmed(const std::vector<Lane>& lanes,
-                                                       const std::vector<LaneIdentity>& all) {
+std::optional<EgoLane> SequenceTracker::EgoOfConfirmed(const std::vector<Entry>& entries) {
   // The ego lane from the confirmed lanes' filtered curves only: a
   // one-frame streak on a car does not bound it, and the filter steadies
   // the offset whose rate warns of a departure.
-  std::vector<std::optional<GroundCurve>> curves(lanes.size());
-  std::vector<int> track_ids(lanes.size(), -1);
-  std::vector<Eigen::Matrix3d> covariances(lanes.size(), Eigen::Matrix3d::Identity());
-  for (size_t i = 0; i < lanes.size(); ++i) {
-    if (!all[i].confirmed) continue;
-    curves[i] = all[i].curve;
-    track_ids[i] = all[i].id;
-    covariances[i] = all[i].covariance;
+  std::vector<std::optional<GroundCurve>> curves(entries.size());
+  std::vector<int> track_ids(entries.size(), -1);
+  std::vector<Eigen::Matrix3d> covariances(entries.size(), Eigen::Matrix3d::Identity());
+  for (size_t i = 0; i < entries.size(); ++i) {
+    const LaneIdentity& identity = entries[i].identity;
+    if (!identity.confirmed) continue;
+    curves[i] = identity.curve;
+    track_ids[i] = identity.id;
+    covariances[i] = identity.covariance;
   }
   std::optional<EgoLane> ego =
       EgoLaneOfCurves(curves, track_ids, camera_, ego_options_, &covariances);
@@ -127,8 +129,7 @@ std::optional<EgoLane> SequenceTracker::EgoOfConfirmed(const std::vector<Lane>& 
     ego_.Reset();
     resets_seen_ = lanes_.resets();
   }
-  ego_.Update(ego, lanes_.time_s());
-  return ego;
+  return ego_.Update(std::move(ego), lanes_.time_s());
 }
 
 DetectionPrior SequenceTracker::Prior(const IpmMapping& ipm) const {

@@ -69,60 +69,23 @@ struct DetectorOptions {
   absl::Status Validate() const;
 };
 
-// A marking's paint colour (lane/track/marking_reader.h, MarkingColorOf).
-enum class MarkingColor { kUnknown, kWhite, kYellow };
-const char* MarkingColorName(MarkingColor color);  // "unknown", "white", "yellow"
-// A marking's pattern (lane/track/marking_reader.h, MarkingTypeOf); kRoadEdge: a
-// boundary without paint (a curb, the asphalt's edge).
-enum class MarkingType { kUnknown, kSolid, kDashed, kDouble, kRoadEdge };
-// "unknown", "solid", "dashed", "double", "road_edge"
-const char* MarkingTypeName(MarkingType type);
-
 struct Lane {
   // Cubic Bezier control points of the same boundary in three frames:
   std::array<Eigen::Vector2d, 4> image;   // image pixels
   std::array<Eigen::Vector2d, 4> ipm;     // IPM pixels (may lie outside the view after extension)
   std::array<Eigen::Vector2d, 4> ground;  // metres: x lateral (right +), y ahead
   double score = 0;                       // spline score in the top view
-  // With tracking (lane/track/frame_tracker.h): the track's id (stable while tracked,
-  // never reused within a tracker), whether it is confirmed, its colour and
-  // its type. -1, false, unknown, unknown without.
-  int id = -1;
-  bool confirmed = false;
-  // With tracking: not detected in this frame; the confirmed track's
-  // prediction, reported for a few frames after it was last seen
-  // (LaneTrackingOptions::coast_frames).
-  bool predicted = false;
   // Not seen in this frame: inferred by the road model (lane/road_model.h)
   // half-way between two found boundaries two lane widths apart, where a
   // vehicle hides it. Its score is the weaker neighbour's.
   bool inferred = false;
-  // With tracking: refitted in its tracked window (DetectionPrior::refit),
-  // not found by the search.
+  // Refitted in a tracker's window (DetectionPrior::refit), not found by the
+  // search.
   bool refit = false;
-  MarkingColor color = MarkingColor::kUnknown;
-  MarkingType type = MarkingType::kUnknown;
 };
 
-// The ego lane: the nearest boundary on each side of the camera.
-struct EgoLane {
-  double offset_m = 0;  // camera from the lane centre, positive to the right
-  double width_m = 0;
-  double heading_deg = 0;      // lane direction from the optical axis on the ground, right +
-  double curvature_per_m = 0;  // positive when the lane bends right
-  int left_index = -1;         // into the frame's lanes
-  int right_index = -1;
-  int left_id = -1;  // tracking ids, -1 without tracking
-  int right_id = -1;
-  double left_distance_m = 0;  // camera to each boundary, laterally
-  double right_distance_m = 0;
-  // Lateral speed of the camera in the lane (m/s, right +), from tracking;
-  // 0 without.
-  double offset_rate_mps = 0;
-  // Time to line crossing below departure_tlc_s while moving towards that
-  // line faster than departure_min_rate_mps.
-  bool departing = false;
-};
+// What a tracker adds to a frame's lanes (ids, colours, types, predicted
+// lanes, the ego lane) is in lane/track/tracked_frame.h.
 
 struct Intermediates {
   cv::Mat ipm;          // CV_32F top view, mean removed
@@ -136,8 +99,6 @@ struct Intermediates {
 
 struct Detection {
   std::vector<Lane> lanes;  // sorted left to right at the bottom of the image
-  // With tracking (lane/track/frame_tracker.h): the ego lane, or none when not found.
-  std::optional<EgoLane> ego;
   StageTimings timings;
   std::optional<Intermediates> debug;
   // With a prior that allows refits: how many of `lanes` were refitted in
@@ -148,9 +109,10 @@ struct Detection {
 };
 
 // How many of a frame's lanes each path found: refitted in a tracked window
-// (Lane::refit), or the search. Predicted (coasting) and inferred lanes were
-// not found in this frame and count in neither. What `lane detect --track`,
-// the service's lanes_found counter and the tracked benchmark report.
+// (Lane::refit), or the search. Inferred lanes were not found in this frame
+// and count in neither (nor do a tracker's predicted lanes, which are not
+// the detection's). What `lane detect --track`, the service's lanes_found
+// counter and the tracked benchmark report.
 struct LanePathCounts {
   int refit = 0;
   int searched = 0;

@@ -20,6 +20,7 @@
 #include "lane/synthetic.h"
 #include "lane/track/ego_lane.h"
 #include "lane/track/frame_tracker.h"
+#include "lane/track/tracked_frame.h"
 
 namespace lane::eval {
 
@@ -44,9 +45,10 @@ struct DriveTruthFrame {
 
 DriveTruthFrame DriveTruthOf(const SyntheticFrame& frame);
 
-// What the system reported for one frame.
+// What the system reported for one frame: its lanes (untracked: without
+// ids, colour and type read in the frame) and the ego lane.
 struct DriveOutput {
-  std::vector<Lane> lanes;
+  std::vector<TrackedLane> lanes;
   std::optional<EgoLane> ego;
 };
 
@@ -66,7 +68,7 @@ struct DriveScore {
   int reported = 0;  // lanes counted (confirmed ones with confirmed_only)
   int matched = 0;   // of those, on a true boundary
   int false_positives = 0;
-  int predicted = 0;  // of the lanes counted, predicted ones (Lane::predicted)
+  int predicted = 0;  // of the lanes counted, predicted ones (TrackedLane::predicted)
   int predicted_false_positives = 0;
   int on_road_edges = 0;                   // lanes on no boundary but on an asphalt edge
   std::vector<int> false_positive_frames;  // one entry per false positive

@@ -15,6 +15,26 @@
 
 namespace lane {
 
+// The ego lane: the nearest boundary on each side of the camera.
+struct EgoLane {
+  double offset_m = 0;  // camera from the lane centre, positive to the right
+  double width_m = 0;
+  double heading_deg = 0;      // lane direction from the optical axis on the ground, right +
+  double curvature_per_m = 0;  // positive when the lane bends right
+  int left_index = -1;         // into the frame's lanes
+  int right_index = -1;
+  int left_id = -1;  // tracking ids, -1 without tracking
+  int right_id = -1;
+  double left_distance_m = 0;  // camera to each boundary, laterally
+  double right_distance_m = 0;
+  // Lateral speed of the camera in the lane (m/s, right +), from tracking;
+  // 0 without.
+  double offset_rate_mps = 0;
+  // Time to line crossing below departure_tlc_s while moving towards that
+  // line faster than departure_min_rate_mps.
+  bool departing = false;
+};
+
 struct EgoOptions {
   double min_width_m = 2.2;
   double max_width_m = 5.0;
@@ -26,8 +46,8 @@ struct EgoOptions {
 };
 
 // The ego lane of one frame's lanes (none when no pair of boundaries one on
-// each side lies a plausible lane width apart). `camera` gives the optical
-// axis (yaw).
+// each side lies a plausible lane width apart), without ids. `camera` gives
+// the optical axis (yaw).
 std::optional<EgoLane> ComputeEgoLane(const std::vector<Lane>& lanes, const CameraModel& camera,
                                       const EgoOptions& options = {});
 // The same from ground curves (one per lane, none for a lane that has
@@ -47,9 +67,9 @@ std::optional<EgoLane> EgoLaneOfCurves(const std::vector<std::optional<GroundCur
 class EgoTracker {
  public:
   explicit EgoTracker(EgoOptions options = {}) : options_(options) {}
-  // `ego` from ComputeEgoLane with its ids filled in; sets offset_rate_mps
-  // and departing.
-  void Update(std::optional<EgoLane>& ego, double time_s);
+  // `ego` (from EgoLaneOfCurves, with ids) at `time_s`, with its
+  // offset_rate_mps and departing set; none when `ego` is none.
+  std::optional<EgoLane> Update(std::optional<EgoLane> ego, double time_s);
   void Reset();
 
  private:

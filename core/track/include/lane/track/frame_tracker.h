@@ -24,6 +24,7 @@
 #include "lane/detector.h"
 #include "lane/geometry/camera.h"
 #include "lane/track/sequence_tracker.h"
+#include "lane/track/tracked_frame.h"
 #include "lane/track/tracker_state.h"
 
 namespace lane {
@@ -41,7 +42,7 @@ class FrameTracker {
   // and type in the rows the detector read (Detector::Needs: a frame decoded
   // only there reads as a whole one). Safe to call from several threads at
   // once, and concurrently with Commit.
-  absl::StatusOr<Detection> Measure(const Detector& detector, const cv::Mat& frame) const;
+  absl::StatusOr<MeasuredFrame> Measure(const Detector& detector, const cv::Mat& frame) const;
 
   // The prior Measure would search now: the tracker's predicted lanes after
   // the last committed frame.
@@ -50,19 +51,21 @@ class FrameTracker {
   // and that prior only, not on when this runs. A batch that takes frame i's
   // prior right after committing frame i - k gets the same lanes whatever
   // its threads' timing (lane backfill).
-  absl::StatusOr<Detection> Measure(const Detector& detector, const cv::Mat& frame,
-                                    const DetectionPrior& prior) const;
+  absl::StatusOr<MeasuredFrame> Measure(const Detector& detector, const cv::Mat& frame,
+                                        const DetectionPrior& prior) const;
 
-  // Step 2, in frame order. `detection` (from Measure) gets its lanes' ids,
-  // confirmed flags and voted colours and types, the predicted lanes of
-  // confirmed tracks missed for a few frames, drawn in `detector`'s top view,
-  // and its ego lane. `time_s`: the frame's capture time, if it has one
-  // (else the previous frame's + 1 / default_fps).
-  void Commit(const Detector& detector, Detection& detection, std::optional<double> time_s);
+  // Step 2, in frame order: the tracker takes `measured` (from Measure) and
+  // returns the tracked frame: its lanes with their ids, confirmed flags and
+  // voted colours and types, the predicted lanes of confirmed tracks missed
+  // for a few frames, drawn in `detector`'s top view, and the ego lane.
+  // `time_s`: the frame's capture time, if it has one (else the previous
+  // frame's + 1 / default_fps).
+  TrackedFrame Commit(const Detector& detector, MeasuredFrame measured,
+                      std::optional<double> time_s);
 
   // Measure, then Commit.
-  absl::StatusOr<Detection> Process(const Detector& detector, const cv::Mat& frame,
-                                    std::optional<double> time_s);
+  absl::StatusOr<TrackedFrame> Process(const Detector& detector, const cv::Mat& frame,
+                                       std::optional<double> time_s);
 
   // Forgets every track (a new clip).
   void Reset();

@@ -22,6 +22,7 @@
 
 #include "lane/detector.h"
 #include "lane/track/ground_curve.h"
+#include "lane/track/marking.h"
 #include "lane/track/tracker_state.h"
 
 namespace lane {
@@ -73,7 +74,7 @@ struct LaneTrackingOptions {
   // turns solid reads solid about this long after the change.
   double type_memory_s = 1.0;
   // A confirmed track missed for at most this many frames in a row is still
-  // reported, from its prediction (Lane::predicted), when SequenceTracker
+  // reported, from its prediction (TrackedLane::predicted), when SequenceTracker
   // is given the top view to draw it in.
   int coast_frames = 3;
   // A predicted lane (coast_frames) is not reported when a lane of the

@@ -9,6 +9,7 @@
 
 #include "lane/detector.h"
 #include "lane/geometry/camera.h"
+#include "lane/track/marking.h"
 
 namespace lane {
 
@@ -32,10 +33,12 @@ MarkingColor MarkingColorOf(const cv::Mat& bgr, const Lane& lane, const CameraMo
 MarkingType MarkingTypeOf(const cv::Mat& frame, const Lane& lane, const CameraModel& camera,
                           int top_row = 0, int bottom_row = -1);
 
-// Sets every lane's colour and type in this frame (MarkingColorOf,
-// MarkingTypeOf), reading rows [top_row, bottom_row) only.
-void ReadMarkings(const cv::Mat& frame, const CameraModel& camera, std::vector<Lane>& lanes,
-                  int top_row = 0, int bottom_row = -1);
+// Every lane's colour and type in this frame (MarkingColorOf,
+// MarkingTypeOf), one a lane, reading rows [top_row, bottom_row) only. An
+// inferred lane's are unknown: what lies there is not its paint.
+std::vector<Marking> ReadMarkings(const cv::Mat& frame, const CameraModel& camera,
+                                  const std::vector<Lane>& lanes, int top_row = 0,
+                                  int bottom_row = -1);
 
 }  // namespace lane
 

@@ -11,27 +11,36 @@
 #include "lane/geometry/ipm.h"
 #include "lane/track/ego_lane.h"
 #include "lane/track/lane_tracker.h"
+#include "lane/track/marking.h"
+#include "lane/track/tracked_frame.h"
 
 namespace lane {
 
-// Everything video-aware for one camera, frame after frame: each lane's
-// colour and type in the frame must already be in Lane::color and
-// Lane::type (MarkingColorOf, MarkingTypeOf); Track replaces them by the
-// track's votes and sets id and confirmed, and
-// returns the ego lane with its lateral speed and departure flag.
+// Everything video-aware for one camera, frame after frame: Track gives each
+// lane its track's id, confirmed flag and voted colour and type, adds the
+// predicted lanes, and returns them with the ego lane, its lateral speed and
+// departure flag.
 class SequenceTracker {
  public:
   explicit SequenceTracker(const CameraModel& camera, LaneTrackingOptions lanes = {},
                            EgoOptions ego = {})
       : camera_(camera), lanes_(lanes), ego_options_(ego), ego_(ego) {}
 
-  // With `ipm` (the detector's top view), confirmed tracks missed for up to
-  // coast_frames frames are added to `lanes` from their prediction
-  // (Lane::predicted), confirmed lanes of the frame are drawn from their
-  // filtered curves (LaneTrackingOptions::report_filtered); `lanes` stays
-  // sorted left to right.
-  std::optional<EgoLane> Track(std::vector<Lane>& lanes, std::optional<double> time_s,
-                               const IpmMapping* ipm = nullptr);
+  // What Track reports of one frame.
+  struct Frame {
+    std::vector<TrackedLane> lanes;  // left to right (with a top view; else in `lanes`' order)
+    std::optional<EgoLane> ego;
+  };
+
+  // One frame, in order: its lanes and their markings in this frame (one a
+  // lane, or empty: unknown; MarkingColorOf, MarkingTypeOf), at `time_s`
+  // (LaneTracker::Update). With `ipm` (the detector's top view), confirmed
+  // tracks missed for up to coast_frames frames are added from their
+  // prediction (TrackedLane::predicted), confirmed lanes of the frame are
+  // drawn from their filtered curves (LaneTrackingOptions::report_filtered),
+  // and the lanes are sorted left to right.
+  Frame Track(const std::vector<Lane>& lanes, const std::vector<Marking>& markings,
+              std::optional<double> time_s, const IpmMapping* ipm = nullptr);
   void Reset();
   const LaneTracker& lane_tracker() const { return lanes_; }
   // The lane tracker's resume state (LaneTracker::Snapshot, Restore,
@@ -52,18 +61,21 @@ class SequenceTracker {
   DetectionPrior Prior(const IpmMapping& ipm) const;
 
  private:
-  // Track's steps after the lane tracker's update. With a top view: the
+  // A lane of the frame being tracked and its track's identity (id -1:
+  // none).
+  struct Entry {
+    TrackedLane lane;
+    LaneIdentity identity;
+  };
+  // Track's steps after the lane tracker's update, with a top view: the
   // confirmed lanes of the frame drawn from their filtered curves
   // (report_filtered), the confirmed tracks missed for up to coast_frames
   // frames added from their prediction, and all sorted left to right.
-  void DrawFiltered(std::vector<Lane>& lanes, const std::vector<LaneIdentity>& ids,
-                    const IpmMapping& ipm) const;
-  void AddCoasting(std::vector<Lane>& lanes, std::vector<LaneIdentity>& all,
-                   const IpmMapping& ipm) const;
-  void SortLeftToRight(std::vector<Lane>& lanes, std::vector<LaneIdentity>& all) const;
+  std::vector<Entry> DrawFiltered(std::vector<Entry> entries, const IpmMapping& ipm) const;
+  std::vector<Entry> WithCoasting(std::vector<Entry> entries, const IpmMapping& ipm) const;
+  static std::vector<Entry> SortedLeftToRight(std::vector<Entry> entries);
   // The ego lane of the confirmed lanes, followed over frames.
-  std::optional<EgoLane> EgoOfConfirmed(const std::vector<Lane>& lanes,
-                                        const std::vector<LaneIdentity>& all);
+  std::optional<EgoLane> EgoOfConfirmed(const std::vector<Entry>& entries);
 
   CameraModel camera_;
   LaneTracker lanes_;
