@@ -40,6 +40,7 @@ struct RenderFlags {
   bool clutter = false;
   bool straight = false;
   bool night = false;
+  bool static_overlay = false;
   double double_lines = 0;
   double fps = lane::SyntheticDriveOptions().fps;
   double speed_mps = lane::SyntheticDriveOptions().speed_mps;
@@ -70,6 +71,7 @@ int RunRender(const RenderFlags& flags) {
   options.jpeg_quality = flags.jpeg_quality;
   if (flags.clutter) lane::SetRoadsideClutter(&options);
   options.night = flags.night;
+  options.static_overlay = flags.static_overlay;
   options.double_line_probability = flags.double_lines;
   if (flags.straight) {
     options.straight_probability = 1.0;
@@ -181,6 +183,9 @@ Command AddRenderCommand(CLI::App& lane) {
                 "straight roads only, nearly aligned with the car (independent frames): "
                 "calibration footage")
       ->excludes(sequence);
+  app->add_flag("--static-overlay", flags->static_overlay,
+                "a card on the dashboard reflected in the windscreen, at the same image position "
+                "in every frame (structure fixed to the camera; not labelled)");
   app->add_option("--fps", flags->fps, "--sequence: frames per second")
       ->type_name("F")
       ->check(CLI::Range(1.0, 240.0));
