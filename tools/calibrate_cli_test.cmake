@@ -1,9 +1,11 @@
 # `lane calibrate` end to end: frames rendered through the synthetic camera
-# (pitch 14, yaw 0) give a config whose camera is that one again; bad input
-# fails cleanly.
+# (pitch 14, yaw 0), with a card's barcode reflected in the windscreen at
+# the same place in every frame, give a config whose camera is that one
+# again and whose static mask holds the card; bad input fails cleanly.
 include(${CMAKE_CURRENT_LIST_DIR}/cli_test_common.cmake)
 
-run(0 render render --config ${CONFIG} --count 40 --seed 7 --output ${OUT}/frames)
+run(0 render render --config ${CONFIG} --count 40 --seed 7 --static-overlay
+    --output ${OUT}/frames)
 run(0 calibrate calibrate ${OUT}/frames --height-m 2.1798 --focal-px 344.2161
     --principal-point 317.9034,256.5352 --output ${OUT}/calibrated.json
     --overlay ${OUT}/check.png)
@@ -24,6 +26,16 @@ endif()
 if(NOT view STREQUAL "ground")
   message(FATAL_ERROR "calibrated config's view is ${view}, expected ground")
 endif()
+# The card is fixed to the camera: masked (u 422-563, v 307-350 in 640x480).
+string(JSON masked LENGTH "${show_out}" ipm static_mask)
+string(JSON mask_left GET "${show_out}" ipm static_mask 0 left)
+string(JSON mask_top GET "${show_out}" ipm static_mask 0 top)
+if(NOT masked EQUAL 1 OR mask_left LESS 414 OR mask_left GREATER 445 OR mask_top LESS 299
+   OR mask_top GREATER 320)
+  message(FATAL_ERROR "calibrated config's static mask: ${masked} rectangles, the first at "
+                      "(${mask_left}, ${mask_top}); expected one at the card\n${calibrate_out}")
+endif()
+expect_contains("${calibrate_out}" "static structure" "calibrate output: the static structure")
 # ... and detects lanes on the rendered frames.
 run(0 detect detect --config ${OUT}/calibrated.json --output ${OUT}/lanes.jsonl --quiet
     ${OUT}/frames)
@@ -46,6 +58,20 @@ if(EXISTS ${OUT}/tall.json)
 endif()
 expect_contains("${tall_err}" "failed its self-check" "calibrate with a wrong height")
 expect_contains("${tall_err}" "no config written" "calibrate with a wrong height")
+
+# The card's bars meet at one point in every frame: let them vote and the
+# first pass goes there; the estimate is refused, and --overlay shows who
+# voted for it.
+run(1 astray calibrate ${OUT}/frames --height-m 2.1798 --focal-px 344.2161
+    --principal-point 317.9034,256.5352 --keep-static-structure --output ${OUT}/astray.json
+    --overlay ${OUT}/astray.png)
+expect_contains("${astray_err}" "meet elsewhere" "calibrate with the card voting")
+if(EXISTS ${OUT}/astray.json)
+  message(FATAL_ERROR "lane calibrate wrote a config for a refused estimate")
+endif()
+if(NOT EXISTS ${OUT}/astray.png)
+  message(FATAL_ERROR "lane calibrate --overlay wrote no ${OUT}/astray.png for a refused estimate")
+endif()
 
 # Frames without markings: a clear failure, not a config.
 file(MAKE_DIRECTORY ${OUT}/blank)

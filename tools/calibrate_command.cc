@@ -1,5 +1,6 @@
 // `lane calibrate`: a camera's config from frames of ordinary driving
 // (lane/calibrate/calibration.h, docs/calibration.md).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -53,6 +54,7 @@ struct CalibrateFlags {
   std::optional<std::string> template_config;
   std::string output;
   std::optional<std::string> overlay;
+  bool keep_static = false;
   ReadFlags read;
   std::vector<std::string> inputs;
 };
@@ -80,9 +82,71 @@ struct BestFrame {
   lane::FrameVanishingPoint point;
 };
 
-void DrawOverlay(const BestFrame& best, const lane::CalibrationResult& r, const std::string& path) {
-  cv::Mat img = best.bgr.channels() == 3 ? best.bgr.clone() : cv::Mat();
-  if (img.empty()) cv::cvtColor(best.bgr, img, cv::COLOR_GRAY2BGR);
+cv::Point Pixel(const Eigen::Vector2d& p) {
+  return {static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y()))};
+}
+
+cv::Mat ColourCopy(const cv::Mat& frame) {
+  cv::Mat img;
+  if (frame.channels() == 3) return frame.clone();
+  cv::cvtColor(frame, img, cv::COLOR_GRAY2BGR);
+  return img;
+}
+
+void DrawSegment(cv::Mat& img, const lane::ImageSegment& s, const cv::Scalar& colour) {
+  cv::line(img, Pixel(s.centre - 0.5 * s.length * s.direction),
+           Pixel(s.centre + 0.5 * s.length * s.direction), colour, 2, cv::LINE_AA);
+}
+
+// The static structure's rectangles (blue).
+void DrawStaticBoxes(cv::Mat& img, const std::vector<lane::Roi>& boxes) {
+  for (const lane::Roi& b : boxes) {
+    cv::rectangle(img, Pixel({b.left, b.top}), Pixel({b.right, b.bottom}), {255, 128, 0}, 1);
+  }
+}
+
+// A refused estimate: pass 1's point with the segments of every frame that
+// supported it (green, extended to it), those left out as static structure
+// (blue) and its rectangles, on `frame` (the frame that gave most support).
+void DrawRefusalOverlay(const cv::Mat& frame, const lane::FirstPassReport& first,
+                        const std::string& path) {
+  cv::Mat img = ColourCopy(frame);
+  DrawStaticBoxes(img, first.static_structure.boxes);
+  for (const auto& [k, s] : first.static_segments) DrawSegment(img, s, {255, 128, 0});
+  for (const auto& [k, s] : first.support) {
+    cv::line(img, Pixel(s.centre), Pixel(first.point), {0, 200, 0}, 1, cv::LINE_AA);
+  }
+  for (const auto& [k, s] : first.support) DrawSegment(img, s, {0, 255, 0});
+  cv::drawMarker(img, Pixel(first.point), {255, 0, 255}, cv::MARKER_CROSS, 24, 2);
+  const std::string lines[] = {
+      absl::StrFormat("REFUSED: the first pass's point (%.1f, %.1f)", first.point.x(),
+                      first.point.y()),
+      absl::StrFormat("%d segments voted for it (green), %d left out as static (blue)",
+                      static_cast<int>(first.support.size()),
+                      static_cast<int>(first.static_segments.size()))};
+  for (int k = 0; k < 2; ++k) {
+    cv::putText(img, lines[k], {10, 24 + 24 * k}, cv::FONT_HERSHEY_SIMPLEX, 0.55, {255, 255, 255},
+                2, cv::LINE_AA);
+  }
+  cv::imwrite(path, img);
+}
+
+// The frame (0-based) that gave pass 1's point the most support.
+int MostSupportingFrame(const lane::FirstPassReport& first) {
+  std::vector<int> count;
+  for (const auto& [k, s] : first.support) {
+    if (k >= static_cast<int>(count.size())) count.resize(static_cast<size_t>(k) + 1, 0);
+    ++count[static_cast<size_t>(k)];
+  }
+  return count.empty()
+             ? -1
+             : static_cast<int>(std::max_element(count.begin(), count.end()) - count.begin());
+}
+
+void DrawOverlay(const BestFrame& best, const lane::CalibrationResult& r,
+                 const std::vector<lane::Roi>& static_boxes, const std::string& path) {
+  cv::Mat img = ColourCopy(best.bgr);
+  DrawStaticBoxes(img, static_boxes);
   const double horizon = r.camera.HorizonRow();
   cv::line(img, {0, static_cast<int>(std::lround(horizon))},
            {img.cols - 1, static_cast<int>(std::lround(horizon))}, {255, 255, 0}, 1, cv::LINE_AA);
@@ -182,6 +246,10 @@ std::string ConfigHeader(const lane::CalibrationResult& r, const lane::LaneGeome
                         r.road_bottom_row, r.outline.Top(r.camera.image_height),
                         r.outline.Bottom(r.camera.image_height), flags.lane_width_m);
   absl::StrAppendFormat(&h,
+                        "// Static structure: %d segments left out; %d rectangles on the road's "
+                        "rows masked (ipm.static_mask).\n",
+                        r.static_segments, static_cast<int>(r.static_mask.size()));
+  absl::StrAppendFormat(&h,
                         "// Self-check passed: lane pairs in %d of %d used frames, heading %.2f "
                         "deg, divergence %.2f deg, width %.2f m.\n",
                         check.frames_with_pair, check.frames, check.heading_deg,
@@ -215,6 +283,7 @@ absl::Status WriteCalibratedConfig(const lane::Config& base, const lane::Calibra
   lane::Config config = base;
   config.camera = r.camera;
   config.ipm = lane::GroundViewIpm(r.view, config.ipm);
+  config.ipm.static_mask = r.static_mask;  // this camera's, not the template's
   if (absl::StatusOr<lane::Detector> d =
           lane::Detector::Create(config.camera, config.ipm, config.detector);
       !d.ok()) {
@@ -310,6 +379,13 @@ void PrintCalibration(const lane::CalibrationResult& r, const lane::LaneGeometry
   std::printf("segments          %d supporting\n", r.segments);
   std::printf("pitch, yaw        %.3f +- %.3f, %.3f +- %.3f deg (95 %% interval)\n",
               r.camera.pitch_deg, r.pitch_interval_deg, r.camera.yaw_deg, r.yaw_interval_deg);
+  std::string boxes;
+  for (const lane::Roi& b : r.static_mask) {
+    absl::StrAppendFormat(&boxes, "%s u %.0f..%.0f v %.0f..%.0f", boxes.empty() ? ":" : ";", b.left,
+                          b.right, b.top, b.bottom);
+  }
+  std::printf("static structure  %d segments left out; %d rectangles masked on the road's rows%s\n",
+              r.static_segments, static_cast<int>(r.static_mask.size()), boxes.c_str());
   PrintCameraAndView(r, check, flags);
 }
 
@@ -354,6 +430,7 @@ int RunCalibrate(const CalibrateFlags& flags) {
   options.focal_px = flags.focal_px;
   options.lane_width_m = flags.lane_width_m;
   options.road_bottom_row = flags.road_bottom_row;
+  options.static_structure.enabled = !flags.keep_static;
   if (flags.principal_point) {
     options.principal_point = ParsePoint(*flags.principal_point);
     if (!options.principal_point) {
@@ -376,7 +453,12 @@ int RunCalibrate(const CalibrateFlags& flags) {
   }
   read_errors = 0;
   BestFrame best;
+  // For an overlay of a refusal: the frame that supported pass 1 most.
+  const int refusal_frame = flags.overlay ? MostSupportingFrame(calibrator.first_pass()) : -1;
+  cv::Mat refusal_bgr;
+  int index = 0;
   if (!EachFrame(flags, read_errors, [&](const InputFrame& f) -> absl::Status {
+        if (index++ == refusal_frame) refusal_bgr = f.bgr.clone();
         std::vector<lane::ImageSegment> segments;
         absl::StatusOr<lane::FrameVanishingPoint> p = calibrator.AddSecondPass(f.bgr, &segments);
         if (!p.ok()) return p.status();
@@ -390,10 +472,15 @@ int RunCalibrate(const CalibrateFlags& flags) {
   }
   const absl::StatusOr<lane::CalibrationResult> result = calibrator.Finish();
   if (!result.ok()) {
+    if (flags.overlay && !refusal_bgr.empty()) {
+      DrawRefusalOverlay(refusal_bgr, calibrator.first_pass(), *flags.overlay);
+    }
     return Failure("calibrate", absl::StrCat(result.status().message(), "; ", kRefusalAdvice));
   }
   const lane::CalibrationResult& r = *result;
-  if (flags.overlay && !best.bgr.empty()) DrawOverlay(best, r, *flags.overlay);
+  if (flags.overlay && !best.bgr.empty()) {
+    DrawOverlay(best, r, calibrator.first_pass().static_structure.boxes, *flags.overlay);
+  }
   const absl::StatusOr<lane::LaneGeometryReport> check = SelfCheck(r, flags);
   if (!check.ok()) return Failure("calibrate", std::string(check.status().message()));
   if (!check->verdict.ok()) {
@@ -464,8 +551,12 @@ Command AddCalibrateCommand(CLI::App& lane) {
       ->required();
   AddOptional(app, "--overlay", &flags->overlay,
               "also draw the best-supported frame's segments, vanishing point, horizon, road "
-              "rows and top view to this PNG")
+              "rows, top view and static structure to this PNG; when the estimate is refused, "
+              "the first pass's point and the segments that voted for it")
       ->type_name("PNG");
+  app->add_flag("--keep-static-structure", flags->keep_static,
+                "let structure fixed to the camera (reflections, stickers, overlays) vote, and "
+                "write no static mask: for comparison");
   AddReadFlags(app, &flags->read);
   app->add_option("INPUT", flags->inputs, "image files, directories, list files or videos")
       ->required();

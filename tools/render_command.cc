@@ -40,6 +40,7 @@ struct RenderFlags {
   bool clutter = false;
   bool straight = false;
   bool night = false;
+  bool static_overlay = false;
   double double_lines = 0;
   double hood_top_row = 0;
   double hood_side_row = 0;
@@ -73,6 +74,7 @@ int RunRender(const RenderFlags& flags) {
   options.jpeg_quality = flags.jpeg_quality;
   if (flags.clutter) lane::SetRoadsideClutter(&options);
   options.night = flags.night;
+  options.static_overlay = flags.static_overlay;
   options.double_line_probability = flags.double_lines;
   options.hood_top_row = flags.hood_top_row;
   options.hood_side_row = flags.hood_side_row;
@@ -205,6 +207,9 @@ Command AddRenderCommand(CLI::App& lane) {
                 "--hood-top-row: label the lanes on through the hood to the image's bottom "
                 "(CULane's convention) instead of stopping at it")
       ->needs(hood);
+  app->add_flag("--static-overlay", flags->static_overlay,
+                "a card on the dashboard reflected in the windscreen, at the same image position "
+                "in every frame (structure fixed to the camera; not labelled)");
   app->add_option("--fps", flags->fps, "--sequence: frames per second")
       ->type_name("F")
       ->check(CLI::Range(1.0, 240.0));

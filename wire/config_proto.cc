@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <type_traits>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
 #include "lane/config/config_fields.h"
@@ -63,6 +64,26 @@ class ProtoReader {
     if (status_.ok()) status_ = nested.status_;
   }
 
+  template <class T>
+  void List(const char* name, std::vector<T>& member) {
+    const FieldDescriptor* field = Find(name);
+    if (field == nullptr || !status_.ok()) return;
+    const Reflection& r = *message_.GetReflection();
+    const int n = r.FieldSize(message_, field);
+    if (n == 0) return;  // unset: the default (an empty list)
+    std::vector<T> items(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) {
+      ProtoReader nested(r.GetRepeatedMessage(message_, field, i),
+                         absl::StrCat(Key(name), "[", i, "]"));
+      VisitFields(items[static_cast<size_t>(i)], nested);
+      if (!nested.status_.ok()) {
+        status_ = nested.status_;
+        return;
+      }
+    }
+    member = std::move(items);
+  }
+
   const absl::Status& status() const { return status_; }
 
  private:
@@ -115,6 +136,16 @@ class ProtoWriter {
     if (field == nullptr) return;
     ProtoWriter nested(message_->GetReflection()->MutableMessage(message_, field));
     VisitFields(member, nested);
+  }
+
+  template <class T>
+  void List(const char* name, const std::vector<T>& member) {
+    const FieldDescriptor* field = message_->GetDescriptor()->FindFieldByName(name);
+    if (field == nullptr) return;
+    for (const T& item : member) {
+      ProtoWriter nested(message_->GetReflection()->AddMessage(message_, field));
+      VisitFields(item, nested);
+    }
   }
 
  private:

@@ -55,6 +55,20 @@ class SchemaChecker {
     nested.Finish({});
   }
 
+  template <class T>
+  void List(const char* name, const std::vector<T>& /*member*/) {
+    const FieldDescriptor* field = Claim(name);
+    if (field == nullptr) return;
+    if (field->cpp_type() != FieldDescriptor::CPPTYPE_MESSAGE || !field->is_repeated()) {
+      Problem(name, "is not a repeated message, the config list is");
+      return;
+    }
+    SchemaChecker nested(field->message_type(), problems_);
+    const T item;
+    VisitFields(item, nested);
+    nested.Finish({});
+  }
+
   // Proto fields no config field claimed, but for `extra` (not config).
   void Finish(const std::set<std::string>& extra) {
     for (int i = 0; i < descriptor_->field_count(); ++i) {

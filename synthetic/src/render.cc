@@ -518,6 +518,7 @@ SyntheticFrame RenderScene(const CameraModel& camera, const SyntheticOptions& op
   DrawObjects(camera, road, scene.objects, img);
   if (scene.night.on) ApplyNight(camera, scene.night, img);
   DrawHood(camera, options, scene.night.on, img);
+  if (options.static_overlay) DrawStaticOverlay(img);
   cv::GaussianBlur(img, img, cv::Size(3, 3), look.blur_sigma);
 
   // Exposure and sensor noise.

@@ -197,6 +197,10 @@ struct Scene {
   uint64_t noise_seed = 0;
   Night night;
 };
+// SyntheticOptions::static_overlay: the reflection of a card with digits,
+// blended into `img` (CV_8UC3) at a fixed place for its size.
+void DrawStaticOverlay(cv::Mat& img);
+
 // The ground distance of the bottom row's centre (0.5 when the ground is not
 // visible there).
 double BottomDistance(const CameraModel& cam);

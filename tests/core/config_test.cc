@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "absl/strings/string_view.h"
@@ -41,6 +42,7 @@ Config NonDefaultConfig() {
   c.ipm.roi = {120.5, 640.0, 340.0, 520.0};
   c.ipm.horizon_margin_px = 15.0;
   c.ipm.interpolation = Interpolation::kNearest;
+  c.ipm.static_mask = {{700, 790.5, 300, 330}, {10, 60, 560, 599}};
   c.detector = DetectorOptions::ForMode(Mode::kTwo);
   c.detector.channel = Channel::kGreen;
   c.detector.seed = 18446744073709551615ull;  // needs all 64 bits
@@ -147,6 +149,9 @@ TEST(ConfigTest, RoundTripKeepsEveryValue) {
   EXPECT_EQ(parsed->camera.image_width, 800);
   EXPECT_EQ(parsed->ipm.roi.left, 120.5);
   EXPECT_EQ(parsed->ipm.interpolation, Interpolation::kNearest);
+  ASSERT_EQ(parsed->ipm.static_mask.size(), 2u);
+  EXPECT_EQ(parsed->ipm.static_mask[0].right, 790.5);
+  EXPECT_EQ(parsed->ipm.static_mask[1].bottom, 599);
   EXPECT_EQ(parsed->detector.mode, Mode::kTwo);
   EXPECT_EQ(parsed->detector.channel, Channel::kGreen);
   EXPECT_EQ(parsed->detector.seed, 18446744073709551615ull);
@@ -438,6 +443,40 @@ TEST(ConfigTest, GroundViewIsValidated) {
       R"({"ipm": {"ground": {"x_min_m": -50, "x_max_m": 50, "metres_per_px_x": 0.01}}})");
   EXPECT_EQ(huge.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(huge.status().message().find("10000x"), std::string::npos) << huge.status();
+}
+
+// ipm.static_mask: a list of image rectangles (`lane calibrate` writes it).
+TEST(ConfigTest, StaticMaskIsAListOfRectangles) {
+  const absl::StatusOr<Config> c = ParseConfig(R"({"ipm": {"static_mask": [
+      {"left": 1199, "right": 1323, "top": 339, "bottom": 372}, {"top": 300}]}})");
+  ASSERT_TRUE(c.ok()) << c.status();
+  ASSERT_EQ(c->ipm.static_mask.size(), 2u);
+  EXPECT_EQ(c->ipm.static_mask[0].left, 1199);
+  EXPECT_EQ(c->ipm.static_mask[0].bottom, 372);
+  EXPECT_EQ(c->ipm.static_mask[1].top, 300);  // the other keys: a Roi's defaults
+  EXPECT_EQ(c->ipm.static_mask[1].left, Roi{}.left);
+  EXPECT_TRUE(Contains(ConfigToJson(*c), "\"static_mask\": [\n      {\n        \"left\": 1199.0"));
+  EXPECT_TRUE(Contains(ConfigToJson(Config()), "\"static_mask\": []"));
+  const absl::StatusOr<Config> empty = ParseConfig(R"({"ipm": {"static_mask": []}})");
+  ASSERT_TRUE(empty.ok()) << empty.status();
+  EXPECT_TRUE(empty->ipm.static_mask.empty());
+  const std::pair<const char*, const char*> bad[] = {
+      {R"({"ipm": {"static_mask": {"left": 1}}})", "\"ipm.static_mask\" must be an array"},
+      {R"({"ipm": {"static_mask": [3]}})", "\"ipm.static_mask[0]\" must be a JSON object"},
+      {R"({"ipm": {"static_mask": [{}, {"lft": 3}]}})", "unknown key \"ipm.static_mask[1].lft\""},
+      {R"({"ipm": {"static_mask": [{"left": "3"}]}})", "\"ipm.static_mask[0].left\" must be"},
+      {R"({"ipm": {"static_mask": [{"left": 5, "right": 4}]}})", "ipm.static_mask[0] must be"},
+  };
+  for (const auto& [doc, message] : bad) {
+    const absl::StatusOr<Config> parsed = ParseConfig(doc);
+    EXPECT_EQ(parsed.status().code(), absl::StatusCode::kInvalidArgument) << doc;
+    EXPECT_TRUE(Contains(parsed.status().message(), message)) << doc;
+  }
+  std::string many = R"({"ipm": {"static_mask": [)";
+  for (int i = 0; i <= kMaxStaticMaskBoxes; ++i) many += i == 0 ? "{}" : ", {}";
+  const absl::StatusOr<Config> too_many = ParseConfig(many + "]}}");
+  EXPECT_TRUE(Contains(too_many.status().message(), "more than the limit of 64"))
+      << too_many.status();
 }
 
 TEST(ConfigTest, NewDetectorOptionsRoundTripAndAreValidated) {

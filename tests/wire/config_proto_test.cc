@@ -95,6 +95,35 @@ TEST(ConvertTest, RoundTrip) {
   EXPECT_EQ(lane::ConfigToJson(*back), lane::ConfigToJson(config));
 }
 
+// The list the perturbation below cannot reach: ipm.static_mask, a
+// repeated Roi.
+TEST(ConvertTest, StaticMaskRoundTrips) {
+  lane::Config config;
+  config.ipm.static_mask = {{1199, 1323, 339, 372}, {0, 10.5, 20, 30}};
+  v1::SessionConfig proto;
+  ConfigToProto(config, &proto);
+  ASSERT_EQ(proto.ipm().static_mask_size(), 2);
+  EXPECT_DOUBLE_EQ(proto.ipm().static_mask(1).right(), 10.5);
+  absl::StatusOr<lane::Config> back = ConfigFromProto(proto);
+  ASSERT_TRUE(back.ok()) << back.status();
+  EXPECT_EQ(lane::ConfigToJson(*back), lane::ConfigToJson(config));
+  // A rectangle's unset fields keep a Roi's defaults; a bad one is refused.
+  v1::SessionConfig partial;
+  partial.mutable_ipm()->add_static_mask()->set_top(300);
+  back = ConfigFromProto(partial);
+  ASSERT_TRUE(back.ok()) << back.status();
+  ASSERT_EQ(back->ipm.static_mask.size(), 1u);
+  EXPECT_DOUBLE_EQ(back->ipm.static_mask[0].left, lane::Roi{}.left);
+  EXPECT_DOUBLE_EQ(back->ipm.static_mask[0].top, 300);
+  v1::SessionConfig bad;
+  v1::Roi* box = bad.mutable_ipm()->add_static_mask();
+  box->set_left(10);
+  box->set_right(5);
+  back = ConfigFromProto(bad);
+  EXPECT_EQ(back.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(back.status().message().find("static_mask[0]"), std::string::npos) << back.status();
+}
+
 // The enums the perturbation below cannot reach: the ground view, area
 // sampling and the min(red, green) channel.
 TEST(ConvertTest, GroundViewAreaSamplingAndMinRedGreenRoundTrip) {

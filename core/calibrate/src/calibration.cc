@@ -197,11 +197,13 @@ absl::Status CameraCalibrator::AddFirstPass(const cv::Mat& frame) {
                          kStationaryLevels;
   previous_ = small;
   stationary_.push_back(still);
-  if (!still) road_rows_.Add(paint);
+  if (!still) {
+    road_rows_.Add(paint);
+    static_finder_.Add(paint);
+  }
   MarkingSegmentOptions o;
   o.top_row = static_cast<int>(0.6 * height_);
-  for (double f : {320.0, 160.0, 80.0, 40.0})
-    o.fixed_widths_px.push_back(std::max(2.0, width_ / f));
+  o.fixed_widths_px = FixedBarWidths(width_);
   first_segments_.push_back(FindMarkingSegments(paint, o));
   return absl::OkStatus();
 }
@@ -213,7 +215,10 @@ absl::Status CameraCalibrator::FinishFirstPass() {
     road_bottom_ = std::clamp(*options_.road_bottom_row, 1, height_);
     outline_ = RoadOutline::Flat(road_bottom_, width_);
   }
+  first_pass_ = {};
+  first_pass_.static_structure = static_finder_.Finish();
   std::vector<std::vector<ImageSegment>> moving;
+  std::vector<int> moving_frames;
   for (size_t i = 0; i < first_segments_.size(); ++i) {
     if (stationary_[i]) continue;
     std::vector<ImageSegment>& segs = first_segments_[i];
@@ -222,9 +227,15 @@ absl::Status CameraCalibrator::FinishFirstPass() {
         std::remove_if(segs.begin(), segs.end(),
                        [&](const ImageSegment& s) { return s.bottom_row >= road_bottom_ - 1; }),
         segs.end());
+    // Nor what is fixed to the camera: it votes for one point in every frame.
+    for (ImageSegment& s : first_pass_.static_structure.TakeCovered(segs)) {
+      first_pass_.static_segments.emplace_back(static_cast<int>(i), std::move(s));
+    }
     moving.push_back(std::move(segs));
+    moving_frames.push_back(static_cast<int>(i));
   }
   first_segments_.clear();
+  static_segments_ = static_cast<int>(first_pass_.static_segments.size());
   VanishingPointOptions vo = options_.vanishing_point;
   vo.focal_px = intrinsics_.fu;
   vo.bounds = SearchBounds();
@@ -234,6 +245,11 @@ absl::Status CameraCalibrator::FinishFirstPass() {
         "no frame showed two or more straight lane markings below the horizon");
   }
   first_point_ = p->point;
+  first_pass_.point = p->point;
+  for (const auto& [frame, k] : p->supporting) {
+    const size_t f = static_cast<size_t>(frame);
+    first_pass_.support.emplace_back(moving_frames[f], moving[f][static_cast<size_t>(k)]);
+  }
   first_done_ = true;
   return absl::OkStatus();
 }
@@ -269,6 +285,7 @@ absl::StatusOr<FrameVanishingPoint> CameraCalibrator::AddSecondPass(
     return still;
   }
   std::vector<ImageSegment> segs = FindMarkingSegments(frame, SecondPassSegments());
+  static_segments_ += static_cast<int>(first_pass_.static_structure.TakeCovered(segs).size());
   VanishingPointOptions vo = options_.vanishing_point;
   vo.focal_px = intrinsics_.fu;
   vo.prior = first_point_;
@@ -331,6 +348,10 @@ absl::StatusOr<CalibrationResult> CameraCalibrator::Finish() const {
   r.frames_elsewhere = elsewhere;
   r.frames_stationary = stationary_count_;
   r.segments = segments_;
+  r.static_segments = static_segments_;
+  // The rows a top view may read: from the horizon's margin to the hood.
+  r.static_mask = first_pass_.static_structure.BoxesInRows(
+      c->point.y() + IpmOptions().horizon_margin_px, road_bottom_);
   r.road_bottom_row = road_bottom_;
   r.outline = outline_;
   r.far_point = r.camera.GroundToImage({0.0, 1e5});

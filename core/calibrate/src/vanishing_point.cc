@@ -274,6 +274,20 @@ std::optional<ImageSegment> SegmentOfPiece(const BandPieces& p, int i, int top, 
 
 }  // namespace
 
+cv::Mat MarkingResponse(const cv::Mat& paint, const MarkingSegmentOptions& o) {
+  CV_Assert(paint.type() == CV_8UC1);
+  const int top = std::clamp(o.top_row, 0, paint.rows);
+  const int bottom = std::clamp(o.bottom_row > 0 ? o.bottom_row : paint.rows, top, paint.rows);
+  if (bottom - top < 3) return cv::Mat::zeros(bottom - top, paint.cols, CV_32F);
+  return BandResponse(paint, top, bottom, o);
+}
+
+std::vector<double> FixedBarWidths(int image_width) {
+  std::vector<double> widths;
+  for (double f : {320.0, 160.0, 80.0, 40.0}) widths.push_back(std::max(2.0, image_width / f));
+  return widths;
+}
+
 std::vector<ImageSegment> FindMarkingSegments(const cv::Mat& frame,
                                               const MarkingSegmentOptions& o) {
   std::vector<ImageSegment> segments;
@@ -282,7 +296,7 @@ std::vector<ImageSegment> FindMarkingSegments(const cv::Mat& frame,
   const int top = std::clamp(o.top_row, 0, paint.rows);
   const int bottom = std::clamp(o.bottom_row > 0 ? o.bottom_row : paint.rows, top, paint.rows);
   if (bottom - top < 3) return segments;
-  const cv::Mat response = BandResponse(paint, top, bottom, o);
+  const cv::Mat response = MarkingResponse(paint, o);
   const float threshold =
       std::max(static_cast<float>(o.min_contrast), ResponseQuantile(response, o.quantile));
   cv::Mat mask = response >= threshold;
@@ -399,8 +413,12 @@ std::optional<PooledVanishingPoint> EstimatePooledVanishingPoint(
     const std::vector<std::vector<ImageSegment>>& frames, const VanishingPointOptions& o,
     int pairs_per_frame) {
   std::vector<ImageSegment> all;
+  std::vector<std::pair<int, int>> origin;  // (frame, index) of each of `all`
   std::vector<std::vector<int>> groups;
   for (const std::vector<ImageSegment>& frame : frames) {
+    for (size_t k = 0; k < frame.size(); ++k) {
+      origin.emplace_back(static_cast<int>(groups.size()), static_cast<int>(k));
+    }
     std::vector<int> idx(frame.size());
     std::iota(idx.begin(), idx.end(), 0);
     std::stable_sort(idx.begin(), idx.end(),
@@ -418,8 +436,10 @@ std::optional<PooledVanishingPoint> EstimatePooledVanishingPoint(
       BestPoint(all, use, o.inlier_angle_deg * kDegToRad, o.min_inliers,
                 o.min_spread_deg * kDegToRad, std::nullopt, 0.0, o.bounds, groups);
   if (!c) return std::nullopt;
-  return PooledVanishingPoint{c->point, static_cast<int>(c->support.size()),
-                              static_cast<int>(all.size())};
+  PooledVanishingPoint p{
+      c->point, static_cast<int>(c->support.size()), static_cast<int>(all.size()), {}};
+  for (int k : c->support) p.supporting.push_back(origin[static_cast<size_t>(k)]);
+  return p;
 }
 
 std::optional<CombinedVanishingPoint> CombineVanishingPoints(

@@ -95,6 +95,21 @@ class Reader {
   void Section(const char* name, T& member) {
     Visit(name, [&](const Json& j, const std::string& key) { return ReadObject(j, key, member); });
   }
+  // An array of objects, each read like a section over the type's defaults.
+  template <class T>
+  void List(const char* name, std::vector<T>& member) {
+    Visit(name, [&](const Json& j, const std::string& key) -> absl::Status {
+      if (!j.is_array()) return WrongType(key, "an array of objects", j);
+      std::vector<T> items(j.size());
+      for (size_t i = 0; i < j.size(); ++i) {
+        if (absl::Status s = ReadObject(j[i], absl::StrCat(key, "[", i, "]"), items[i]); !s.ok()) {
+          return s;
+        }
+      }
+      member = std::move(items);
+      return absl::OkStatus();
+    });
+  }
 
   // The first error, unknown keys first (they are usually typos that also
   // explain any other surprise).
@@ -192,14 +207,25 @@ Json WriteValue(const T& value) {
 class Writer {
  public:
   template <class T>
+  static Json Object(const T& value) {
+    Writer nested;
+    VisitFields(value, nested);
+    return std::move(nested.out_);
+  }
+
+  template <class T>
   void Field(const char* name, const T& member) {
     out_[name] = WriteValue(member);
   }
   template <class T>
   void Section(const char* name, const T& member) {
-    Writer nested;
-    VisitFields(member, nested);
-    out_[name] = std::move(nested.out_);
+    out_[name] = Object(member);
+  }
+  template <class T>
+  void List(const char* name, const std::vector<T>& member) {
+    Json items = Json::array();
+    for (const T& item : member) items.push_back(Object(item));
+    out_[name] = std::move(items);
   }
   Json& out() { return out_; }
 
@@ -241,7 +267,7 @@ absl::Status CheckConfigShape(const std::string& text) {
       if (++depth > kMaxConfigDepth) {
         return absl::InvalidArgumentError(
             absl::StrCat("the config nests deeper than ", kMaxConfigDepth,
-                         " levels (its schema has 3: sections, subsections, values)"));
+                         " levels (its schema has 4: sections, subsections, lists, values)"));
       }
     } else if (c == ']' || c == '}') {
       --depth;

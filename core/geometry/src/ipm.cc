@@ -6,16 +6,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
+#include "ipm_internal.h"
 
 namespace lane {
 
 namespace {
-
-// Top-view size along one axis for a ground range and resolution.
-int GroundPixels(double range_m, double metres_per_px) {
-  const double n = range_m / metres_per_px;
-  return n < 1e6 ? static_cast<int>(std::lround(n)) : 1000000;
-}
 
 // The bilinear taps of image point `p` (inside the image), scaled by `w`.
 template <class Add>
@@ -35,54 +30,6 @@ void BilinearTaps(const Eigen::Vector2d& p, int image_width, int image_height, f
 constexpr int kMaxSubsamples = 12;
 
 }  // namespace
-
-absl::Status IpmOptions::Validate() const {
-  if (!std::isfinite(horizon_margin_px) || horizon_margin_px < 0) {
-    return absl::InvalidArgumentError("ipm.horizon_margin_px must be a finite number >= 0");
-  }
-  if (view == IpmView::kGround) {
-    const GroundView& g = ground;
-    const double v[] = {g.x_min_m, g.x_max_m,         g.y_min_m,
-                        g.y_max_m, g.metres_per_px_x, g.metres_per_px_y};
-    for (double x : v) {
-      if (!std::isfinite(x)) return absl::InvalidArgumentError("ipm.ground values must be finite");
-    }
-    if (!(g.x_max_m > g.x_min_m) || !(g.y_min_m > 0) || !(g.y_max_m > g.y_min_m)) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "ipm.ground must have x_max_m > x_min_m and y_max_m > y_min_m > 0 (metres ahead of "
-          "the camera), got x ",
-          g.x_min_m, "..", g.x_max_m, ", y ", g.y_min_m, "..", g.y_max_m));
-    }
-    if (!(g.metres_per_px_x >= 0.001 && g.metres_per_px_x <= 10 && g.metres_per_px_y >= 0.001 &&
-          g.metres_per_px_y <= 10)) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("ipm.ground.metres_per_px_x and _y must lie in [0.001, 10] metres, got ",
-                       g.metres_per_px_x, " and ", g.metres_per_px_y));
-    }
-    const int w = GroundPixels(g.x_max_m - g.x_min_m, g.metres_per_px_x);
-    const int h = GroundPixels(g.y_max_m - g.y_min_m, g.metres_per_px_y);
-    if (w < 8 || h < 8 || w > 2048 || h > 2048) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "ipm.ground gives a ", w, "x", h,
-          " pixel top view; ranges / metres_per_px must give 8..2048 pixels each way"));
-    }
-    return absl::OkStatus();
-  }
-  if (width < 8 || height < 8 || width > 2048 || height > 2048) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("ipm size must be within 8..2048 pixels, got ", width, "x", height));
-  }
-  const double v[] = {roi.left, roi.right, roi.top, roi.bottom};
-  for (double x : v) {
-    if (!std::isfinite(x)) return absl::InvalidArgumentError("ipm.roi values must be finite");
-  }
-  if (roi.right <= roi.left || roi.bottom <= roi.top) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("ipm.roi must have right > left and bottom > top, got left=", roi.left,
-                     " right=", roi.right, " top=", roi.top, " bottom=", roi.bottom));
-  }
-  return absl::OkStatus();
-}
 
 absl::StatusOr<IpmMapping> IpmMapping::Create(const CameraModel& camera,
                                               const IpmOptions& options) {
@@ -107,8 +54,8 @@ absl::Status IpmMapping::PlaceGroundView() {
   // The ground rectangle as given; the ROI is the bounding box of its
   // projection, clipped to the image and to below the horizon.
   const GroundView& g = options.ground;
-  width_ = GroundPixels(g.x_max_m - g.x_min_m, g.metres_per_px_x);
-  height_ = GroundPixels(g.y_max_m - g.y_min_m, g.metres_per_px_y);
+  width_ = ipm_internal::GroundPixels(g.x_max_m - g.x_min_m, g.metres_per_px_x);
+  height_ = ipm_internal::GroundPixels(g.y_max_m - g.y_min_m, g.metres_per_px_y);
   x_min_ = g.x_min_m;
   x_max_ = g.x_max_m;
   y_min_ = g.y_min_m;
@@ -201,9 +148,9 @@ void IpmMapping::BuildTaps() {
   const Roi& roi = roi_;
   const int iw = camera_.image_width;
   const int ih = camera_.image_height;
-  const auto inside = [&roi](const Eigen::Vector2d& img) {
+  const auto inside = [this, &roi](const Eigen::Vector2d& img) {
     return img.allFinite() && img.x() >= roi.left && img.x() <= roi.right && img.y() >= roi.top &&
-           img.y() <= roi.bottom;
+           img.y() <= roi.bottom && !options_.Masked(img);
   };
   struct XyQuad {
     int x = -1, y = -1;  // top-left image pixel; x < 0: invalid

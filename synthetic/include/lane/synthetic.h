@@ -51,6 +51,15 @@ struct SyntheticOptions {
   // its centre (docs/evaluation.md, "Double lines"). 0 by default: the
   // frame is then exactly as without it.
   double double_line_probability = 0;
+  // Structure fixed to the camera: a card on the dashboard reflected in the
+  // windscreen, a dark blue card with a row of bright digits seen in
+  // perspective (its strokes meet about four card heights above it), at
+  // the same image position in every frame: right of the centre, from 64 %
+  // to 73 % of the image height. It is not labelled (it is not road), and
+  // it would vote for its own vanishing point in every frame
+  // (docs/calibration.md, "Static structure"). Off by default: the frame is
+  // then exactly as without it.
+  bool static_overlay = false;
   // Night: the scene lit by the car's low beams (bright from a few metres
   // to 20-35 m ahead, falling off with the square of the distance beyond,
   // within a cone of +-20-30 deg) over an ambient 3-10 % of daylight, with

@@ -24,6 +24,7 @@
 
 #include "absl/status/statusor.h"
 #include "lane/calibrate/self_check.h"
+#include "lane/calibrate/static_structure.h"
 #include "lane/calibrate/vanishing_point.h"
 #include "lane/detector.h"
 #include "lane/geometry/camera.h"
@@ -112,6 +113,11 @@ struct CalibrationOptions {
   // by RoadRowFinder.
   std::optional<int> road_bottom_row;
   VanishingPointOptions vanishing_point;
+  // Structure fixed to the camera (a reflection, a sticker, an overlay):
+  // found over pass 1's moving frames; its segments get no vote in either
+  // pass, and its rectangles on the road's rows are the written config's
+  // ipm.static_mask (static_structure.h).
+  StaticStructureOptions static_structure;
 };
 
 struct CalibrationResult {
@@ -131,7 +137,12 @@ struct CalibrationResult {
   int frames_curved = 0;      // left out: near and far markings disagree
   int frames_stationary = 0;  // left out: the same view as the frame before
   int segments = 0;           // segments supporting the used frames' points
-  int road_bottom_row = 0;    // first row below the road (hood), or the height
+  int static_segments = 0;    // segments of both passes left out as static structure
+  // The static structure's rectangles that reach into the rows a top view
+  // may read (from the horizon + IpmOptions::horizon_margin_px down to
+  // road_bottom_row): a config's ipm.static_mask.
+  std::vector<Roi> static_mask;
+  int road_bottom_row = 0;  // first row below the road (hood), or the height
   // Per column, the first row below the road (RoadRowFinder::Outline, or
   // flat at --road-bottom-row); the view's rule uses it.
   RoadOutline outline;
@@ -148,9 +159,20 @@ struct CalibrationResult {
   std::vector<int> used_frames;
 };
 
+// Pass 1 as it ended, also when the estimate is refused later (overlays):
+// its point, the segments that supported it and those left out as static
+// structure, each with its frame (0-based, in the order given).
+struct FirstPassReport {
+  Eigen::Vector2d point = Eigen::Vector2d::Zero();
+  std::vector<std::pair<int, ImageSegment>> support;
+  std::vector<std::pair<int, ImageSegment>> static_segments;
+  StaticStructure static_structure;
+};
+
 class CameraCalibrator {
  public:
-  explicit CameraCalibrator(CalibrationOptions options) : options_(std::move(options)) {}
+  explicit CameraCalibrator(CalibrationOptions options)
+      : options_(std::move(options)), static_finder_(options_.static_structure) {}
 
   // Pass 1, every frame (BGR or grey, all of one size).
   absl::Status AddFirstPass(const cv::Mat& frame);
@@ -169,6 +191,8 @@ class CameraCalibrator {
   // The camera before pitch and yaw: focal length, principal point, height
   // and size (valid after the first frame).
   const CameraModel& intrinsics() const { return intrinsics_; }
+  // Valid after FinishFirstPass succeeded.
+  const FirstPassReport& first_pass() const { return first_pass_; }
 
  private:
   MarkingSegmentOptions SecondPassSegments() const;
@@ -179,6 +203,9 @@ class CameraCalibrator {
   bool focal_assumed_ = false;
   int width_ = 0, height_ = 0;
   RoadRowFinder road_rows_;
+  StaticStructureFinder static_finder_;
+  FirstPassReport first_pass_;
+  int static_segments_ = 0;
   std::vector<std::vector<ImageSegment>> first_segments_;
   Eigen::Vector2d first_point_ = Eigen::Vector2d::Zero();
   int road_bottom_ = 0;

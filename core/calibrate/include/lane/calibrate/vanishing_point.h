@@ -19,6 +19,7 @@
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace lane {
@@ -67,6 +68,16 @@ cv::Mat PaintChannel(const cv::Mat& frame);
 // Marking segments of one frame (CV_8UC3 BGR or CV_8UC1 paint channel).
 std::vector<ImageSegment> FindMarkingSegments(const cv::Mat& frame,
                                               const MarkingSegmentOptions& options);
+
+// FindMarkingSegments' first step: the bright-bar response of the rows
+// [top_row, bottom_row) of a paint channel (CV_8UC1), smoothed over 3 rows
+// first, as CV_32F grey levels (rows from top_row; 0 where no bar fits).
+cv::Mat MarkingResponse(const cv::Mat& paint, const MarkingSegmentOptions& options);
+
+// The bar widths looked for without a horizon (the first pass of `lane
+// calibrate`): W/320, W/160, W/80 and W/40 for frames W pixels wide, at
+// least 2 pixels.
+std::vector<double> FixedBarWidths(int image_width);
 
 struct VanishingPointOptions {
   // A segment supports a point when its direction is within this angle of
@@ -120,6 +131,8 @@ struct PooledVanishingPoint {
   Eigen::Vector2d point;
   int support = 0;
   int segments = 0;
+  // The supporting segments: (frame, index into that frame's segments).
+  std::vector<std::pair<int, int>> supporting;
 };
 std::optional<PooledVanishingPoint> EstimatePooledVanishingPoint(
     const std::vector<std::vector<ImageSegment>>& frames, const VanishingPointOptions& options,

@@ -23,7 +23,7 @@ struct Config {
 };
 
 // Limits on a config document, checked before it is parsed: configs are a few
-// kB and nest 3 levels deep (sections, subsections, values), so these leave
+// kB and nest 4 levels deep (sections, subsections, lists, values), so these leave
 // ample room while keeping every walk of client data shallow and short.
 inline constexpr size_t kMaxConfigBytes = size_t{1} << 20;
 inline constexpr int kMaxConfigDepth = 16;

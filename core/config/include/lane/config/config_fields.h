@@ -6,7 +6,9 @@
 //
 // A visitor V provides
 //   v.Field(name, member)    for numbers, booleans and enums;
-//   v.Section(name, member)  for nested structs (which have a list here too).
+//   v.Section(name, member)  for nested structs (which have a list here too);
+//   v.List(name, member)     for a std::vector of such structs (a JSON array
+//                            of objects, a repeated message field).
 #ifndef LANE_CONFIG_FIELDS_H_
 #define LANE_CONFIG_FIELDS_H_
 
@@ -24,7 +26,8 @@ namespace lane {
 // service (wire/config_proto.cc, which finds each proto field by this name)
 // walk them. A visitor V provides
 //   v.Field(name, member)    for numbers, booleans and enums;
-//   v.Section(name, member)  for nested structs (which have a list here too).
+//   v.Section(name, member)  for nested structs (which have a list here too);
+//   v.List(name, member)     for a std::vector of such structs.
 // S is the struct or the const struct (the writer only reads).
 #define LANE_FIELDS(Type)     \
   template <class S, class V> \
@@ -68,6 +71,7 @@ LANE_FIELDS(IpmOptions) {
   v.Section("roi", s.roi);
   v.Field("horizon_margin_px", s.horizon_margin_px);
   v.Field("interpolation", s.interpolation);
+  v.List("static_mask", s.static_mask);
 }
 
 LANE_FIELDS(FilterOptions) {

@@ -64,6 +64,9 @@ struct GroundView {
   double metres_per_px_y = 0.125;
 };
 
+// At most this many rectangles in IpmOptions::static_mask.
+inline constexpr int kMaxStaticMaskBoxes = 64;
+
 struct IpmOptions {
   // kRoi: `roi`, `width` and `height` define the view. kGround: `ground`
   // does, and `roi`, `width` and `height` are ignored (derived). A config
@@ -81,8 +84,19 @@ struct IpmOptions {
   // horizon map to ground points that are absurdly far away.
   double horizon_margin_px = 10.0;
   Interpolation interpolation = Interpolation::kBilinear;
+  // Image rectangles the top view does not read: structure fixed to the
+  // camera that is not road (a reflection in the windscreen, a sticker, a
+  // timestamp overlay), as `lane calibrate` learns it from a drive
+  // (docs/calibration.md, "Static structure"). A top-view pixel whose image
+  // point lies in one is invalid, like one outside the ROI: it reads the
+  // mean, and the filter's response there is zero. Applied when the mapping
+  // is built, so it costs nothing per frame. Empty by default; at most
+  // kMaxStaticMaskBoxes.
+  std::vector<Roi> static_mask;
 
   absl::Status Validate() const;
+  // True when `image` (pixels) lies in a rectangle of static_mask.
+  bool Masked(const Eigen::Vector2d& image) const;
 };
 
 // The precomputed mapping between a camera's image and its top view.
