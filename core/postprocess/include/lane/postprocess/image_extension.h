@@ -14,8 +14,8 @@
 
 #include "lane/geometry/bezier.h"
 #include "lane/geometry/camera.h"
-#include "lane/geometry/ipm.h"
 #include "lane/geometry/channel_view.h"
+#include "lane/geometry/ipm.h"
 #include "lane/postprocess/postprocess_options.h"
 
 namespace lane {
@@ -111,8 +111,15 @@ double ImageBarContrast(const Bezier& spline, const ChannelView& image, const Ca
 
 // The extension; P0 of `spline` must be its upper (far) end. Returns the
 // refitted spline (upper end first), or the input when nothing was added.
+// The walks follow the bar under the spline (its ImageBarContrast, the
+// reference the continuation threshold is a fraction of); without one
+// (contrast 0) there is nothing to follow, and only extrapolate_down (a
+// labelling convention, which needs no evidence) applies.
 Bezier ExtendInImage(const Bezier& spline, const ChannelView& image, const CameraModel& camera,
                      const ImageExtendOptions& options);
+// The same with the spline's ImageBarContrast already measured.
+Bezier ExtendInImage(const Bezier& spline, double reference, const ChannelView& image,
+                     const CameraModel& camera, const ImageExtendOptions& options);
 
 // The longest part of `spline` that lies inside the image and on image
 // content: points where the image is black in a 5x5 neighbourhood (outside
