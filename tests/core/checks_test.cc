@@ -250,7 +250,7 @@ TEST(MarkingCheckTest, GroundAngleOfTheRoadsDirection) {
 // extended; one along a step (a vehicle's lower edge or its shadow's
 // border: bright on one side, dark on the other) has no bar under it in
 // the image, nor near it, and is dropped (driver161-a's raw top-view
-// splines; docs/accuracy-log.md, entry 55). The top view's own marking and
+// splines; docs/accuracy-log.md, entry 61). The top view's own marking and
 // ray checks are off here, so that the image's check is the one tested.
 TEST(PostprocessTest, DropsACandidateWithNoBarInTheImage) {
   CameraModel cam;

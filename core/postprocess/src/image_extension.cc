@@ -220,13 +220,15 @@ double ImageBarContrast(const Bezier& spline, const ChannelView& image, const Ca
   return n > 0 ? sum / n : 0.0;
 }
 
-std::optional<Bezier> ClipToImageContent(const Bezier& spline, const ChannelView& image) {
+std::optional<Bezier> ClipToImageContent(const Bezier& spline, const ChannelView& image,
+                                         double convention_row) {
   constexpr int kSamples = 40;
   // "Black": no pixel of the 5x5 neighbourhood above this (of 255).
   constexpr float kBlack = 12.f;
   const float black = image.image.depth() == CV_32F ? kBlack / 255.f : kBlack;
   const auto on_content = [&](const Eigen::Vector2d& p) {
     if (!InImage(p, image)) return false;
+    if (p.y() >= convention_row) return true;
     const int x = static_cast<int>(std::lround(p.x())), y = static_cast<int>(std::lround(p.y()));
     for (int dy = -2; dy <= 2; ++dy) {
       for (int dx = -2; dx <= 2; ++dx) {

@@ -90,7 +90,7 @@ bool PostprocessInImage(SplineCandidate& c, const PostprocessFrame& f, const Pos
     // when a fine top view skipped that; one with no bar near it even then
     // is no marking: on driver161-a every one was a vehicle's lower edge or
     // its shadow's border (a step, not a bar; docs/accuracy-log.md, entry
-    // 55), and is dropped.
+    // 61), and is dropped.
     double reference = ImageBarContrast(c.image, f.channel, cam, eo);
     if (!(reference > 0) && !localize && pp.localize_in_image) {
       if (auto loc = LocalizeInImage(c.image, f.channel, cam, lo)) {
@@ -132,7 +132,7 @@ bool PostprocessInImage(SplineCandidate& c, const PostprocessFrame& f, const Pos
     }
   }
   const std::optional<Bezier> finished =
-      FinishImageSpline(c.image, f.channel, f.frame, cam, pp, scale);
+      FinishImageSpline(c.image, f.channel, f.frame, cam, pp, scale, f.ipm.roi().bottom);
   if (!finished) return false;
   c.image = *finished;
   return true;

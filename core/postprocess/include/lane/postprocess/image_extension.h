@@ -10,6 +10,7 @@
 #ifndef LANE_IMAGE_EXTENSION_H_
 #define LANE_IMAGE_EXTENSION_H_
 
+#include <limits>
 #include <optional>
 
 #include "lane/geometry/bezier.h"
@@ -123,11 +124,16 @@ Bezier ExtendInImage(const Bezier& spline, double reference, const ChannelView& 
 
 // The longest part of `spline` that lies inside the image and on image
 // content: points where the image is black in a 5x5 neighbourhood (outside
-// a lens's image circle, as in the Caltech Lanes frames) do not count.
+// a lens's image circle, as in the Caltech Lanes frames) do not count,
+// except at or below image row `convention_row`: there a labelling
+// convention carries lanes on whatever the image shows (CULane's lanes run
+// through the car's hood, which is black at night, to the bottom row).
 // Samples of the kept part are refitted; nullopt when fewer than 4 samples
 // of 40 remain. Top-view splines project beyond the image's sides where the
 // ground rectangle does; labels stop at the image's edge.
-std::optional<Bezier> ClipToImageContent(const Bezier& spline, const ChannelView& image);
+std::optional<Bezier> ClipToImageContent(
+    const Bezier& spline, const ChannelView& image,
+    double convention_row = std::numeric_limits<double>::infinity());
 
 }  // namespace lane
 
