@@ -32,7 +32,7 @@ struct ImageExtendOptions {
   // brighter of the two sides one marking width out) reaches this fraction
   // of the spline's own bar contrast.
   double continuation_threshold = 0.35;
-  double max_gap_m = 6;        // unsupported distance along the road walked through
+  double max_gap_m = 12;       // unsupported distance along the road walked through
   double min_cos_up = 0.86;    // direction change allowed going up (towards t = 0)
   double min_cos_down = 0.95;  // going down
   // The walk follows the road: each new point, seen on the ground from the
