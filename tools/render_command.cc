@@ -41,6 +41,8 @@ struct RenderFlags {
   bool straight = false;
   bool night = false;
   bool static_overlay = false;
+  double hood_m = 0;
+  double truth_far_m = lane::SyntheticOptions().truth_far_m;
   double double_lines = 0;
   double hood_top_row = 0;
   double hood_side_row = 0;
@@ -75,6 +77,8 @@ int RunRender(const RenderFlags& flags) {
   if (flags.clutter) lane::SetRoadsideClutter(&options);
   options.night = flags.night;
   options.static_overlay = flags.static_overlay;
+  options.hood_edge_m = flags.hood_m;
+  options.truth_far_m = flags.truth_far_m;
   options.double_line_probability = flags.double_lines;
   options.hood_top_row = flags.hood_top_row;
   options.hood_side_row = flags.hood_side_row;
@@ -176,9 +180,20 @@ Command AddRenderCommand(CLI::App& lane) {
                 "(independent frames)")
       ->excludes(sequence);
   app->add_flag("--night", flags->night,
-                "night: the road lit by the car's low beams over a little ambient light, with "
-                "street lights and oncoming headlights (independent frames)")
+                "night, as measured on a CULane night clip: the road lit by the car's low "
+                "beams and street lamps over an unlit grey of 17, glare above the horizon, "
+                "oncoming headlights (independent frames)")
       ->excludes(sequence);
+  app->add_option("--hood", flags->hood_m,
+                  "the car's hood covers the road nearer than M metres ahead (CULane's cameras); "
+                  "the labels run on through it to the bottom row (independent frames)")
+      ->type_name("M")
+      ->check(CLI::Range(0.0, 100.0))
+      ->excludes(sequence);
+  app->add_option("--truth-far", flags->truth_far_m,
+                  "the labels run this far ahead, metres (CULane's night labels: about 72)")
+      ->type_name("M")
+      ->check(CLI::Range(1.0, 1000.0));
   app->add_option("--double-lines", flags->double_lines,
                   "the share of inner boundaries drawn as solid double lines, 0.10-0.20 m "
                   "apart; each is labelled once, along its centre (independent frames)")

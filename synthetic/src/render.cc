@@ -404,34 +404,64 @@ void DrawObjects(const CameraModel& cam, const Road& road, std::vector<Object> o
   }
 }
 
-// Relights a day image for the night: the ground by the low beams over the
-// ambient light, everything above the horizon by the ambient light only,
-// then the light sources with their glare.
-void ApplyNight(const CameraModel& cam, const Night& night, cv::Mat& img) {
+// Relights a day image for the night (Night's response): ground pixels by
+// the light on the ground there (low beams, street lamps, the unlit road's
+// level), their paint's contrast faded with the distance
+// (NightPaintFactor); the sky and the hood by the sky's light. Then the
+// glare, the lamps' heads and the oncoming headlights, saturated.
+void ApplyNight(const CameraModel& cam, const Night& night, const Look& look, const Hood& hood,
+                cv::Mat& img) {
   const double horizon = cam.HorizonRow();
-  const double tan_half = std::tan(night.half_angle_deg * kDegToRad);
   cv::Mat3f f;
   img.convertTo(f, CV_32FC3);
+  std::vector<double> hood_top(f.cols);
+  for (int u = 0; u < f.cols; ++u) hood_top[u] = hood.TopRow(cam, u);
   for (int v = 0; v < f.rows; ++v) {
     cv::Vec3f* row = f.ptr<cv::Vec3f>(v);
     for (int u = 0; u < f.cols; ++u) {
-      double light = night.ambient;
-      if (v > horizon + 0.5) {
+      double light = night.sky;
+      double paint = 1.0;
+      if (v > horizon + 0.5 && v < hood_top[u]) {
         const Eigen::Vector2d g =
             cam.ImageToGround({static_cast<double>(u), static_cast<double>(v)});
         if (g.allFinite() && g.y() > 0) {
-          const double along = g.y() < night.reach_m ? 1.0 : std::pow(night.reach_m / g.y(), 2);
-          const double across = g.x() / (g.y() * tan_half);
-          const double near = std::min(1.0, g.y() / 3.0);  // the hood's shadow close by
-          light += night.beam * along * near * std::exp(-across * across);
+          light = night.GroundLight(g.x(), g.y());
+          paint = NightPaintFactor(g.y());
         }
       }
-      row[u] *= static_cast<float>(light);
+      for (int c = 0; c < 3; ++c) {
+        const double day = look.asphalt + (row[u][c] - look.asphalt) * paint;
+        row[u][c] = static_cast<float>(NightGrey(day, light));
+      }
     }
   }
+  const cv::Scalar white(255, 255, 255), halo(70, 75, 80);
+  for (const Night::Glare& g : night.glare) {
+    const cv::Point c = Fp(g.at.x(), g.at.y());
+    if (g.round) {
+      cv::ellipse(f, c, cv::Size(cvRound(2 * g.half_w * 16), cvRound(2 * g.half_h * 16)), 0, 0, 360,
+                  halo, cv::FILLED, cv::LINE_AA, kShift);
+      cv::ellipse(f, c, cv::Size(cvRound(g.half_w * 16), cvRound(g.half_h * 16)), 0, 0, 360, white,
+                  cv::FILLED, cv::LINE_AA, kShift);
+    } else {
+      const double m = std::min(g.half_w, g.half_h);
+      FillRect(f, g.at.x() - g.half_w - m, g.at.y() - g.half_h - m, g.at.x() + g.half_w + m,
+               g.at.y() + g.half_h + m, halo);
+      FillRect(f, g.at.x() - g.half_w, g.at.y() - g.half_h, g.at.x() + g.half_w,
+               g.at.y() + g.half_h, white);
+    }
+  }
+  for (const Night::Lamp& l : night.lamps) {
+    if (Depth(cam, l.x, l.y, l.height_m) < 1.0) continue;
+    const Eigen::Vector2d head = Project(cam, l.x, l.y, l.height_m);
+    const double r = std::max(1.0, 0.3 * cam.fu / Depth(cam, l.x, l.y, l.height_m));
+    cv::circle(f, Fp(head.x(), head.y()), cvRound(3.0 * r * 16), halo, cv::FILLED, cv::LINE_AA,
+               kShift);
+    cv::circle(f, Fp(head.x(), head.y()), cvRound(r * 16), white, cv::FILLED, cv::LINE_AA, kShift);
+  }
   for (const Night::Light& l : night.lights) {
-    cv::circle(f, Fp(l.at.x(), l.at.y()), cvRound(3.0 * l.radius * 16), cv::Scalar(60, 70, 80),
-               cv::FILLED, cv::LINE_AA, kShift);
+    cv::circle(f, Fp(l.at.x(), l.at.y()), cvRound(3.0 * l.radius * 16), halo, cv::FILLED,
+               cv::LINE_AA, kShift);
     cv::circle(f, Fp(l.at.x(), l.at.y()), cvRound(l.radius * 16), cv::Scalar(235, 245, 255),
                cv::FILLED, cv::LINE_AA, kShift);
   }
@@ -461,6 +491,22 @@ void DrawHood(const CameraModel& cam, const SyntheticOptions& options, bool nigh
       for (int c = 0; c < 3; ++c) {
         px[c] = cv::saturate_cast<uchar>((1.0 - cover) * px[c] + cover * paint[c]);
       }
+    }
+  }
+}
+
+// The hood at a ground distance (Hood, SyntheticOptions::hood_edge_m): below its arc, the car's
+// paint, a little lighter towards the windscreen (it mirrors the sky).
+void DrawHoodAtDistance(const CameraModel& cam, const Hood& hood, cv::Mat& img) {
+  if (!(hood.edge_m > 0)) return;
+  for (int u = 0; u < img.cols; ++u) {
+    const double top = hood.TopRow(cam, u);
+    for (int v = std::max(0, static_cast<int>(std::ceil(top))); v < img.rows; ++v) {
+      const double shade = 1.0 - 0.3 * (v - top) / std::max(1.0, img.rows - top);
+      const cv::Vec3f c = hood.colour * static_cast<float>(shade);
+      img.at<cv::Vec3b>(v, u) =
+          cv::Vec3b(cv::saturate_cast<uchar>(c[0]), cv::saturate_cast<uchar>(c[1]),
+                    cv::saturate_cast<uchar>(c[2]));
     }
   }
 }
@@ -512,24 +558,39 @@ SyntheticFrame RenderScene(const CameraModel& camera, const SyntheticOptions& op
 
   cv::Mat3f canvas(h, w, cv::Vec3f(look.haze));
   RenderSky(camera, look, canvas);
-  RenderGround(camera, road, look, scene.shadows, canvas);
+  // At night the air scatters no daylight onto the far road (the measured
+  // light, Night, already holds what the air takes): no haze on the ground.
+  Look ground_look = look;
+  if (scene.night.on) ground_look.haze_dist = std::numeric_limits<double>::infinity();
+  RenderGround(camera, road, ground_look, scene.shadows, canvas);
   cv::Mat img;
   canvas.convertTo(img, CV_8UC3);
   DrawObjects(camera, road, scene.objects, img);
-  if (scene.night.on) ApplyNight(camera, scene.night, img);
+  DrawHoodAtDistance(camera, scene.hood, img);
+  if (scene.night.on) ApplyNight(camera, scene.night, look, scene.hood, img);
   DrawHood(camera, options, scene.night.on, img);
   if (options.static_overlay) DrawStaticOverlay(img);
   cv::GaussianBlur(img, img, cv::Size(3, 3), look.blur_sigma);
 
   // Exposure and sensor noise.
   cv::Mat f;
-  img.convertTo(f, CV_32FC3, look.gain);
+  // (At night the measured grey levels are the exposure: glare stays
+  // saturated.)
+  img.convertTo(f, CV_32FC3, scene.night.on ? 1.0 : look.gain);
   if (options.noise_sigma > 0) {
     cv::Mat noise(f.size(), CV_32FC3);
     cv::RNG cvrng(scene.noise_seed);
-    // At night the sensor's gain is up: 2.5 times the noise.
-    cvrng.fill(noise, cv::RNG::NORMAL, 0.0,
-               options.noise_sigma * (scene.night.on ? kNightNoiseGain : 1.0));
+    if (scene.night.on) {
+      // kNightNoiseGain times the noise at mid grey, as the square root of
+      // the level elsewhere.
+      cvrng.fill(noise, cv::RNG::NORMAL, 0.0, options.noise_sigma * kNightNoiseGain);
+      cv::Mat level;
+      cv::max(f, 1.0, level);
+      cv::sqrt(level / 128.0, level);
+      noise = noise.mul(level);
+    } else {
+      cvrng.fill(noise, cv::RNG::NORMAL, 0.0, options.noise_sigma);
+    }
     f += noise;
   }
   f.convertTo(img, CV_8UC3);
@@ -570,8 +631,16 @@ absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
   Rng clutter(seed ^ 0x9e3779b97f4a7c15ULL);
   AddClutter(options, y_bottom, clutter, &scene.road, &scene.objects);
   if (options.night) {
-    scene.night = SampleNight(camera, clutter);
+    scene.night = SampleNight(camera, scene.road, clutter);
     scene.shadows.clear();  // no sun
+  }
+  if (options.hood_edge_m > 0) {
+    Rng hood(seed ^ 0xd1b54a32d192ed03ULL);
+    scene.hood.edge_m = options.hood_edge_m;
+    const double grey = Uniform(hood, 25.0, 50.0);
+    scene.hood.colour =
+        cv::Vec3f(static_cast<float>(grey * Uniform(hood, 0.9, 1.1)), static_cast<float>(grey),
+                  static_cast<float>(grey * Uniform(hood, 0.9, 1.1)));
   }
   return RenderScene(camera, options, scene);
 }

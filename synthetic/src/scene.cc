@@ -168,6 +168,11 @@ absl::Status ValidateOptions(const SyntheticOptions& o) {
                    o.worn_probability, o.double_line_probability}) {
     if (!(p >= 0.0 && p <= 1.0)) return bad("clutter probabilities must be in [0, 1]");
   }
+  if (!(o.hood_edge_m >= 0 && o.hood_edge_m <= 100)) return bad("hood_edge_m must be in [0, 100]");
+  if (!(o.min_dash_m > 0 && o.max_dash_m >= o.min_dash_m && o.max_dash_m <= 100 &&
+        o.min_gap_m > 0 && o.max_gap_m >= o.min_gap_m && o.max_gap_m <= 100)) {
+    return bad("dashes and gaps must satisfy 0 < min <= max <= 100 metres");
+  }
   if (!std::isfinite(o.truth_near_m) || o.truth_near_m < 0) return bad("truth_near_m must be >= 0");
   if (!(o.hood_top_row >= 0 && o.hood_top_row <= 16384) ||
       !(o.hood_side_row >= 0 && o.hood_side_row <= 16384)) {
@@ -204,8 +209,8 @@ Road SampleRoad(const SyntheticOptions& o, Rng& rng) {
     m.width = Uniform(rng, o.min_marking_width_m, o.max_marking_width_m);
     m.dashed = Chance(rng, o.dashed_probability);
     m.yellow = Chance(rng, o.yellow_probability);
-    m.dash = Uniform(rng, 2.5, 3.5);
-    m.gap = Uniform(rng, 6.0, 9.0);
+    m.dash = Uniform(rng, o.min_dash_m, o.max_dash_m);
+    m.gap = Uniform(rng, o.min_gap_m, o.max_gap_m);
     m.phase = Uniform(rng, 0.0, m.dash + m.gap);
     if (o.first_dash_m > 0) m.phase = m.paint_from = o.first_dash_m;
     m.alpha = Uniform(rng, 0.85, 1.0);
@@ -495,26 +500,104 @@ Object SampleRoadsideObject(const Road& road, double near, double far, double po
   return r;
 }
 
-Night SampleNight(const CameraModel& cam, Rng& rng) {
+double NightAxisGrey(double y, double unlit) {
+  // The beam's part (grey above the measured unlit 17) at these distances.
+  static constexpr double kY[] = {0, 3, 6, 8, 10, 12, 15, 20, 30, 40, 60};
+  static constexpr double kBeam[] = {0, 45, 90, 115, 130, 138, 138, 107, 65, 35, 21};
+  constexpr int kN = sizeof(kY) / sizeof(kY[0]);
+  if (!(y > 0)) return unlit;
+  if (y >= kY[kN - 1]) return unlit + kBeam[kN - 1] * std::pow(kY[kN - 1] / y, 2);
+  int i = 1;
+  while (y > kY[i]) ++i;
+  const double t = (y - kY[i - 1]) / (kY[i] - kY[i - 1]);
+  return unlit + kBeam[i - 1] + t * (kBeam[i] - kBeam[i - 1]);
+}
+
+double NightPaintFactor(double y) {
+  constexpr double kFrom = 45, kTo = 60, kFar = 0.75;
+  if (y <= kFrom) return 1.0;
+  if (y >= kTo) return kFar;
+  return 1.0 - (1.0 - kFar) * (y - kFrom) / (kTo - kFrom);
+}
+
+double NightGrey(double d, double g) {
+  g = std::clamp(g, 0.0, 254.0);
+  const double q = g / (255.0 - g) * std::pow(std::max(d, 0.0) / 100.0, kNightGamma);
+  return 255.0 * q / (1.0 + q);
+}
+
+double Night::GroundLight(double x, double y) const {
+  double g = unlit;
+  if (y > 0) {
+    const double sigma = std::hypot(y * std::tan(pool_sigma_deg * kDegToRad), kNightLampSpreadM);
+    const double across = (x - y * std::tan(pool_centre_deg * kDegToRad)) / sigma;
+    g += pool_gain * (NightAxisGrey(y, unlit) - unlit) * std::exp(-0.5 * across * across);
+  }
+  for (const Lamp& l : lamps) {
+    const double d2 = (x - l.x) * (x - l.x) + (y - l.y) * (y - l.y);
+    g += l.gain * std::exp(-0.5 * d2 / (l.radius_m * l.radius_m));
+  }
+  return std::min(g, 250.0);
+}
+
+Night SampleNight(const CameraModel& cam, const Road& road, Rng& rng) {
   Night n;
   n.on = true;
-  n.ambient = Uniform(rng, 0.03, 0.10);
-  n.beam = Uniform(rng, 0.8, 1.2);
-  n.reach_m = Uniform(rng, 20.0, 35.0);
-  n.half_angle_deg = Uniform(rng, 20.0, 30.0);
-  // Street lights above the horizon, oncoming headlights on it.
+  n.unlit = Uniform(rng, 15.0, 19.0);
+  n.sky = Uniform(rng, 5.0, 10.0);
+  n.pool_gain = Uniform(rng, 0.95, 1.05);
+  n.pool_sigma_deg = Uniform(rng, 6.1, 7.6);
+  n.pool_centre_deg = Uniform(rng, 0.5, 1.1);
+  // Street lamps beside the asphalt, lighting stretches 15-60 m ahead.
+  const int lamps = UniformInt(rng, 0, 2);
+  for (int i = 0; i < lamps; ++i) {
+    Night::Lamp l;
+    const bool left = Chance(rng, 0.5);
+    l.y = Uniform(rng, 15.0, 60.0);
+    l.x = BesideRoad(road, left, l.y, Uniform(rng, 0.5, 2.0));
+    l.radius_m = Uniform(rng, 4.0, 6.0);
+    l.gain = Uniform(rng, 24.0, 32.0);
+    l.height_m = Uniform(rng, 7.0, 10.0);
+    n.lamps.push_back(l);
+  }
+  // Glare above the horizon: areas log-uniform from 20 to 2,200 px at
+  // 1640x590, scaled by the image's area.
   const double horizon = cam.HorizonRow();
-  const int count = UniformInt(rng, 0, 4);
+  const double area_scale =
+      static_cast<double>(cam.image_width) * cam.image_height / (1640.0 * 590.0);
+  const double top = std::max(0.0, horizon - 0.35 * cam.image_height);
+  const int blobs = horizon > 4.0 ? UniformInt(rng, 4, 19) : 0;
+  for (int i = 0; i < blobs; ++i) {
+    Night::Glare g;
+    const double area = area_scale * std::exp(Uniform(rng, std::log(20.0), std::log(2200.0)));
+    g.round = Chance(rng, 0.5);
+    const double aspect = g.round ? Uniform(rng, 0.7, 1.4) : Uniform(rng, 1.5, 5.0);
+    // Ellipse area pi a b; rectangle 4 a b.
+    const double ab = area / (g.round ? kPi : 4.0);
+    g.half_w = std::sqrt(ab * aspect);
+    g.half_h = std::sqrt(ab / aspect);
+    g.at = {Uniform(rng, 0.0, cam.image_width - 1.0),
+            Uniform(rng, top, std::max(top, horizon - g.half_h - 1.0))};
+    n.glare.push_back(g);
+  }
+  // Oncoming headlights on the horizon.
+  const int count = UniformInt(rng, 0, 3);
   for (int i = 0; i < count; ++i) {
     Night::Light l;
-    const bool street = Chance(rng, 0.5);
     l.at = {Uniform(rng, 0.0, cam.image_width - 1.0),
-            street ? Uniform(rng, std::max(0.0, horizon - 0.3 * cam.image_height), horizon)
-                   : horizon + Uniform(rng, 0.0, 0.05 * cam.image_height)};
-    l.radius = Uniform(rng, 1.5, 5.0) * cam.image_width / 640.0;
+            horizon + Uniform(rng, 0.0, 0.02 * cam.image_height)};
+    l.radius = Uniform(rng, 1.5, 4.0) * cam.image_width / 640.0;
     n.lights.push_back(l);
   }
   return n;
+}
+
+double Hood::TopRow(const CameraModel& cam, double u) const {
+  if (!(edge_m > 0)) return std::numeric_limits<double>::infinity();
+  const Eigen::Vector2d centre = cam.GroundToImage({0.0, edge_m});
+  const double half = 0.5 * cam.image_width;
+  const double s = (u - half) / half;
+  return centre.y() + 0.05 * cam.image_height * s * s;
 }
 
 void AddClutter(const SyntheticOptions& o, double y_min, Rng& rng, Road* road,

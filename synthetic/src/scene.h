@@ -170,23 +170,83 @@ void AddClutter(const SyntheticOptions& o, double y_min, Rng& rng, Road* road,
                 std::vector<Object>* objects);
 double ShadowFactor(const std::vector<Shadow>& shadows, double x, double y, double foot);
 double PaintedUpTo(const Boundary& m, double s);
-// Night lighting (SyntheticOptions::night): image = day image x
-// (ambient + beam(x, y)) on the ground, ambient above the horizon, plus
-// light sources (image points, radius px).
+// Night lighting (SyntheticOptions::night), built from grey levels measured
+// on a CULane night clip (1640x590, camera 1.23 m high, pitch 1.8 deg;
+// issue 49). Light is given as the grey level it gives a day-grey-100
+// asphalt; a pixel of day grey d under light G shows
+//   255 q / (1 + q),  q = G / (255 - G) (d / 100)^kNightGamma,
+// a camera response that maps the measured road and marking levels both
+// unlit (road 17, marking 31-35) and in the headlight pool (road ~100,
+// marking +46) from one day marking-to-asphalt ratio.
 struct Night {
   bool on = false;
-  double ambient = 0.06;
-  double beam = 1.0;           // gain inside the beam
-  double reach_m = 25.0;       // full brightness up to here, then (reach / y)^2
-  double half_angle_deg = 25;  // the beam's half width
+  double unlit = 17;  // the road outside every light (measured 17)
+  double sky = 8;     // the light above the horizon and on the hood
+  // The low beams' pool: on the camera's axis the measured profile
+  // (NightAxisGrey), its part above `unlit` times `pool_gain`; across, a
+  // Gaussian centred y tan(pool_centre_deg) to the right, of sigma
+  // hypot(y tan(pool_sigma_deg), kNightLampSpreadM): two lamps' cones
+  // (measured at 12 m: 158 on the axis, 91 / 74 at +-2 m, 36 / 22 at
+  // +-3.5 m, 16 / 15 at +-7 m: sigma 1.6 m, centre 0.17 m right; dipped
+  // beams light the kerb side).
+  double pool_gain = 1.0;
+  double pool_sigma_deg = 6.84;
+  double pool_centre_deg = 0.8;
+  // Street lamps: pools of light on the ground (grey added to the unlit
+  // road at the centre, Gaussian of `radius_m`) and their heads, `height_m`
+  // up, drawn as glare. Measured: markings +28 to +33 under them (20-50 m).
+  struct Lamp {
+    double x = 0, y = 0, radius_m = 6, gain = 28, height_m = 8;
+  };
+  std::vector<Lamp> lamps;
+  // Saturated blobs above the horizon (neon signs, lamps, windows): 4-19 a
+  // frame, up to 2,200 px each at 1640x590 (scaled by the image's area).
+  struct Glare {
+    Eigen::Vector2d at;
+    double half_w = 2, half_h = 2;  // pixels
+    bool round = true;              // an ellipse, else a rectangle (a sign)
+  };
+  std::vector<Glare> glare;
+  // Oncoming headlights on the horizon (image points, radius px).
   struct Light {
     Eigen::Vector2d at;
     double radius = 3;
   };
   std::vector<Light> lights;
+
+  // The light (NightLight's grey) at ground point (x, y).
+  double GroundLight(double x, double y) const;
 };
-Night SampleNight(const CameraModel& cam, Rng& rng);
+// The measured grey of the road on the camera's axis under the low beams,
+// `y` metres ahead: 150-160 at 12-15 m, 124 at 20, 82 at 30, 52 at 40, 38
+// at 60 m, then falling with the square of the distance to `unlit`; nearer
+// than 12 m (not measured: the hood hides the road below 6 m) it falls off
+// towards the car, as the markings' contrast does (+40 at 8-12 m against
+// +46 at 12-20 m).
+double NightAxisGrey(double y, double unlit);
+// The night's marking contrast falls beyond 45 m faster than the light
+// (measured: +32 at 30-50 m, +14 at 50-90 m): the paint's share of a
+// ground pixel's day grey above the asphalt is scaled by this factor.
+double NightPaintFactor(double y);
+constexpr double kNightGamma = 0.88;
+// Half the distance between the car's two headlamps, metres.
+constexpr double kNightLampSpreadM = 0.7;
+// The grey a day-grey `d` surface shows under light `g` (Night's response).
+double NightGrey(double d, double g);
+Night SampleNight(const CameraModel& cam, const Road& road, Rng& rng);
+// At night the sensor's gain is up: 2.5 times the noise at mid grey, falling
+// with the square root of the level (photon noise), so that black stays black.
 constexpr double kNightNoiseGain = 2.5;
+
+// The car's own hood (SyntheticOptions::hood_edge_m): it covers the image
+// below an arc through the row of the ground point `edge_m` ahead at its
+// centre, bulging up a twentieth of the image's height above its ends.
+struct Hood {
+  double edge_m = 0;  // 0: no hood
+  cv::Vec3f colour{40, 40, 40};
+  // The hood's top row at column u; +infinity without a hood.
+  double TopRow(const CameraModel& cam, double u) const;
+};
 
 // Everything random of one frame, then drawn by RenderScene.
 struct Scene {
@@ -196,6 +256,7 @@ struct Scene {
   std::vector<Object> objects;
   uint64_t noise_seed = 0;
   Night night;
+  Hood hood;
 };
 // SyntheticOptions::static_overlay: the reflection of a card with digits,
 // blended into `img` (CV_8UC3) at a fixed place for its size.

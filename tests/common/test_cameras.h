@@ -21,6 +21,18 @@ inline CameraModel CulaneCamera() {
   return config->camera;
 }
 
+// The CULane-like night camera of configs/culane-night.json (1640x590,
+// 1.23 m high, pitched 1.8 deg down, the hood's edge 6 m ahead), with its
+// detector settings.
+inline Config CulaneNightConfig() {
+  const auto config = LoadConfigFile(LANE_SOURCE_DIR "/configs/culane-night.json");
+  if (!config.ok()) {
+    std::fprintf(stderr, "%s\n", config.status().ToString().c_str());
+    std::abort();
+  }
+  return *config;
+}
+
 // A 640x480 camera with a 79 degree field of view (focal 390 px), for
 // rendered frames.
 inline CameraModel TestCamera(double pitch_deg, double yaw_deg, double height_m) {

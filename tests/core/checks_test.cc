@@ -7,6 +7,7 @@
 
 #include "lane/postprocess/image_extension.h"
 #include "lane/postprocess/marking_check.h"
+#include "lane/postprocess/postprocess.h"
 #include "lane/postprocess/vehicle_check.h"
 #include "lane/stages/threshold.h"
 
@@ -138,6 +139,33 @@ TEST(ImageExtensionTest, CarriesTheLineStraightDownWithoutWalking) {
   EXPECT_NEAR((same.p[3] - start.p[3]).norm() + (same.p[0] - start.p[0]).norm(), 0.0, 1e-6);
 }
 
+// No bar under the spline (it runs along a step: a shadow's border, dark
+// to its right): there is nothing to follow, but extend_to_max_row, a
+// labelling convention, needs no evidence and still carries it down to the
+// bottom row (it returned the spline unextended).
+TEST(ImageExtensionTest, WithoutABarUnderItOnlyTheConventionExtends) {
+  const CameraModel cam;
+  cv::Mat frame(cam.image_height, cam.image_width, CV_8UC3, cv::Scalar(90, 90, 90));
+  std::vector<cv::Point> dark;
+  for (const auto& [x, y] : {std::pair{1.8, 3.0}, {9.0, 3.0}, {9.0, 40.0}, {1.8, 40.0}}) {
+    const Eigen::Vector2d p = cam.GroundToImage({x, y});
+    dark.emplace_back(static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y())));
+  }
+  cv::fillConvexPoly(frame, dark, cv::Scalar(40, 40, 40), cv::LINE_AA);
+  const ChannelView red(frame, 2);
+  ImageExtendOptions o;
+  o.min_row = 0;
+  o.max_row = 470;
+  o.marking_width_m = 0.12;
+  o.extrapolate_down = true;
+  const Bezier start = ImageSpline(cam, 1.8, 18, 12);
+  ASSERT_EQ(ImageBarContrast(start, red, cam, o), 0.0);
+  const Bezier out = ExtendInImage(start, red, cam, o);
+  EXPECT_NEAR(out.p[3].y(), 470.0, 1.0);
+  EXPECT_NEAR(out.p[0].y(), start.p[0].y(), 1.0) << "nothing to follow upwards";
+  EXPECT_NEAR(cam.ImageToGround(out.p[3]).x(), 1.8, 0.05);
+}
+
 // A double line (two 0.1 m lines 0.12 m apart, centred at x = 1.8 m, from
 // 3 to 30 m): far away its lines blur into one, near the camera they
 // resolve. Walking down from the far part, profiles smoothed as
@@ -215,6 +243,58 @@ TEST(MarkingCheckTest, GroundAngleOfTheRoadsDirection) {
   const Bezier slanted =
       Bezier::Line(cam.GroundToImage({1.0, 14}), cam.GroundToImage({1.0 + 8 * std::tan(0.5), 6}));
   EXPECT_NEAR(GroundAngleFromRoadDeg(slanted, cam), 0.5 * 180 / M_PI, 1e-6);
+}
+
+// Post-processing on a fine top view (CULane's 0.0625 m/px, where the image
+// localisation is skipped): a candidate along a marking is kept and
+// extended; one along a step (a vehicle's lower edge or its shadow's
+// border: bright on one side, dark on the other) has no bar under it in
+// the image, nor near it, and is dropped (driver161-a's raw top-view
+// splines; docs/accuracy-log.md, entry 61). The top view's own marking and
+// ray checks are off here, so that the image's check is the one tested.
+TEST(PostprocessTest, DropsACandidateWithNoBarInTheImage) {
+  CameraModel cam;
+  cam.fu = cam.fv = 1000;
+  cam.cu = 820;
+  cam.cv = 295;
+  cam.pitch_deg = -4.858;
+  cam.yaw_deg = 0;
+  cam.height_m = 1.3;
+  cam.image_width = 1640;
+  cam.image_height = 590;
+  IpmOptions io;
+  io.view = IpmView::kGround;
+  auto ipm = IpmMapping::Create(cam, io);
+  ASSERT_TRUE(ipm.ok()) << ipm.status();
+  cv::Mat frame(cam.image_height, cam.image_width, CV_8UC3, cv::Scalar(90, 90, 90));
+  const auto quad = [&](double x0, double x1, const cv::Scalar& colour) {
+    std::vector<cv::Point> pts;
+    for (const auto& [x, y] : {std::pair{x0, 5.0}, {x1, 5.0}, {x1, 80.0}, {x0, 80.0}}) {
+      const Eigen::Vector2d p = cam.GroundToImage({x, y});
+      pts.emplace_back(static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y())));
+    }
+    cv::fillConvexPoly(frame, pts, colour, cv::LINE_AA);
+  };
+  quad(-1.875, -1.725, cv::Scalar(220, 220, 220));  // a 15 cm marking at x = -1.8 m
+  quad(2.0, 9.0, cv::Scalar(35, 35, 35));           // a step at x = 2 m
+  const ChannelView red(frame, 2);
+  const cv::Mat zeros = cv::Mat::zeros(ipm->height(), ipm->width(), CV_32F);
+  const PostprocessFrame images{*ipm, zeros, zeros, red, frame};
+  std::vector<SplineCandidate> candidates;
+  for (const double x : {-1.8, 2.0}) {
+    SplineCandidate c;
+    c.line.top = ipm->GroundToIpm({x, 17.9});
+    c.line.bottom = ipm->GroundToIpm({x, 8.1});
+    c.ipm = Bezier::Line(c.line.top, c.line.bottom);
+    candidates.push_back(c);
+  }
+  PostprocessOptions pp;
+  pp.min_side_contrast = 0;
+  pp.min_ray_angle_deg = 0;
+  const std::vector<SplineCandidate> kept = PostprocessCandidates(candidates, images, pp, 0.15, 2);
+  ASSERT_EQ(kept.size(), 1u);
+  EXPECT_NEAR(cam.ImageToGround(kept[0].image.Eval(0.5)).x(), -1.8, 0.05);
+  EXPECT_LT(kept[0].image.p[0].y(), ipm->roi().top - 5) << "the marking is extended upwards";
 }
 
 }  // namespace

@@ -10,10 +10,13 @@
 #include <functional>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
+#include <vector>
 
 #include "lane/eval/match.h"
 #include "lane/road_model.h"
 #include "lane/synthetic.h"
+#include "test_cameras.h"
 
 namespace lane {
 namespace {
@@ -132,17 +135,20 @@ TEST(DetectorEndToEnd, FindsSyntheticBoundariesAllLanes) {
   EXPECT_LE(t.false_positives, 0.2 * t.frames);
 }
 
-// Issue 34's rendered conditions, with the built-in settings: night (low
-// beams over 3-10 % ambient light, lights near the horizon) and roadside
-// clutter with worn paint and up to three vehicles. The bounds are the
-// measured figures (printed) with a margin, so that a change that loses
-// the night or the clutter fails here.
+// Issue 34's rendered conditions, with the built-in settings: night (since
+// issue 49 the grey levels measured on a CULane night clip: low beams over
+// an unlit road of grey 17, outer markings +14 beside it, glare above the
+// horizon) and roadside clutter with worn paint and up to three vehicles.
+// The bounds are the measured figures (printed) with a margin, so that a
+// change that loses the night or the clutter fails here.
 TEST(DetectorEndToEnd, FindsSyntheticBoundariesAtNightAndInClutter) {
   SyntheticOptions night;
   night.night = true;
   const Tally n = RunSynthetic(Mode::kAll, 40, 7000, night, " night");
   ASSERT_EQ(n.frames, 40);
-  EXPECT_GE(n.found, 0.93 * n.truths);            // measured 69 of 70
+  // Measured 60 of 70 (69 of 70 under issue 34's brighter night, whose
+  // ambient light lit the outer boundaries).
+  EXPECT_GE(n.found, 0.78 * n.truths);
   EXPECT_LE(n.false_positives, 0.25 * n.frames);  // measured 0.075 per frame
   SyntheticOptions clutter;
   SetRoadsideClutter(&clutter);
@@ -294,13 +300,103 @@ TEST(DetectorEndToEnd, SearchesWhereTheRoadModelPutsAMissedBoundary) {
   // neither; 110-130 with the search only; 140 without it too. 120 is the
   // middle of the search's range.
   constexpr int kFaint = 120;
-  constexpr int kFrames = 8;
+  constexpr int kFrames = 6;
   const int with = FramesFindingTheFaintLine(on, kFaint, kFrames);
   const int without = FramesFindingTheFaintLine(off, kFaint, kFrames);
   std::printf("[ faint line ] found in %d of %d frames with the search, %d without\n", with,
               kFrames, without);
   EXPECT_GE(with, kFrames - 1);
   EXPECT_LE(without, 1);
+}
+
+double MedianOf(std::vector<double> v) {
+  if (v.empty()) return std::nan("");
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Issue 49, night: lanes followed to their ends. A rendered CULane-like
+// night drive (configs/culane-night.json: 1640x590, camera 1.23 m high,
+// the hood's edge 6 m ahead, black at night; grey levels as measured on a
+// CULane night clip), labelled as CULane labels: from 72 m ahead through the
+// hood to the image's last row. The ego boundaries, found with the config's
+// settings, must run on through the hood to within a few rows of the
+// label's near end (the black hood is no lens circle's outside:
+// ClipToImageContent keeps the convention's rows below the road), and their
+// far ends must reach where the measured contrast still carries them.
+TEST(DetectorEndToEnd, HoldsNightLanesToTheirLabelledEnds) {
+  const Config config = testing::CulaneNightConfig();
+  const CameraModel& cam = config.camera;
+  auto det = Detector::Create(cam, config.ipm, config.detector);
+  ASSERT_TRUE(det.ok()) << det.status();
+  SyntheticOptions o;
+  o.night = true;
+  o.hood_edge_m = 6.0;
+  o.truth_far_m = 72.0;
+  o.straight_probability = 1.0;  // the label's far end is then 72 m ahead
+  o.max_vehicles = 0;
+  constexpr int kFrames = 6;
+  int ego = 0, found = 0;
+  std::vector<double> far_m, near_rows_short;
+  for (int i = 0; i < kFrames; ++i) {
+    const auto frame = RenderSyntheticFrame(cam, o, 4900 + i);
+    ASSERT_TRUE(frame.ok()) << frame.status();
+    const auto result = det->Detect(frame->bgr);
+    ASSERT_TRUE(result.ok()) << result.status();
+    for (const int b : {frame->ego_left, frame->ego_right}) {
+      if (b < 0) continue;
+      ++ego;
+      const Bezier truth{frame->boundaries[b].image};
+      const std::vector<Eigen::Vector2d> t = truth.Sample(200);
+      // The detection nearest the label: mean column distance over the
+      // rows both cover, under 20 px (1640 px wide), on at least 10 rows.
+      std::optional<Bezier> best;
+      double best_mean = 20;
+      for (const auto& lane : result->lanes) {
+        const Bezier d{lane.image};
+        double sum = 0;
+        int n = 0;
+        for (const auto& p : d.Sample(50)) {
+          const auto c = std::min_element(t.begin(), t.end(), [&](const auto& u, const auto& v) {
+            return std::abs(u.y() - p.y()) < std::abs(v.y() - p.y());
+          });
+          if (std::abs(c->y() - p.y()) > 3) continue;
+          sum += std::abs(c->x() - p.x());
+          ++n;
+        }
+        if (n >= 10 && sum / n < best_mean) best_mean = sum / n, best = d;
+      }
+      if (!best) continue;
+      ++found;
+      const auto lower = [](const Eigen::Vector2d& u, const Eigen::Vector2d& v) {
+        return u.y() < v.y();
+      };
+      const std::vector<Eigen::Vector2d> d = best->Sample(50);
+      const Eigen::Vector2d top = *std::min_element(d.begin(), d.end(), lower);
+      const double bottom = std::max_element(d.begin(), d.end(), lower)->y();
+      const double truth_bottom = std::max_element(t.begin(), t.end(), lower)->y();
+      far_m.push_back(cam.ImageToGround(top).y());
+      near_rows_short.push_back(truth_bottom - bottom);
+    }
+  }
+  const double far = MedianOf(far_m), near_short = MedianOf(near_rows_short);
+  std::printf(
+      "[ night ends ] ego boundaries %d, found %d; far ends median %.1f m (labels 72 m); near "
+      "ends median %.1f rows short of the label's (worst %.1f)\n",
+      ego, found, far, near_short,
+      near_rows_short.empty() ? 0.0
+                              : *std::max_element(near_rows_short.begin(), near_rows_short.end()));
+  ASSERT_GE(ego, 2 * kFrames - 2);
+  EXPECT_GE(found, 0.8 * ego);
+  // Near: the hood's edge is 115 rows above the last; the labels run
+  // through it.
+  EXPECT_LE(near_short, 8);
+  EXPECT_LE(*std::max_element(near_rows_short.begin(), near_rows_short.end()), 20);
+  // Far: measured 29.5 m over these frames (CULane's night detections: from
+  // about 33 m). The walk up stops at the extension's top row (40 m for this
+  // camera), short of the labels' 72 m, where the measured contrast (+14 at
+  // 50-90 m) is under the continuation threshold's 0.35 of the lane's own.
+  EXPECT_GE(far, 25);
 }
 
 TEST(DetectorEndToEnd, FindsTheEgoLaneInTwoLanesMode) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -27,6 +28,7 @@ using lane::SyntheticOptions;
 CameraModel CaltechCamera() { return CameraModel{}; }
 
 using ::lane::testing::CulaneCamera;
+using ::lane::testing::CulaneNightConfig;
 
 SyntheticFrame Render(const CameraModel& cam, const SyntheticOptions& opt, uint64_t seed) {
   auto frame = RenderSyntheticFrame(cam, opt, seed);
@@ -356,6 +358,113 @@ TEST(SyntheticTest, LabelsJsonIsOneLineInTheDocumentedForm) {
                                                                  : "none";
     EXPECT_EQ(b["ego"].get<std::string>(), ego);
   }
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return std::nan("");
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Issue 49's night, measured on a CULane night clip (1640x590, camera 1.23
+// m high, pitch 1.8 deg), rendered through that camera
+// (configs/culane-night.json) with its hood: the grey levels of the road on
+// the camera's axis, of the unlit road, of the markings over the road at
+// the measured distances, the glare above the horizon and the black hood.
+// Medians over 8 frames (straight roads of 4 lanes, no vehicles, solid
+// white markings 15 cm wide, no noise or JPEG: the figures of the model
+// itself), against the measured figures with a margin.
+TEST(SyntheticTest, NightHasTheMeasuredGreyLevels) {
+  const CameraModel cam = CulaneNightConfig().camera;
+  SyntheticOptions opt;
+  opt.night = true;
+  opt.hood_edge_m = 6.0;
+  opt.num_lanes = 4;
+  opt.lane_width_m = 3.5;
+  opt.min_marking_width_m = 0.15;
+  opt.max_marking_width_m = 0.15;
+  opt.dashed_probability = 0;
+  opt.yellow_probability = 0;
+  opt.max_vehicles = 0;
+  opt.noise_sigma = 0;
+  opt.jpeg_quality = 0;
+  opt.straight_probability = 1;
+  opt.max_heading_rad = 0;
+  // Red at ground point (x, y).
+  const auto grey = [&](const cv::Mat& bgr, double x, double y) {
+    return Red(bgr, cam.GroundToImage({x, y}));
+  };
+  std::vector<double> axis12, axis20, axis30, axis40, axis60, unlit, hood;
+  // Marking over the road beside it (0.6 m out), ego boundaries, by band.
+  const double bands[][2] = {{8, 12}, {12, 20}, {20, 30}, {30, 50}, {50, 90}};
+  std::vector<double> ego_contrast[5], outer_contrast;
+  int glare_min = 1 << 30, glare_max = 0;
+  double glare_largest = 0;
+  for (uint64_t seed = 300; seed < 308; ++seed) {
+    const SyntheticFrame f = Render(cam, opt, seed);
+    axis12.push_back(Median({grey(f.bgr, 0, 12), grey(f.bgr, 0, 13), grey(f.bgr, 0, 14)}));
+    axis20.push_back(grey(f.bgr, 0, 20));
+    axis30.push_back(grey(f.bgr, 0, 30));
+    axis40.push_back(grey(f.bgr, 0, 40));
+    axis60.push_back(grey(f.bgr, 0, 60));
+    for (int i = 0; i < static_cast<int>(f.boundaries.size()); ++i) {
+      const double x = f.boundaries[i].lateral_offset_m;  // a straight road along y
+      const bool ego = i == f.ego_left || i == f.ego_right;
+      for (int b = 0; b < 5; ++b) {
+        for (double y = bands[b][0]; y < bands[b][1]; y += 1.0) {
+          const Eigen::Vector2d p = cam.GroundToImage({x, y});
+          if (p.x() < 8 || p.x() > cam.image_width - 9) continue;
+          const double road = 0.5 * (grey(f.bgr, x - 0.6, y) + grey(f.bgr, x + 0.6, y));
+          double peak = 0;
+          for (int du = -2; du <= 2; ++du)
+            peak = std::max(peak, Red(f.bgr, p + Eigen::Vector2d(du, 0)));
+          if (std::isnan(road)) continue;
+          if (ego) ego_contrast[b].push_back(peak - road);
+          if (std::abs(x) > 4.5 && y < 20) {
+            outer_contrast.push_back(peak - road);
+            unlit.push_back(road);
+          }
+        }
+      }
+    }
+    for (int u = 0; u < cam.image_width; u += 41) hood.push_back(Red(f.bgr, {u, 585.0}));
+    // Glare: saturated blobs above the horizon.
+    cv::Mat red, sat, labels, stats, centroids;
+    cv::extractChannel(f.bgr, red, 2);
+    cv::compare(red.rowRange(0, static_cast<int>(cam.HorizonRow())), 250, sat, cv::CMP_GE);
+    const int n = cv::connectedComponentsWithStats(sat, labels, stats, centroids);
+    glare_min = std::min(glare_min, n - 1);
+    glare_max = std::max(glare_max, n - 1);
+    for (int k = 1; k < n; ++k) {
+      glare_largest = std::max<double>(glare_largest, stats.at<int>(k, cv::CC_STAT_AREA));
+    }
+  }
+  std::printf(
+      "[ night ] axis 12-14 m %.0f, 20 m %.0f, 30 m %.0f, 40 m %.0f, 60 m %.0f; unlit road "
+      "%.0f, marking +%.0f; ego markings +%.0f +%.0f +%.0f +%.0f +%.0f; glare %d-%d blobs, "
+      "largest %.0f px; hood %.0f\n",
+      Median(axis12), Median(axis20), Median(axis30), Median(axis40), Median(axis60), Median(unlit),
+      Median(outer_contrast), Median(ego_contrast[0]), Median(ego_contrast[1]),
+      Median(ego_contrast[2]), Median(ego_contrast[3]), Median(ego_contrast[4]), glare_min,
+      glare_max, glare_largest, Median(hood));
+  // Measured: 150-160, 124, 82, 52, 38.
+  EXPECT_NEAR(Median(axis12), 155, 12);
+  EXPECT_NEAR(Median(axis20), 124, 15);
+  EXPECT_NEAR(Median(axis30), 82, 12);
+  EXPECT_NEAR(Median(axis40), 52, 10);
+  EXPECT_NEAR(Median(axis60), 38, 8);
+  // Measured: road 17, marking +14 (31-35).
+  EXPECT_NEAR(Median(unlit), 17, 5);
+  EXPECT_NEAR(Median(outer_contrast), 16, 6);
+  // Measured: +40 at 8-12 m, +46 at 12-20, +37 at 20-30, +32 at 30-50, +14
+  // at 50-90 m.
+  const double measured[] = {40, 46, 37, 32, 14};
+  for (int b = 0; b < 5; ++b) EXPECT_NEAR(Median(ego_contrast[b]), measured[b], 10) << b;
+  // Measured: 4-19 blobs, up to about 2,200 px; the hood <= 16.
+  EXPECT_GE(glare_min, 3);
+  EXPECT_LE(glare_max, 25);
+  EXPECT_LE(glare_largest, 3000);
+  EXPECT_LE(Median(hood), 16);
 }
 
 }  // namespace

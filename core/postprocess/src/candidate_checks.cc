@@ -1,6 +1,7 @@
 #include "lane/postprocess/candidate_checks.h"
 
 #include <cmath>
+#include <limits>
 
 #include "lane/postprocess/image_extension.h"
 #include "lane/postprocess/marking_check.h"
@@ -33,10 +34,15 @@ bool PassesTopViewChecks(const Bezier& ipm_spline, const cv::Mat& top_view, cons
 
 std::optional<Bezier> FinishImageSpline(const Bezier& image_spline, const ChannelView& channel,
                                         const cv::Mat& frame, const CameraModel& camera,
-                                        const PostprocessOptions& pp, double scale) {
+                                        const PostprocessOptions& pp, double scale,
+                                        double road_bottom_row) {
   Bezier s = image_spline;
   if (pp.clip_to_image) {
-    const std::optional<Bezier> clipped = ClipToImageContent(s, channel);
+    // A black hood is no lens circle's outside: below the road the top view
+    // reads, the convention's rows count as content.
+    const std::optional<Bezier> clipped = ClipToImageContent(
+        s, channel,
+        pp.extend_to_max_row ? road_bottom_row : std::numeric_limits<double>::infinity());
     if (!clipped) return std::nullopt;
     s = *clipped;
     if (s.p[0].y() > s.p[3].y()) {  // keep the upper end first

@@ -220,13 +220,15 @@ double ImageBarContrast(const Bezier& spline, const ChannelView& image, const Ca
   return n > 0 ? sum / n : 0.0;
 }
 
-std::optional<Bezier> ClipToImageContent(const Bezier& spline, const ChannelView& image) {
+std::optional<Bezier> ClipToImageContent(const Bezier& spline, const ChannelView& image,
+                                         double convention_row) {
   constexpr int kSamples = 40;
   // "Black": no pixel of the 5x5 neighbourhood above this (of 255).
   constexpr float kBlack = 12.f;
   const float black = image.image.depth() == CV_32F ? kBlack / 255.f : kBlack;
   const auto on_content = [&](const Eigen::Vector2d& p) {
     if (!InImage(p, image)) return false;
+    if (p.y() >= convention_row) return true;
     const int x = static_cast<int>(std::lround(p.x())), y = static_cast<int>(std::lround(p.y()));
     for (int dy = -2; dy <= 2; ++dy) {
       for (int dx = -2; dx <= 2; ++dx) {
@@ -316,14 +318,17 @@ std::vector<Eigen::Vector2d> ExtrapolateDownOnGround(const std::vector<Eigen::Ve
 
 Bezier ExtendInImage(const Bezier& spline, const ChannelView& image, const CameraModel& camera,
                      const ImageExtendOptions& options) {
-  const double reference = ImageBarContrast(spline, image, camera, options);
-  if (!(reference > 0)) return spline;
+  return ExtendInImage(spline, ImageBarContrast(spline, image, camera, options), image, camera,
+                       options);
+}
+
+Bezier ExtendInImage(const Bezier& spline, double reference, const ChannelView& image,
+                     const CameraModel& camera, const ImageExtendOptions& options) {
   const double min_contrast = options.continuation_threshold * reference;
   const double max_row = std::min(options.max_row, image.bottom() - 1.0);
 
   // Walks from `start` along `dir`; returns the supported points, in order.
-  const auto walk = [&](const Eigen::Vector2d& start, Eigen::Vector2d dir, double min_cos,
-                        Eigen::Vector2d* last_dir) {
+  const auto walk = [&](const Eigen::Vector2d& start, Eigen::Vector2d dir, double min_cos) {
     std::vector<Eigen::Vector2d> added;
     if (dir.norm() < 1e-9) return added;
     dir.normalize();
@@ -359,12 +364,15 @@ Bezier ExtendInImage(const Bezier& spline, const ChannelView& image, const Camer
         cur = guess;  // through the gap, straight on
       }
     }
-    if (last_dir) *last_dir = dir;
     return added;
   };
-  const auto up = walk(spline.p[0], -spline.Derivative(0), options.min_cos_up, nullptr);
-  Eigen::Vector2d down_dir = spline.Derivative(1);
-  auto down = walk(spline.p[3], spline.Derivative(1), options.min_cos_down, &down_dir);
+  // Without a bar under the spline there is nothing to follow; the
+  // labelling convention's extrapolation below still applies.
+  const bool follow = reference > 0;
+  const auto up = follow ? walk(spline.p[0], -spline.Derivative(0), options.min_cos_up)
+                         : std::vector<Eigen::Vector2d>{};
+  auto down = follow ? walk(spline.p[3], spline.Derivative(1), options.min_cos_down)
+                     : std::vector<Eigen::Vector2d>{};
   if (options.extrapolate_down) {
     std::vector<Eigen::Vector2d> evidence = spline.Sample(20);
     evidence.insert(evidence.end(), down.begin(), down.end());

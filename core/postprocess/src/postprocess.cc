@@ -64,18 +64,18 @@ bool PostprocessInImage(SplineCandidate& c, const PostprocessFrame& f, const Pos
   c.image = TopDown(*image);
   const Bezier fallback = TopDown(*image_line);
   const double min_len = pp.min_image_length_px * scale;
+  LocalizeOptions lo;
+  lo.points = pp.localize_points;
+  lo.search_m = pp.localize_search_m;
+  lo.sigma_m = pp.localize_sigma_m;
+  lo.min_sigma_px = pp.profile_sigma_px * scale;
+  lo.max_search_px = 2 * pp.localize_search_px * scale;
+  lo.min_cos = pp.localize_min_cos;
+  lo.marking_width_m = marking_width_m;
+  lo.on_bars = pp.localize_on_bars;
   const bool localize = pp.localize_in_image && (!pp.localize_only_coarse_top_view ||
                                                  f.ipm.metres_per_px_x() > marking_width_m);
   if (localize) {
-    LocalizeOptions lo;
-    lo.points = pp.localize_points;
-    lo.search_m = pp.localize_search_m;
-    lo.sigma_m = pp.localize_sigma_m;
-    lo.min_sigma_px = pp.profile_sigma_px * scale;
-    lo.max_search_px = 2 * pp.localize_search_px * scale;
-    lo.min_cos = pp.localize_min_cos;
-    lo.marking_width_m = marking_width_m;
-    lo.on_bars = pp.localize_on_bars;
     if (auto loc = LocalizeInImage(c.image, f.channel, cam, lo)) {
       c.image = TopDown(*loc);
     }
@@ -84,6 +84,25 @@ bool PostprocessInImage(SplineCandidate& c, const PostprocessFrame& f, const Pos
   if (pp.extend_in_image) {
     const ImageExtendOptions eo =
         ImageExtendOptionsFrom(pp, scale, rows.min_row, rows.max_row, marking_width_m);
+    // The extension follows the bar under the spline. A spline with none
+    // under it in the image (ImageBarContrast 0: no sample's profile has a
+    // bar within half a marking width) is localised in the image first,
+    // when a fine top view skipped that; one with no bar near it even then
+    // is no marking: on driver161-a every one was a vehicle's lower edge or
+    // its shadow's border (a step, not a bar; docs/accuracy-log.md, entry
+    // 61), and is dropped.
+    double reference = ImageBarContrast(c.image, f.channel, cam, eo);
+    if (!(reference > 0) && !localize && pp.localize_in_image) {
+      if (auto loc = LocalizeInImage(c.image, f.channel, cam, lo)) {
+        const Bezier moved = TopDown(*loc);
+        const double moved_reference = ImageBarContrast(moved, f.channel, cam, eo);
+        if (moved_reference > 0 && PassesShapeChecks(moved, min_len, pp.min_straightness)) {
+          c.image = moved;
+          reference = moved_reference;
+        }
+      }
+    }
+    if (!(reference > 0)) return false;
     ImageExtendOptions straight = eo;
     straight.max_steps = 0;
     // The first extension whose shape passes the checks, else the line. A
@@ -96,11 +115,16 @@ bool PostprocessInImage(SplineCandidate& c, const PostprocessFrame& f, const Pos
     // needs no evidence beyond its own.
     const Bezier spline = c.image;
     c.image = fallback;
-    for (const auto& [from, options] :
-         {std::pair<const Bezier&, const ImageExtendOptions&>{spline, eo},
-          {fallback, eo},
-          {fallback, straight}}) {
-      const Bezier extended = TopDown(ExtendInImage(from, f.channel, cam, options));
+    // (The straight attempt walks nowhere: its reference is not needed.)
+    const struct {
+      const Bezier& from;
+      const ImageExtendOptions& options;
+      double reference;  // its ImageBarContrast when known; < 0: measure it
+    } attempts[] = {{spline, eo, reference}, {fallback, eo, -1}, {fallback, straight, 0}};
+    for (const auto& a : attempts) {
+      const Bezier extended =
+          TopDown(a.reference >= 0 ? ExtendInImage(a.from, a.reference, f.channel, cam, a.options)
+                                   : ExtendInImage(a.from, f.channel, cam, a.options));
       if (PassesShapeChecks(extended, min_len, pp.min_straightness)) {
         c.image = extended;
         break;
@@ -108,7 +132,7 @@ bool PostprocessInImage(SplineCandidate& c, const PostprocessFrame& f, const Pos
     }
   }
   const std::optional<Bezier> finished =
-      FinishImageSpline(c.image, f.channel, f.frame, cam, pp, scale);
+      FinishImageSpline(c.image, f.channel, f.frame, cam, pp, scale, f.ipm.roi().bottom);
   if (!finished) return false;
   c.image = *finished;
   return true;

@@ -60,12 +60,25 @@ struct SyntheticOptions {
   // (docs/calibration.md, "Static structure"). Off by default: the frame is
   // then exactly as without it.
   bool static_overlay = false;
-  // Night: the scene lit by the car's low beams (bright from a few metres
-  // to 20-35 m ahead, falling off with the square of the distance beyond,
-  // within a cone of +-20-30 deg) over an ambient 3-10 % of daylight, with
-  // street lights and oncoming headlights near the horizon, and 2.5 times
-  // the sensor noise (the gain is up).
+  // Night, as measured on a CULane night clip (issue 49): the road lit by
+  // the car's low beams (on the axis grey 150-160 at 12-15 m, 124 at 20 m,
+  // 82 at 30, 52 at 40, 38 at 60 m; a pool about 1.6 m wide (sigma) at
+  // 12 m, widening with the distance), unlit road 17 and markings +14
+  // beside it, street lamps' pools (markings +28 to +33 under them),
+  // markings' contrast falling to +14 beyond 50 m, 4-19 saturated blobs of
+  // glare above the horizon (neon signs, up to 2,200 px at 1640x590),
+  // oncoming headlights, and the sensor's noise 2.5 times up at mid grey.
   bool night = false;
+  // The car's hood covers the road nearer than this (metres ahead), as on
+  // CULane's cameras: an arc across the image's bottom, dark (at night
+  // black). The truth runs on through it to the image's bottom row, as
+  // CULane labels do. 0 = no hood. 0 by default: the frame is then exactly
+  // as without it.
+  double hood_edge_m = 0;
+  // Dashed markings' painted length and gap, metres (uniform in the
+  // ranges; US MUTCD: 3 m + 9 m).
+  double min_dash_m = 2.5, max_dash_m = 3.5;
+  double min_gap_m = 6.0, max_gap_m = 9.0;
   // Ground truth covers the boundary from this far ahead (metres) ...
   double truth_near_m = 0.0;  // 0 = the bottom of the image
   // ... to this far ahead (metres).

@@ -34,10 +34,14 @@ bool PassesTopViewChecks(const Bezier& ipm_spline, const cv::Mat& top_view, cons
 // The final image spline: cut to the image content (clip_to_image), checked
 // against the road's direction on the ground (check_ground_angle) and for
 // colour (max_redness, on BGR frames). nullopt to drop it. `scale` is the
-// image width / 640.
+// image width / 640. With extend_to_max_row (a labelling convention that
+// runs every lane on to that row, through the hood), rows below
+// `road_bottom_row`, the lowest the top view reads from the road, are not
+// cut for being black (ClipToImageContent).
 std::optional<Bezier> FinishImageSpline(const Bezier& image_spline, const ChannelView& channel,
                                         const cv::Mat& frame, const CameraModel& camera,
-                                        const PostprocessOptions& pp, double scale);
+                                        const PostprocessOptions& pp, double scale,
+                                        double road_bottom_row);
 
 }  // namespace lane
 

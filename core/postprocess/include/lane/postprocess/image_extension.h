@@ -10,12 +10,13 @@
 #ifndef LANE_IMAGE_EXTENSION_H_
 #define LANE_IMAGE_EXTENSION_H_
 
+#include <limits>
 #include <optional>
 
 #include "lane/geometry/bezier.h"
 #include "lane/geometry/camera.h"
-#include "lane/geometry/ipm.h"
 #include "lane/geometry/channel_view.h"
+#include "lane/geometry/ipm.h"
 #include "lane/postprocess/postprocess_options.h"
 
 namespace lane {
@@ -31,7 +32,7 @@ struct ImageExtendOptions {
   // brighter of the two sides one marking width out) reaches this fraction
   // of the spline's own bar contrast.
   double continuation_threshold = 0.35;
-  double max_gap_m = 6;        // unsupported distance along the road walked through
+  double max_gap_m = 12;       // unsupported distance along the road walked through
   double min_cos_up = 0.86;    // direction change allowed going up (towards t = 0)
   double min_cos_down = 0.95;  // going down
   // The walk follows the road: each new point, seen on the ground from the
@@ -111,16 +112,28 @@ double ImageBarContrast(const Bezier& spline, const ChannelView& image, const Ca
 
 // The extension; P0 of `spline` must be its upper (far) end. Returns the
 // refitted spline (upper end first), or the input when nothing was added.
+// The walks follow the bar under the spline (its ImageBarContrast, the
+// reference the continuation threshold is a fraction of); without one
+// (contrast 0) there is nothing to follow, and only extrapolate_down (a
+// labelling convention, which needs no evidence) applies.
 Bezier ExtendInImage(const Bezier& spline, const ChannelView& image, const CameraModel& camera,
                      const ImageExtendOptions& options);
+// The same with the spline's ImageBarContrast already measured.
+Bezier ExtendInImage(const Bezier& spline, double reference, const ChannelView& image,
+                     const CameraModel& camera, const ImageExtendOptions& options);
 
 // The longest part of `spline` that lies inside the image and on image
 // content: points where the image is black in a 5x5 neighbourhood (outside
-// a lens's image circle, as in the Caltech Lanes frames) do not count.
+// a lens's image circle, as in the Caltech Lanes frames) do not count,
+// except at or below image row `convention_row`: there a labelling
+// convention carries lanes on whatever the image shows (CULane's lanes run
+// through the car's hood, which is black at night, to the bottom row).
 // Samples of the kept part are refitted; nullopt when fewer than 4 samples
 // of 40 remain. Top-view splines project beyond the image's sides where the
 // ground rectangle does; labels stop at the image's edge.
-std::optional<Bezier> ClipToImageContent(const Bezier& spline, const ChannelView& image);
+std::optional<Bezier> ClipToImageContent(
+    const Bezier& spline, const ChannelView& image,
+    double convention_row = std::numeric_limits<double>::infinity());
 
 }  // namespace lane
 

@@ -93,11 +93,14 @@ struct PostprocessOptions {
   // window follows the perspective: the reference's fixed 20 px are +-1.4 m
   // at the Caltech camera's far rows and +-0.2 m at its near rows), walks
   // through up to `extend_gap_m` metres without one (the gap between two
-  // dashes: 6 to 9 m on US and Chinese roads; beyond that the lane is not
-  // followed), and, with `extend_to_max_row`, extrapolates the final
-  // straight segment down to `extend_max_row` (the road continues straight
-  // under the last evidence; lane labels such as CULane's run to the image
-  // bottom). Localisation in the image (LocalizeInImage) searches the normal
+  // dashes: the longest standard gap, a German motorway's 12 m (6 m dashes;
+  // US 9 m, 3 m dashes; Chinese roads 4-9 m), so a dashed line is followed
+  // as far as its dashes continue; beyond that the lane is not followed.
+  // 6 m until docs/accuracy-log.md entry 63 stopped at a US gap), and, with
+  // `extend_to_max_row`, extrapolates the final straight segment down to
+  // `extend_max_row` (the road continues straight under the last evidence; lane labels such as
+  // CULane's run to the image bottom). Localisation in the image (LocalizeInImage) searches the
+  // normal
   // +-localize_search_m on the road and smooths the profile with
   // localize_sigma_m on the road (at least profile_sigma_px), so the two
   // lines of a double line merge into one peak at their centre (0.1 m: a
@@ -110,7 +113,7 @@ struct PostprocessOptions {
   bool localize_on_bars = true;
   double localize_sigma_m = 0.1;
   double extend_search_m = 0.4;
-  double extend_gap_m = 6.0;
+  double extend_gap_m = 12.0;
   bool extend_to_max_row = false;
   // The final image spline is cut to the part inside the image and on image
   // content (not black: outside a lens's image circle). A top-view spline
