@@ -77,12 +77,24 @@ int RunRender(const RenderFlags& flags) {
   if (flags.clutter) lane::SetRoadsideClutter(&options);
   options.night = flags.night;
   options.static_overlay = flags.static_overlay;
-  options.hood_edge_m = flags.hood_m;
   options.truth_far_m = flags.truth_far_m;
   options.double_line_probability = flags.double_lines;
   options.hood_top_row = flags.hood_top_row;
   options.hood_side_row = flags.hood_side_row;
   options.labels_through_hood = flags.labels_through_hood;
+  if (flags.hood_m > 0) {
+    // --hood M is the same hood by rows, from the camera, labelled through.
+    const absl::StatusOr<lane::HoodRows> rows =
+        lane::HoodRowsAtDistance(config->camera, flags.hood_m);
+    if (!rows.ok()) return Failure("render", std::string(rows.status().message()));
+    options.hood_top_row = rows->top_row;
+    options.hood_side_row = rows->side_row;
+    options.labels_through_hood = true;
+    std::fprintf(stderr,
+                 "lane render: --hood %g is --hood-top-row %.2f --hood-side-row %.2f "
+                 "--labels-through-hood on this camera\n",
+                 flags.hood_m, rows->top_row, rows->side_row);
+  }
   if (flags.straight) {
     options.straight_probability = 1.0;
     options.max_heading_rad = 0.005;
@@ -184,12 +196,13 @@ Command AddRenderCommand(CLI::App& lane) {
                 "beams and street lamps over an unlit grey of 17, glare above the horizon, "
                 "oncoming headlights (independent frames)")
       ->excludes(sequence);
-  app->add_option("--hood", flags->hood_m,
-                  "the car's hood covers the road nearer than M metres ahead (CULane's cameras); "
-                  "the labels run on through it to the bottom row (independent frames)")
-      ->type_name("M")
-      ->check(CLI::Range(0.0, 100.0))
-      ->excludes(sequence);
+  CLI::Option* hood_m =
+      app->add_option("--hood", flags->hood_m,
+                      "the car's hood covering the road nearer than M metres ahead (CULane's "
+                      "cameras), labelled through: the same as --hood-top-row/--hood-side-row "
+                      "(converted from the camera, printed) with --labels-through-hood")
+          ->type_name("M")
+          ->check(CLI::Range(0.0, 100.0));
   app->add_option("--truth-far", flags->truth_far_m,
                   "the labels run this far ahead, metres (CULane's night labels: about 72)")
       ->type_name("M")
@@ -211,7 +224,8 @@ Command AddRenderCommand(CLI::App& lane) {
                       "edges. The labels stop at it (--labels-through-hood: they run on to the "
                       "image's bottom, CULane's convention)")
           ->type_name("V")
-          ->check(CLI::Range(1.0, 16384.0));
+          ->check(CLI::Range(1.0, 16384.0))
+          ->excludes(hood_m);
   app->add_option("--hood-side-row", flags->hood_side_row,
                   "--hood-top-row: the hood's edge at the image's left and right edges "
                   "(default: the image's bottom)")

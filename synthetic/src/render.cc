@@ -407,15 +407,15 @@ void DrawObjects(const CameraModel& cam, const Road& road, std::vector<Object> o
 // Relights a day image for the night (Night's response): ground pixels by
 // the light on the ground there (low beams, street lamps, the unlit road's
 // level), their paint's contrast faded with the distance
-// (NightPaintFactor); the sky and the hood by the sky's light. Then the
-// glare, the lamps' heads and the oncoming headlights, saturated.
-void ApplyNight(const CameraModel& cam, const Night& night, const Look& look, const Hood& hood,
-                cv::Mat& img) {
+// (NightPaintFactor); the sky and the hood (HoodRow) by the sky's light.
+// Then the glare, the lamps' heads and the oncoming headlights, saturated.
+void ApplyNight(const CameraModel& cam, const SyntheticOptions& options, const Night& night,
+                const Look& look, cv::Mat& img) {
   const double horizon = cam.HorizonRow();
   cv::Mat3f f;
   img.convertTo(f, CV_32FC3);
   std::vector<double> hood_top(f.cols);
-  for (int u = 0; u < f.cols; ++u) hood_top[u] = hood.TopRow(cam, u);
+  for (int u = 0; u < f.cols; ++u) hood_top[u] = HoodRow(cam, options, u);
   for (int v = 0; v < f.rows; ++v) {
     cv::Vec3f* row = f.ptr<cv::Vec3f>(v);
     for (int u = 0; u < f.cols; ++u) {
@@ -468,13 +468,12 @@ void ApplyNight(const CameraModel& cam, const Night& night, const Look& look, co
   f.convertTo(img, CV_8UC3);
 }
 
-void DrawHood(const CameraModel& cam, const SyntheticOptions& options, bool night, cv::Mat& img) {
+void DrawHood(const CameraModel& cam, const SyntheticOptions& options, cv::Mat& img) {
   if (!(options.hood_top_row > 0)) return;
   const int w = img.cols, h = img.rows;
   // Dark paint that mirrors the bright sky at grazing angles near its edge,
   // with a soft highlight across it: smooth, and the same in every frame.
   const double depth = std::max(1.0, h - options.hood_top_row);
-  const float dim = night ? 0.25f : 1.0f;
   for (int u = 0; u < w; ++u) {
     const double edge = HoodRow(cam, options, u);
     for (int v = std::max(0, static_cast<int>(std::floor(edge))); v < h; ++v) {
@@ -484,29 +483,12 @@ void DrawHood(const CameraModel& cam, const SyntheticOptions& options, bool nigh
       const double grey = 34.0 + 50.0 * std::exp(-d / 0.12) +
                           22.0 * std::exp(-std::pow((d - 0.45) / 0.1, 2)) +
                           6.0 * std::abs(u - cam.cu) / std::max(1.0, 0.5 * w);
-      const cv::Vec3f paint = cv::Vec3f(static_cast<float>(grey * 1.04), static_cast<float>(grey),
-                                        static_cast<float>(grey * 0.96)) *
-                              dim;
+      const cv::Vec3f paint(static_cast<float>(grey * 1.04), static_cast<float>(grey),
+                            static_cast<float>(grey * 0.96));
       cv::Vec3b& px = img.at<cv::Vec3b>(v, u);
       for (int c = 0; c < 3; ++c) {
         px[c] = cv::saturate_cast<uchar>((1.0 - cover) * px[c] + cover * paint[c]);
       }
-    }
-  }
-}
-
-// The hood at a ground distance (Hood, SyntheticOptions::hood_edge_m): below its arc, the car's
-// paint, a little lighter towards the windscreen (it mirrors the sky).
-void DrawHoodAtDistance(const CameraModel& cam, const Hood& hood, cv::Mat& img) {
-  if (!(hood.edge_m > 0)) return;
-  for (int u = 0; u < img.cols; ++u) {
-    const double top = hood.TopRow(cam, u);
-    for (int v = std::max(0, static_cast<int>(std::ceil(top))); v < img.rows; ++v) {
-      const double shade = 1.0 - 0.3 * (v - top) / std::max(1.0, img.rows - top);
-      const cv::Vec3f c = hood.colour * static_cast<float>(shade);
-      img.at<cv::Vec3b>(v, u) =
-          cv::Vec3b(cv::saturate_cast<uchar>(c[0]), cv::saturate_cast<uchar>(c[1]),
-                    cv::saturate_cast<uchar>(c[2]));
     }
   }
 }
@@ -566,9 +548,8 @@ SyntheticFrame RenderScene(const CameraModel& camera, const SyntheticOptions& op
   cv::Mat img;
   canvas.convertTo(img, CV_8UC3);
   DrawObjects(camera, road, scene.objects, img);
-  DrawHoodAtDistance(camera, scene.hood, img);
-  if (scene.night.on) ApplyNight(camera, scene.night, look, scene.hood, img);
-  DrawHood(camera, options, scene.night.on, img);
+  DrawHood(camera, options, img);
+  if (scene.night.on) ApplyNight(camera, options, scene.night, look, img);
   if (options.static_overlay) DrawStaticOverlay(img);
   cv::GaussianBlur(img, img, cv::Size(3, 3), look.blur_sigma);
 
@@ -615,6 +596,25 @@ double HoodRow(const CameraModel& camera, const SyntheticOptions& options, doubl
   return options.hood_top_row + (side - options.hood_top_row) * t * t;
 }
 
+absl::StatusOr<HoodRows> HoodRowsAtDistance(const CameraModel& camera, double edge_m) {
+  if (absl::Status s = camera.Validate(); !s.ok()) return s;
+  if (!(edge_m > 0 && edge_m <= 100)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("the hood's edge must be in (0, 100] metres ahead, not ", edge_m));
+  }
+  const double top = camera.GroundToImage({0.0, edge_m}).y();
+  if (!std::isfinite(top) || !(top > camera.HorizonRow())) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "the hood's edge ", edge_m, " m ahead is not on the camera's road (below its horizon)"));
+  }
+  // Nearer than the image's bottom row the hood is out of view: its rows
+  // then lie just below the image.
+  HoodRows rows;
+  rows.top_row = std::clamp(top, 1.0, static_cast<double>(camera.image_height));
+  rows.side_row = rows.top_row + 0.05 * camera.image_height;
+  return rows;
+}
+
 absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
                                                     const SyntheticOptions& options,
                                                     uint64_t seed) {
@@ -633,14 +633,6 @@ absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
   if (options.night) {
     scene.night = SampleNight(camera, scene.road, clutter);
     scene.shadows.clear();  // no sun
-  }
-  if (options.hood_edge_m > 0) {
-    Rng hood(seed ^ 0xd1b54a32d192ed03ULL);
-    scene.hood.edge_m = options.hood_edge_m;
-    const double grey = Uniform(hood, 25.0, 50.0);
-    scene.hood.colour =
-        cv::Vec3f(static_cast<float>(grey * Uniform(hood, 0.9, 1.1)), static_cast<float>(grey),
-                  static_cast<float>(grey * Uniform(hood, 0.9, 1.1)));
   }
   return RenderScene(camera, options, scene);
 }

@@ -168,7 +168,6 @@ absl::Status ValidateOptions(const SyntheticOptions& o) {
                    o.worn_probability, o.double_line_probability}) {
     if (!(p >= 0.0 && p <= 1.0)) return bad("clutter probabilities must be in [0, 1]");
   }
-  if (!(o.hood_edge_m >= 0 && o.hood_edge_m <= 100)) return bad("hood_edge_m must be in [0, 100]");
   if (!(o.min_dash_m > 0 && o.max_dash_m >= o.min_dash_m && o.max_dash_m <= 100 &&
         o.min_gap_m > 0 && o.max_gap_m >= o.min_gap_m && o.max_gap_m <= 100)) {
     return bad("dashes and gaps must satisfy 0 < min <= max <= 100 metres");
@@ -590,14 +589,6 @@ Night SampleNight(const CameraModel& cam, const Road& road, Rng& rng) {
     n.lights.push_back(l);
   }
   return n;
-}
-
-double Hood::TopRow(const CameraModel& cam, double u) const {
-  if (!(edge_m > 0)) return std::numeric_limits<double>::infinity();
-  const Eigen::Vector2d centre = cam.GroundToImage({0.0, edge_m});
-  const double half = 0.5 * cam.image_width;
-  const double s = (u - half) / half;
-  return centre.y() + 0.05 * cam.image_height * s * s;
 }
 
 void AddClutter(const SyntheticOptions& o, double y_min, Rng& rng, Road* road,

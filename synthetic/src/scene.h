@@ -181,7 +181,7 @@ double PaintedUpTo(const Boundary& m, double s);
 struct Night {
   bool on = false;
   double unlit = 17;  // the road outside every light (measured 17)
-  double sky = 8;     // the light above the horizon and on the hood
+  double sky = 8;     // the light above the horizon and on the hood (HoodRow)
   // The low beams' pool: on the camera's axis the measured profile
   // (NightAxisGrey), its part above `unlit` times `pool_gain`; across, a
   // Gaussian centred y tan(pool_centre_deg) to the right, of sigma
@@ -238,16 +238,6 @@ Night SampleNight(const CameraModel& cam, const Road& road, Rng& rng);
 // with the square root of the level (photon noise), so that black stays black.
 constexpr double kNightNoiseGain = 2.5;
 
-// The car's own hood (SyntheticOptions::hood_edge_m): it covers the image
-// below an arc through the row of the ground point `edge_m` ahead at its
-// centre, bulging up a twentieth of the image's height above its ends.
-struct Hood {
-  double edge_m = 0;  // 0: no hood
-  cv::Vec3f colour{40, 40, 40};
-  // The hood's top row at column u; +infinity without a hood.
-  double TopRow(const CameraModel& cam, double u) const;
-};
-
 // Everything random of one frame, then drawn by RenderScene.
 struct Scene {
   Road road;
@@ -256,7 +246,6 @@ struct Scene {
   std::vector<Object> objects;
   uint64_t noise_seed = 0;
   Night night;
-  Hood hood;
 };
 // SyntheticOptions::static_overlay: the reflection of a card with digits,
 // blended into `img` (CV_8UC3) at a fixed place for its size.
@@ -276,9 +265,9 @@ SyntheticFrame RenderScene(const CameraModel& cam, const SyntheticOptions& optio
 bool FitTruth(const CameraModel& cam, const Road& road, double y_near, double y_far,
               const SyntheticOptions& options, Boundary* m);
 
-// Paints the hood (SyntheticOptions::hood_top_row) over `img` (8-bit BGR),
-// dimmed at night.
-void DrawHood(const CameraModel& cam, const SyntheticOptions& options, bool night, cv::Mat& img);
+// Paints the hood (SyntheticOptions::hood_top_row, HoodRow) over `img`
+// (8-bit BGR) as in daylight; at night ApplyNight then lights it by the sky.
+void DrawHood(const CameraModel& cam, const SyntheticOptions& options, cv::Mat& img);
 
 }  // namespace lane::synthetic_internal
 

@@ -331,7 +331,11 @@ TEST(DetectorEndToEnd, HoldsNightLanesToTheirLabelledEnds) {
   ASSERT_TRUE(det.ok()) << det.status();
   SyntheticOptions o;
   o.night = true;
-  o.hood_edge_m = 6.0;
+  const absl::StatusOr<HoodRows> hood = HoodRowsAtDistance(cam, 6.0);
+  ASSERT_TRUE(hood.ok()) << hood.status();
+  o.hood_top_row = hood->top_row;
+  o.hood_side_row = hood->side_row;
+  o.labels_through_hood = true;  // CULane's convention
   o.truth_far_m = 72.0;
   o.straight_probability = 1.0;  // the label's far end is then 72 m ahead
   o.max_vehicles = 0;

@@ -313,6 +313,30 @@ TEST(SyntheticTest, HoodIsStillAndLabelsStopAtItOrRunThrough) {
   }
 }
 
+// A hood given by distance (`lane render --hood M`, CULane's cameras) is the
+// hood by rows: its top row is where the road `edge_m` ahead lies, its sides
+// a twentieth of the image's height lower.
+TEST(SyntheticTest, HoodAtADistanceIsTheHoodByRows) {
+  const CameraModel cam = CulaneNightConfig().camera;
+  const absl::StatusOr<lane::HoodRows> rows = lane::HoodRowsAtDistance(cam, 6.0);
+  ASSERT_TRUE(rows.ok()) << rows.status();
+  EXPECT_NEAR(cam.ImageToGround({cam.cu, rows->top_row}).y(), 6.0, 0.05);
+  EXPECT_NEAR(rows->side_row - rows->top_row, 0.05 * cam.image_height, 1e-9);
+  SyntheticOptions o;
+  o.hood_top_row = rows->top_row;
+  o.hood_side_row = rows->side_row;
+  EXPECT_DOUBLE_EQ(lane::HoodRow(cam, o, cam.cu), rows->top_row);
+  // Nearer than the image's bottom the hood is out of view.
+  const absl::StatusOr<lane::HoodRows> hidden = lane::HoodRowsAtDistance(cam, 0.5);
+  ASSERT_TRUE(hidden.ok()) << hidden.status();
+  EXPECT_EQ(hidden->top_row, cam.image_height);
+  for (const double bad : {0.0, -1.0, 101.0, std::nan("")}) {
+    EXPECT_EQ(lane::HoodRowsAtDistance(cam, bad).status().code(),
+              absl::StatusCode::kInvalidArgument)
+        << bad;
+  }
+}
+
 TEST(SyntheticTest, DegenerateViewsRenderWithoutTruth) {
   // Looking at the sky: no ground visible.
   CameraModel up;
@@ -378,7 +402,11 @@ TEST(SyntheticTest, NightHasTheMeasuredGreyLevels) {
   const CameraModel cam = CulaneNightConfig().camera;
   SyntheticOptions opt;
   opt.night = true;
-  opt.hood_edge_m = 6.0;
+  const absl::StatusOr<lane::HoodRows> hood_rows = lane::HoodRowsAtDistance(cam, 6.0);
+  ASSERT_TRUE(hood_rows.ok()) << hood_rows.status();
+  opt.hood_top_row = hood_rows->top_row;
+  opt.hood_side_row = hood_rows->side_row;
+  opt.labels_through_hood = true;
   opt.num_lanes = 4;
   opt.lane_width_m = 3.5;
   opt.min_marking_width_m = 0.15;

@@ -69,12 +69,6 @@ struct SyntheticOptions {
   // glare above the horizon (neon signs, up to 2,200 px at 1640x590),
   // oncoming headlights, and the sensor's noise 2.5 times up at mid grey.
   bool night = false;
-  // The car's hood covers the road nearer than this (metres ahead), as on
-  // CULane's cameras: an arc across the image's bottom, dark (at night
-  // black). The truth runs on through it to the image's bottom row, as
-  // CULane labels do. 0 = no hood. 0 by default: the frame is then exactly
-  // as without it.
-  double hood_edge_m = 0;
   // Dashed markings' painted length and gap, metres (uniform in the
   // ranges; US MUTCD: 3 m + 9 m).
   double min_dash_m = 2.5, max_dash_m = 3.5;
@@ -83,10 +77,15 @@ struct SyntheticOptions {
   double truth_near_m = 0.0;  // 0 = the bottom of the image
   // ... to this far ahead (metres).
   double truth_far_m = 40.0;
-  // The car's hood: a dark, smooth, glossy region (a static reflection of
-  // the sky, the same in every frame) below a parabola through row
-  // `hood_top_row` at the principal point's column and `hood_side_row` at
-  // the image's left and right edges (0: the image's bottom). 0 = no hood.
+  // The car's hood, the renderer's only one: a dark, smooth, glossy region
+  // (a static reflection of the sky, the same in every frame) below a
+  // parabola through row `hood_top_row` at the principal point's column and
+  // `hood_side_row` at the image's left and right edges (0: the image's
+  // bottom). Rows, because rows are what one measures on a frame; a hood
+  // known by the ground distance of its edge (CULane's cameras: "the road
+  // nearer than 6 m") converts once through HoodRowsAtDistance. At night it
+  // is lit by the sky's light only (Night::sky): black, as on CULane's night
+  // clips. 0 = no hood. 0 by default: the frame is then exactly as without it.
   double hood_top_row = 0;
   double hood_side_row = 0;
   // Labels stop where the hood hides the road, as a fleet's labels would;
@@ -101,7 +100,23 @@ struct SyntheticOptions {
 };
 
 // The first image row of the hood in column u (HUGE_VAL without a hood).
+// FitTruth (where labels stop), the hood's paint and the night's lighting
+// all read the hood through this function.
 double HoodRow(const CameraModel& camera, const SyntheticOptions& options, double u);
+
+// A hood given by where its edge meets the road, converted to
+// SyntheticOptions' rows for one camera.
+struct HoodRows {
+  double top_row = 0;   // SyntheticOptions::hood_top_row
+  double side_row = 0;  // SyntheticOptions::hood_side_row
+};
+// The hood that covers the road nearer than `edge_m` metres ahead (`lane
+// render --hood M`): its top row is the image row of the ground point
+// `edge_m` straight ahead, its sides a twentieth of the image's height
+// lower (a hood's arc). InvalidArgument unless 0 < edge_m <= 100 and that
+// point lies below the horizon. The labels' convention is the caller's
+// (CULane's run on through the hood: labels_through_hood).
+absl::StatusOr<HoodRows> HoodRowsAtDistance(const CameraModel& camera, double edge_m);
 
 // The clutter of `lane render --clutter` and the calibration clutter test:
 // 10 extra roadside objects, a tree row in 60 % of the frames, a sign and a
