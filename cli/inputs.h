@@ -16,7 +16,7 @@
 #include "cli/input_file.h"
 #include "cli/pacer.h"
 #include "cli/video_input.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 
 namespace lane_tools {
 

@@ -7,7 +7,7 @@
 #include <opencv2/core.hpp>
 #include <string>
 
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/track/tracked_frame.h"
 
 namespace lane_tools {

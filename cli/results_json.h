@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/track/tracked_frame.h"
 
 namespace lane_tools {

@@ -14,7 +14,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/synchronization/mutex.h"
 #include "bench.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/track/frame_tracker.h"
 #include "wire/config_proto.h"
 #include "wire/frame_decoder.h"

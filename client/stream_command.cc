@@ -25,7 +25,7 @@
 #include "commands.h"
 #include "common.h"
 #include "frames.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "results.h"
 #include "session_config.h"
 #include "streamer.h"

@@ -51,7 +51,7 @@
 #include "cli/video_input.h"
 #include "commands.h"
 #include "lane/config/config.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/track/frame_tracker.h"
 
 namespace lane_tools {

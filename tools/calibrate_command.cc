@@ -22,7 +22,7 @@
 #include "lane/calibrate/calibration.h"
 #include "lane/calibrate/mounted_camera.h"
 #include "lane/config/config.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 
 namespace lane_tools {
 namespace {

@@ -24,7 +24,7 @@
 #include "cli/results_json.h"
 #include "commands.h"
 #include "lane/config/config.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/track/frame_tracker.h"
 
 namespace lane_tools {

@@ -23,7 +23,7 @@
 #include "eval_drive.h"
 #include "eval_overlay.h"
 #include "lane/config/config.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/eval/dataset.h"
 #include "lane/eval/evaluate.h"
 #include "lane/eval/report.h"

@@ -10,7 +10,7 @@
 #include "absl/strings/str_format.h"
 #include "cli/cli_config.h"
 #include "commands.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/eval/drive.h"
 #include "lane/eval/drive_io.h"
 

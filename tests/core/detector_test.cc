@@ -1,6 +1,6 @@
 // End-to-end tests of the detector on synthetic frames with exact truth, and
 // its handling of bad input.
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 
 #include <gtest/gtest.h>
 
@@ -13,8 +13,8 @@
 #include <optional>
 #include <vector>
 
+#include "lane/detector/road_model.h"
 #include "lane/eval/match.h"
-#include "lane/road_model.h"
 #include "lane/synthetic.h"
 #include "test_cameras.h"
 
@@ -219,7 +219,7 @@ TEST(DetectorEndToEnd, ReportsADoubleLineOnceAlongItsCentre) {
   EXPECT_LE(median, 0.08);
 }
 
-// The road model (lane/road_model.h) on rendered roads of 3 lanes whose
+// The road model (lane/detector/road_model.h) on rendered roads of 3 lanes whose
 // paint is worn to 0-30 % or gone on about half the boundaries: an inner
 // boundary without paint lies half-way between its painted neighbours, and
 // is reported there with `inferred` set. Inference only adds lanes: the

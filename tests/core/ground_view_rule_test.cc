@@ -17,7 +17,7 @@
 #include "lane/calibrate/calibration.h"
 #include "lane/calibrate/mounted_camera.h"
 #include "lane/config/config.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/eval/match.h"
 #include "lane/synthetic.h"
 

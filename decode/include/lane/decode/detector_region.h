@@ -6,7 +6,7 @@
 #define LANE_DECODE_DETECTOR_REGION_H_
 
 #include "lane/decode/image_decoder.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 
 namespace lane::decode {
 

@@ -2,8 +2,8 @@
 //
 //   frame (BGR) -> channel -> IPM -> filter -> threshold -> column-sum Hough
 //   -> RANSAC lines -> RANSAC splines -> post-processing -> image splines
-#ifndef LANE_DETECTOR_H_
-#define LANE_DETECTOR_H_
+#ifndef LANE_DETECTOR_DETECTOR_H_
+#define LANE_DETECTOR_DETECTOR_H_
 
 #include <Eigen/Core>
 #include <array>
@@ -15,13 +15,13 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "lane/detector/road_model.h"
 #include "lane/detector/stage_timings.h"
 #include "lane/geometry/bezier.h"
 #include "lane/geometry/camera.h"
 #include "lane/geometry/ground_curve.h"
 #include "lane/geometry/ipm.h"
 #include "lane/postprocess/postprocess.h"
-#include "lane/road_model.h"
 #include "lane/stages/filter.h"
 #include "lane/stages/line_detection.h"
 #include "lane/stages/line_fit.h"
@@ -75,7 +75,7 @@ struct Lane {
   std::array<Eigen::Vector2d, 4> ipm;     // IPM pixels (may lie outside the view after extension)
   std::array<Eigen::Vector2d, 4> ground;  // metres: x lateral (right +), y ahead
   double score = 0;                       // spline score in the top view
-  // Not seen in this frame: inferred by the road model (lane/road_model.h)
+  // Not seen in this frame: inferred by the road model (lane/detector/road_model.h)
   // half-way between two found boundaries two lane widths apart, where a
   // vehicle hides it. Its score is the weaker neighbour's.
   bool inferred = false;
@@ -218,4 +218,4 @@ class Detector {
 
 }  // namespace lane
 
-#endif  // LANE_DETECTOR_H_
+#endif  // LANE_DETECTOR_DETECTOR_H_

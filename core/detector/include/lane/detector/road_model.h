@@ -7,8 +7,8 @@
 //
 // Only gaps are filled: a boundary beyond the outermost found one is never
 // invented, since nothing in the frame bounds the road there.
-#ifndef LANE_ROAD_MODEL_H_
-#define LANE_ROAD_MODEL_H_
+#ifndef LANE_DETECTOR_ROAD_MODEL_H_
+#define LANE_DETECTOR_ROAD_MODEL_H_
 
 #include <Eigen/Core>
 #include <optional>
@@ -113,4 +113,4 @@ bool FitsRoadModel(const Bezier& lane, const std::vector<Bezier>& found, double 
 
 }  // namespace lane
 
-#endif  // LANE_ROAD_MODEL_H_
+#endif  // LANE_DETECTOR_ROAD_MODEL_H_
