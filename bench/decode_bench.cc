@@ -31,8 +31,8 @@ namespace {
 
 using lane::CameraModel;
 using lane::Detector;
-using lane_bench::FilesWithExtension;
-using lane_bench::SharedDataDir;
+using lane::bench::FilesWithExtension;
+using lane::bench::SharedDataDir;
 
 struct DecodeSet {
   std::string name;

@@ -38,8 +38,8 @@ namespace {
 
 using lane::CameraModel;
 using lane::Detector;
-using lane_bench::FilesWithExtension;
-using lane_bench::SharedDataDir;
+using lane::bench::FilesWithExtension;
+using lane::bench::SharedDataDir;
 
 struct FrameSet {
   CameraModel camera;

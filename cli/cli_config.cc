@@ -6,7 +6,7 @@
 
 #include "absl/strings/str_cat.h"
 
-namespace lane_tools {
+namespace lane::io {
 
 absl::StatusOr<lane::Config> LoadEffectiveConfig(const std::optional<std::string>& path,
                                                  const std::optional<std::string>& mode) {
@@ -38,4 +38,4 @@ absl::StatusOr<lane::Config> LoadEffectiveConfig(const std::optional<std::string
   return config;
 }
 
-}  // namespace lane_tools
+}  // namespace lane::io

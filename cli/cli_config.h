@@ -9,7 +9,7 @@
 #include "absl/status/statusor.h"
 #include "lane/config/config.h"
 
-namespace lane_tools {
+namespace lane::io {
 
 // Loads `path` (the built-in defaults when nullopt). With `mode` ("all" or
 // "two"), the result is as if the file's "detector.mode" were `mode`: the
@@ -18,6 +18,6 @@ namespace lane_tools {
 absl::StatusOr<lane::Config> LoadEffectiveConfig(const std::optional<std::string>& path,
                                                  const std::optional<std::string>& mode);
 
-}  // namespace lane_tools
+}  // namespace lane::io
 
 #endif  // LANE_CLI_CLI_CONFIG_H_

@@ -10,7 +10,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 
-namespace lane_tools {
+namespace lane::io {
 namespace {
 
 constexpr size_t kHelpWidth = 100;
@@ -289,4 +289,4 @@ void AddReadFlags(CLI::App* app, ReadFlags* flags) {
       ->check(CLI::Range(0LL, 1LL << 40));
 }
 
-}  // namespace lane_tools
+}  // namespace lane::io

@@ -21,7 +21,7 @@
 #include "absl/time/time.h"
 #include "cli/inputs.h"
 
-namespace lane_tools {
+namespace lane::io {
 
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;  // a run-time error (file, config, frame, server)
@@ -122,6 +122,6 @@ struct ReadFlags {
 };
 void AddReadFlags(CLI::App* app, ReadFlags* flags);
 
-}  // namespace lane_tools
+}  // namespace lane::io
 
 #endif  // LANE_CLI_COMMAND_LINE_H_

@@ -13,7 +13,7 @@
 
 #include "absl/strings/str_cat.h"
 
-namespace lane_tools {
+namespace lane::io {
 namespace {
 
 // The kernel's pseudo-file systems: their files report a size of 0 (or
@@ -231,4 +231,4 @@ absl::StatusOr<std::optional<std::string>> BoundedLineReader::Next() {
   }
 }
 
-}  // namespace lane_tools
+}  // namespace lane::io

@@ -14,7 +14,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 
-namespace lane_tools {
+namespace lane::io {
 
 // The largest image file read by default, and the largest frame decoded
 // from one (width x height x 3 bytes, as BGR): 64 MiB. A 16-megapixel frame
@@ -106,6 +106,6 @@ class BoundedLineReader {
   int line_number_ = 0;
 };
 
-}  // namespace lane_tools
+}  // namespace lane::io
 
 #endif  // LANE_CLI_INPUT_FILE_H_

@@ -19,7 +19,7 @@
 #include "cli/input_file.h"
 #include "lane/decode/detector_region.h"
 
-namespace lane_tools {
+namespace lane::io {
 namespace {
 
 namespace fs = std::filesystem;
@@ -358,4 +358,4 @@ bool FrameReader::NextUnpaced(InputFrame* frame, double* source_fps) {
   return false;
 }
 
-}  // namespace lane_tools
+}  // namespace lane::io

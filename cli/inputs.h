@@ -18,7 +18,7 @@
 #include "cli/video_input.h"
 #include "lane/detector/detector.h"
 
-namespace lane_tools {
+namespace lane::io {
 
 struct InputFrame {
   // The frame's name in results: the file name for a file given directly or
@@ -168,6 +168,6 @@ std::string LowerExtension(const std::string& path);
 bool IsImageExtension(const std::string& ext);
 bool IsVideoExtension(const std::string& ext);
 
-}  // namespace lane_tools
+}  // namespace lane::io
 
 #endif  // LANE_CLI_INPUTS_H_

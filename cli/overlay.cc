@@ -12,7 +12,7 @@
 #include "absl/strings/str_cat.h"
 #include "lane/geometry/bezier.h"
 
-namespace lane_tools {
+namespace lane::io {
 namespace {
 
 constexpr int kCurveSamples = 50;
@@ -271,4 +271,4 @@ std::string WriteOverlays(const std::filesystem::path& dir, const std::string& s
   return WriteBoth(dir, stem, frame, tracked, detector, frame_name, details);
 }
 
-}  // namespace lane_tools
+}  // namespace lane::io

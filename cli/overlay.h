@@ -10,7 +10,7 @@
 #include "lane/detector/detector.h"
 #include "lane/track/tracked_frame.h"
 
-namespace lane_tools {
+namespace lane::io {
 
 // Colour (BGR) of the i-th lane: a fixed palette of distinct colours.
 cv::Scalar LaneColour(int i);
@@ -56,6 +56,6 @@ std::string WriteOverlays(const std::filesystem::path& dir, const std::string& s
                           const lane::Detector& detector, const std::string& frame_name = "",
                           const std::string& details = "");
 
-}  // namespace lane_tools
+}  // namespace lane::io
 
 #endif  // LANE_CLI_OVERLAY_H_

@@ -6,7 +6,7 @@
 #include "absl/strings/str_cat.h"
 #include "cli/inputs.h"
 
-namespace lane_tools {
+namespace lane::io {
 namespace {
 
 int FourccFor(const std::string& extension) {
@@ -67,4 +67,4 @@ std::string OverlayVideo::Close() {
   return failed_ ? absl::StrCat("cannot write the overlay video ", path_) : "";
 }
 
-}  // namespace lane_tools
+}  // namespace lane::io

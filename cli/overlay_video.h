@@ -9,7 +9,7 @@
 #include <opencv2/videoio.hpp>
 #include <string>
 
-namespace lane_tools {
+namespace lane::io {
 
 class OverlayVideo {
  public:
@@ -38,6 +38,6 @@ class OverlayVideo {
   bool failed_ = false;
 };
 
-}  // namespace lane_tools
+}  // namespace lane::io
 
 #endif  // LANE_CLI_OVERLAY_VIDEO_H_

@@ -2,7 +2,7 @@
 
 #include <thread>
 
-namespace lane_tools {
+namespace lane::io {
 
 double Pacer::RateFor(double source_fps) const {
   if (fps_ > 0) return fps_;
@@ -25,4 +25,4 @@ void Pacer::Wait(double source_fps) {
   std::this_thread::sleep_until(next_);
 }
 
-}  // namespace lane_tools
+}  // namespace lane::io

@@ -9,7 +9,7 @@
 
 #include <chrono>
 
-namespace lane_tools {
+namespace lane::io {
 
 class Pacer {
  public:
@@ -33,6 +33,6 @@ class Pacer {
   std::chrono::steady_clock::time_point next_{};
 };
 
-}  // namespace lane_tools
+}  // namespace lane::io
 
 #endif  // LANE_CLI_PACER_H_

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 
-namespace lane_tools {
+namespace lane::io {
 namespace {
 
 constexpr int kBarWidth = 30;
@@ -52,4 +52,4 @@ void ProgressBar::Clear() {
   drawn_ = false;
 }
 
-}  // namespace lane_tools
+}  // namespace lane::io

@@ -6,7 +6,7 @@
 #include <chrono>
 #include <string>
 
-namespace lane_tools {
+namespace lane::io {
 
 class ProgressBar {
  public:
@@ -28,6 +28,6 @@ class ProgressBar {
   std::chrono::steady_clock::time_point last_;
 };
 
-}  // namespace lane_tools
+}  // namespace lane::io
 
 #endif  // LANE_CLI_PROGRESS_BAR_H_

@@ -3,7 +3,7 @@
 #include <array>
 #include <cmath>
 
-namespace lane_tools {
+namespace lane::io {
 namespace {
 
 using Json = nlohmann::ordered_json;
@@ -115,4 +115,4 @@ std::string JsonLine(const Json& record) {
 
 double RoundTo(double value, int decimals) { return Round(value, std::pow(10.0, decimals)); }
 
-}  // namespace lane_tools
+}  // namespace lane::io

@@ -11,7 +11,7 @@
 #include "lane/detector/detector.h"
 #include "lane/track/tracked_frame.h"
 
-namespace lane_tools {
+namespace lane::io {
 
 inline constexpr int kResultsSchema = 1;
 
@@ -49,6 +49,6 @@ std::string JsonLine(const nlohmann::ordered_json& record);
 // A value rounded to `decimals` decimals as the records round (no "-0").
 double RoundTo(double value, int decimals);
 
-}  // namespace lane_tools
+}  // namespace lane::io
 
 #endif  // LANE_CLI_RESULTS_JSON_H_

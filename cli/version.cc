@@ -11,8 +11,8 @@
 #define LANE_GIT_REVISION "unknown"
 #endif
 
-namespace lane_tools {
+namespace lane::io {
 
 std::string VersionString() { return std::string(LANE_VERSION) + " (git " LANE_GIT_REVISION ")"; }
 
-}  // namespace lane_tools
+}  // namespace lane::io

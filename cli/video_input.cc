@@ -4,7 +4,7 @@
 #include <opencv2/imgproc.hpp>
 #include <regex>
 
-namespace lane_tools {
+namespace lane::io {
 
 std::optional<LiveSource> ClassifyLiveSource(const std::string& input) {
   static const std::regex kUrl("^(rtsps?|rtmps?|https?|udp|tcp|srt)://.+",
@@ -57,4 +57,4 @@ bool VideoInput::Read(cv::Mat* bgr) {
   return true;
 }
 
-}  // namespace lane_tools
+}  // namespace lane::io

@@ -21,7 +21,7 @@
 #include <optional>
 #include <string>
 
-namespace lane_tools {
+namespace lane::io {
 
 struct LiveSource {
   int api = cv::CAP_ANY;  // the VideoCapture backend to open it with
@@ -53,6 +53,6 @@ class VideoInput {
   double fps_ = 0;
 };
 
-}  // namespace lane_tools
+}  // namespace lane::io
 
 #endif  // LANE_CLI_VIDEO_INPUT_H_

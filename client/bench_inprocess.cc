@@ -19,7 +19,7 @@
 #include "wire/config_proto.h"
 #include "wire/frame_decoder.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 namespace v1 = lane::v1;
@@ -189,4 +189,4 @@ InprocessResult CombineInprocess(InprocessResult a, InprocessResult b, absl::Dur
   return out;
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

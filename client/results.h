@@ -12,7 +12,7 @@
 #include "lane/detector/detector.h"
 #include "lane/v1/lane_service.pb.h"
 
-namespace lane_client {
+namespace lane::client {
 
 inline constexpr int kStreamResultsSchema = 1;
 
@@ -48,6 +48,6 @@ std::string ResponseJsonLine(const std::string& frame_name, const lane::v1::Fram
 std::string ClientErrorJsonLine(const std::string& frame_name, const std::string& camera_id,
                                 uint64_t frame_id, const std::string& error);
 
-}  // namespace lane_client
+}  // namespace lane::client
 
 #endif  // LANE_CLIENT_RESULTS_H_

@@ -54,7 +54,7 @@
 #include "lane/detector/detector.h"
 #include "lane/track/frame_tracker.h"
 
-namespace lane_tools {
+namespace lane::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -113,7 +113,7 @@ double SecondsSince(Clock::time_point start) {
 int RunVerify(const CLI::App& app, const BackfillFlags& flags, std::optional<ShardSpec> shard) {
   absl::StatusOr<std::vector<BackfillRecording>> all =
       ReadBackfillManifest(flags.manifest, /*with_sizes=*/shard.has_value());
-  if (!all.ok()) return UsageError(app, std::string(all.status().message()));
+  if (!all.ok()) return io::UsageError(app, std::string(all.status().message()));
   const std::vector<BackfillRecording> mine = shard ? ShareOfShard(*all, *shard) : *all;
   int ok = 0, missing = 0, torn = 0;
   long frames = 0;
@@ -142,7 +142,7 @@ int RunVerify(const CLI::App& app, const BackfillFlags& flags, std::optional<Sha
                  "torn\n",
                  mine.size(), ok, frames, missing, torn);
   }
-  return missing + torn > 0 ? kExitFailure : kExitOk;
+  return missing + torn > 0 ? io::kExitFailure : io::kExitOk;
 }
 
 // The shard's recordings, in order, each processed (ProcessRecording);
@@ -198,7 +198,7 @@ Json ShardSummary(const std::vector<BackfillRecording>& mine,
   summary["shards"] = shard.count;
   summary["manifest"] = flags.manifest;
   summary["jobs"] = jobs;
-  summary["version"] = VersionString();
+  summary["version"] = io::VersionString();
   Json list = Json::array();
   long frames = 0, failed_frames = 0, lanes = 0;
   int failed = 0, done = 0, redone = 0, skipped = 0, claimed = 0;
@@ -247,14 +247,14 @@ Json ShardSummary(const std::vector<BackfillRecording>& mine,
 
 int RunBackfill(const CLI::App& app, const BackfillFlags& flags) {
   absl::StatusOr<ShardSpec> shard = ParseShardSpec(flags.shard);
-  if (!shard.ok()) return UsageError(app, std::string(shard.status().message()));
+  if (!shard.ok()) return io::UsageError(app, std::string(shard.status().message()));
   if (flags.verify) {
     const bool shard_given = app.count("--shard") > 0;
     return RunVerify(app, flags, shard_given ? std::optional<ShardSpec>(*shard) : std::nullopt);
   }
   absl::StatusOr<std::vector<BackfillRecording>> all =
       ReadBackfillManifest(flags.manifest, /*with_sizes=*/true);
-  if (!all.ok()) return UsageError(app, std::string(all.status().message()));
+  if (!all.ok()) return io::UsageError(app, std::string(all.status().message()));
   std::error_code ec;
   fs::create_directories(flags.output_dir, ec);
   if (!fs::is_directory(flags.output_dir)) {
@@ -297,18 +297,20 @@ int RunBackfill(const CLI::App& app, const BackfillFlags& flags) {
                  summary["frames"].get<long>(), summary["failed_frames"].get<long>(),
                  summary["wall_s"].get<double>(), path.c_str());
   }
-  return summary["failed"].get<int>() > 0 || summary["failed_frames"].get<long>() > 0 ? kExitFailure
-                                                                                      : kExitOk;
+  return summary["failed"].get<int>() > 0 || summary["failed_frames"].get<long>() > 0
+             ? io::kExitFailure
+             : io::kExitOk;
 }
 
 }  // namespace
 
-Command AddBackfillCommand(CLI::App& lane) {
+io::Command AddBackfillCommand(CLI::App& lane) {
   auto flags = std::make_shared<BackfillFlags>();
-  CLI::App* app = AddCommand(lane, "backfill",
-                             "re-process a manifest of recordings in shards (Kubernetes Indexed "
-                             "Jobs, or processes on one machine)",
-                             kBackfillDescription, kBackfillFooter);
+  CLI::App* app =
+      io::AddCommand(lane, "backfill",
+                     "re-process a manifest of recordings in shards (Kubernetes Indexed "
+                     "Jobs, or processes on one machine)",
+                     kBackfillDescription, kBackfillFooter);
   app->add_option("--manifest", flags->manifest, "JSON Lines: recording, config, output")
       ->type_name("FILE")
       ->required();
@@ -336,4 +338,4 @@ Command AddBackfillCommand(CLI::App& lane) {
   return {app, [app, flags] { return RunBackfill(*app, *flags); }};
 }
 
-}  // namespace lane_tools
+}  // namespace lane::cli

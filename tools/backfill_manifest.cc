@@ -16,7 +16,7 @@
 #include "cli/input_file.h"
 #include "cli/inputs.h"
 
-namespace lane_tools {
+namespace lane::cli {
 namespace {
 
 bool ValidBackfillOutputName(const std::string& name) {
@@ -54,7 +54,7 @@ absl::StatusOr<std::vector<BackfillRecording>> ReadBackfillManifest(const std::s
                                                                     bool with_sizes) {
   namespace fs = std::filesystem;
   using Json = nlohmann::json;
-  absl::StatusOr<OpenedFile> file = OpenRegularFile(path);
+  absl::StatusOr<io::OpenedFile> file = io::OpenRegularFile(path);
   if (!file.ok()) {
     return absl::InvalidArgumentError(
         absl::StrCat("cannot read the manifest ", file.status().message()));
@@ -70,7 +70,7 @@ absl::StatusOr<std::vector<BackfillRecording>> ReadBackfillManifest(const std::s
   };
   std::vector<BackfillRecording> recordings;
   std::set<std::string> outputs;
-  BoundedLineReader lines(std::move(file->fd), kMaxManifestLineBytes);
+  io::BoundedLineReader lines(std::move(file->fd), kMaxManifestLineBytes);
   for (;;) {
     absl::StatusOr<std::optional<std::string>> text = lines.Next();
     if (!text.ok()) {
@@ -110,8 +110,8 @@ absl::StatusOr<std::vector<BackfillRecording>> ReadBackfillManifest(const std::s
     if (with_sizes) {
       // Listed, not opened: a FIFO or a device among them has no size here
       // and fails when its recording runs.
-      for (const InputEntry& e : ExpandInputs({r.recording})) {
-        if (e.kind == InputEntry::kError) continue;
+      for (const io::InputEntry& e : io::ExpandInputs({r.recording})) {
+        if (e.kind == io::InputEntry::kError) continue;
         const uintmax_t size = fs::file_size(e.path, ec);
         if (!ec) r.bytes += size;
       }
@@ -161,4 +161,4 @@ std::vector<BackfillRecording> ShareOfShard(const std::vector<BackfillRecording>
   return mine;
 }
 
-}  // namespace lane_tools
+}  // namespace lane::cli

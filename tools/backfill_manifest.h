@@ -11,7 +11,7 @@
 
 #include "absl/status/statusor.h"
 
-namespace lane_tools {
+namespace lane::cli {
 
 // A manifest line: at most 64 KiB (a line is three paths and a name).
 inline constexpr size_t kMaxManifestLineBytes = 64 * 1024;
@@ -66,6 +66,6 @@ absl::StatusOr<ShardSpec> ParseShardSpec(const std::string& text);
 std::vector<BackfillRecording> ShareOfShard(const std::vector<BackfillRecording>& all,
                                             ShardSpec shard);
 
-}  // namespace lane_tools
+}  // namespace lane::cli
 
 #endif  // LANE_TOOLS_BACKFILL_MANIFEST_H_

@@ -21,7 +21,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 
-namespace lane_tools {
+namespace lane::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -84,12 +84,12 @@ std::string UniqueSuffix() {
 
 // A file created exclusively in `dir` as PREFIX.PID.RANDOM: its name and
 // descriptor.
-absl::StatusOr<std::pair<std::string, ScopedFd>> CreateUniqueFile(const std::string& dir,
-                                                                  const std::string& prefix) {
+absl::StatusOr<std::pair<std::string, io::ScopedFd>> CreateUniqueFile(const std::string& dir,
+                                                                      const std::string& prefix) {
   for (int attempt = 0;; ++attempt) {
     const std::string path = JoinOutputPath(dir, absl::StrCat(prefix, ".", UniqueSuffix()));
     const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0644);
-    if (fd >= 0) return std::make_pair(path, ScopedFd(fd));
+    if (fd >= 0) return std::make_pair(path, io::ScopedFd(fd));
     if (errno != EEXIST || attempt >= 8) return OutputErrno("cannot create", path);
   }
 }
@@ -148,7 +148,7 @@ OutputCheck CheckBackfillOutput(const std::string& path) {
     check.reason = std::move(reason);
     return check;
   };
-  absl::StatusOr<OpenedFile> file = OpenRegularFile(path);
+  absl::StatusOr<io::OpenedFile> file = io::OpenRegularFile(path);
   if (!file.ok()) {
     if (absl::IsNotFound(file.status())) return check;  // missing
     return torn(std::string(file.status().message()));
@@ -210,7 +210,7 @@ absl::StatusOr<std::optional<OutputClaim>> OutputClaim::Acquire(const std::strin
   for (;;) {
     const int raw = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
     if (raw < 0) return OutputErrno("cannot open the lock", path);
-    ScopedFd fd(raw);
+    io::ScopedFd fd(raw);
     int r;
     do {
       r = ::flock(fd.get(), wait ? LOCK_EX : LOCK_EX | LOCK_NB);
@@ -262,13 +262,13 @@ std::map<std::string, std::vector<std::string>> ListPartialOutputs(const std::st
 
 class PartialOutput::Impl {
  public:
-  Impl(std::string dir, std::string name, std::string path, ScopedFd fd)
+  Impl(std::string dir, std::string name, std::string path, io::ScopedFd fd)
       : dir_(std::move(dir)),
         final_path_(JoinOutputPath(dir_, name + ".jsonl")),
         path_(std::move(path)),
         fd_(std::move(fd)) {}
   ~Impl() {
-    fd_ = ScopedFd();
+    fd_ = io::ScopedFd();
     if (!published_) ::unlink(path_.c_str());
   }
 
@@ -333,7 +333,7 @@ class PartialOutput::Impl {
   std::string dir_;
   std::string final_path_;
   std::string path_;
-  ScopedFd fd_;
+  io::ScopedFd fd_;
   std::string buffer_;
   OutputSha256 sha_;
   long lines_ = 0;
@@ -365,7 +365,7 @@ absl::Status PartialOutput::Publish() { return impl_->Publish(); }
 absl::Status SyncDirectory(const std::string& dir) {
   const int raw = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (raw < 0) return OutputErrno("cannot open", dir);
-  ScopedFd fd(raw);
+  io::ScopedFd fd(raw);
   // EINVAL: a file system that cannot sync a directory (it needs none).
   if (::fsync(fd.get()) != 0 && errno != EINVAL) return OutputErrno("cannot fsync", dir);
   return absl::OkStatus();
@@ -393,4 +393,4 @@ absl::Status ReplaceFileDurably(const std::string& dir, const std::string& file,
   return SyncDirectory(dir);
 }
 
-}  // namespace lane_tools
+}  // namespace lane::cli

@@ -26,7 +26,7 @@
 #include "absl/strings/string_view.h"
 #include "cli/input_file.h"
 
-namespace lane_tools {
+namespace lane::cli {
 
 // The trailer, an output's last line:
 //   {"trailer":{"schema":1,"frames":N,"failed_frames":F,"sha256":"HEX",
@@ -62,10 +62,10 @@ class OutputClaim {
   bool exclusive() const { return exclusive_; }
 
  private:
-  OutputClaim(std::string path, ScopedFd fd, bool exclusive)
+  OutputClaim(std::string path, io::ScopedFd fd, bool exclusive)
       : path_(std::move(path)), fd_(std::move(fd)), exclusive_(exclusive) {}
   std::string path_;
-  ScopedFd fd_;
+  io::ScopedFd fd_;
   bool exclusive_ = true;
 };
 
@@ -111,6 +111,6 @@ absl::Status SyncDirectory(const std::string& dir);
 absl::Status ReplaceFileDurably(const std::string& dir, const std::string& file,
                                 absl::string_view text);
 
-}  // namespace lane_tools
+}  // namespace lane::cli
 
 #endif  // LANE_TOOLS_BACKFILL_OUTPUT_H_

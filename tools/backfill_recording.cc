@@ -23,7 +23,7 @@
 #include "lane/detector/detector.h"
 #include "lane/track/frame_tracker.h"
 
-namespace lane_tools {
+namespace lane::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -38,7 +38,7 @@ constexpr int64_t kMaxBackfillConfigBytes = int64_t{1} << 20;
 // and `measured` belong to the worker until Finish and to the committer
 // after Wait.
 struct Slot {
-  InputFrame frame;
+  io::InputFrame frame;
   absl::StatusOr<lane::MeasuredFrame> measured = lane::MeasuredFrame();
 
   void Finish() {
@@ -70,8 +70,8 @@ class RecordingRun {
   // Every frame of `entries`, in order. Nothing throws out of it: an
   // exception while reading is that frame's error, and every frame in
   // flight is committed before it returns (the workers use this object).
-  void Run(const std::vector<InputEntry>& entries) {
-    for (const InputEntry& entry : entries) {
+  void Run(const std::vector<io::InputEntry>& entries) {
+    for (const io::InputEntry& entry : entries) {
       try {
         RunEntry(entry);
       } catch (const std::exception& e) {
@@ -90,20 +90,20 @@ class RecordingRun {
   const std::string& first_error() const { return first_error_; }
 
  private:
-  void RunEntry(const InputEntry& entry) {
-    if (entry.kind == InputEntry::kVideo) {
+  void RunEntry(const io::InputEntry& entry) {
+    if (entry.kind == io::InputEntry::kVideo) {
       // A video decodes in order, here; its frames are detected on the workers.
-      FrameReader reader({entry.path}, read_options_);
+      io::FrameReader reader({entry.path}, read_options_);
       auto slot = std::make_shared<Slot>();
       while (reader.Next(&slot->frame)) {
-        slot->frame.name = VideoFrameName(entry.name, video_index_++);
+        slot->frame.name = io::VideoFrameName(entry.name, video_index_++);
         Submit(slot, /*decode=*/nullptr);
         slot = std::make_shared<Slot>();
       }
       video_index_ = 0;
       return;
     }
-    if (entry.kind == InputEntry::kError) {
+    if (entry.kind == io::InputEntry::kError) {
       SubmitError(entry.name, entry.error);
       return;
     }
@@ -113,8 +113,8 @@ class RecordingRun {
     slot->frame.name = entry.name;
     const std::string path = entry.path;
     const std::string name = entry.name;
-    Submit(slot, [this, path, name](InputFrame* frame) {
-      FrameReader reader({path}, read_options_);
+    Submit(slot, [this, path, name](io::InputFrame* frame) {
+      io::FrameReader reader({path}, read_options_);
       reader.DecodeOnly(detector_.Needs(), config_.camera.image_width, config_.camera.image_height);
       if (!reader.Next(frame)) frame->error = "no frame";
       frame->name = name;
@@ -130,7 +130,7 @@ class RecordingRun {
 
   // Frame i's prior is taken after frame i - kBackfillWindow is committed: the
   // window is full, the oldest is committed first.
-  void Submit(const std::shared_ptr<Slot>& slot, std::function<void(InputFrame*)> decode) {
+  void Submit(const std::shared_ptr<Slot>& slot, std::function<void(io::InputFrame*)> decode) {
     if (static_cast<int>(window_.size()) >= kBackfillWindow) CommitOldest();
     const lane::DetectionPrior prior = tracker_.Prior(detector_);
     window_.push_back(slot);
@@ -158,7 +158,7 @@ class RecordingRun {
 
   // The frame measured with `prior`, or why it was not: the frame has the
   // wrong size, or the detector failed.
-  absl::StatusOr<lane::MeasuredFrame> Measure(const InputFrame& f,
+  absl::StatusOr<lane::MeasuredFrame> Measure(const io::InputFrame& f,
                                               const lane::DetectionPrior& prior) const {
     if (f.bgr.cols != config_.camera.image_width || f.bgr.rows != config_.camera.image_height) {
       return absl::InvalidArgumentError(
@@ -178,19 +178,19 @@ class RecordingRun {
     window_.pop_front();
     slot->Wait();
     ++frames_;
-    const InputFrame& f = slot->frame;
-    const ResultsFrame record{f.name, config_.camera.image_width, config_.camera.image_height,
-                              detector_.options().mode};
+    const io::InputFrame& f = slot->frame;
+    const io::ResultsFrame record{f.name, config_.camera.image_width, config_.camera.image_height,
+                                  detector_.options().mode};
     if (!f.error.empty()) {
       ++failed_;
       if (first_error_.empty()) first_error_ = absl::StrCat(f.name, ": ", f.error);
-      out_.WriteLine(JsonLine(ErrorJson(record, f.error)));
+      out_.WriteLine(io::JsonLine(io::ErrorJson(record, f.error)));
       return;
     }
     const lane::TrackedFrame tracked =
         tracker_.Commit(detector_, *std::move(slot->measured), std::nullopt);
     lanes_ += static_cast<long>(tracked.lanes.size());
-    out_.WriteLine(JsonLine(DetectionJson(record, tracked, f.decode_ms)));
+    out_.WriteLine(io::JsonLine(io::DetectionJson(record, tracked, f.decode_ms)));
   }
 
   const lane::Config& config_;
@@ -198,7 +198,7 @@ class RecordingRun {
   lane::FrameTracker tracker_;
   BackfillWorkers& workers_;
   PartialOutput& out_;
-  ReadOptions read_options_;
+  io::ReadOptions read_options_;
   std::deque<std::shared_ptr<Slot>> window_;
   int video_index_ = 0;
   long frames_ = 0, failed_ = 0, lanes_ = 0;
@@ -209,7 +209,7 @@ class RecordingRun {
 // file (a video or a list, or one image), on a real file system; never a
 // live source, a FIFO, a socket, a device or a /proc file.
 absl::Status CheckRecordingPath(const std::string& path) {
-  if (const std::optional<LiveSource> live = ClassifyLiveSource(path)) {
+  if (const std::optional<io::LiveSource> live = io::ClassifyLiveSource(path)) {
     return absl::FailedPreconditionError(
         absl::StrCat(path, ": a live source (", live->kind, ") is not a recording"));
   }
@@ -217,13 +217,13 @@ absl::Status CheckRecordingPath(const std::string& path) {
   if (::stat(path.c_str(), &st) != 0) {
     return absl::NotFoundError(absl::StrCat(path, ": ", std::strerror(errno)));
   }
-  if (S_ISDIR(st.st_mode)) return CheckDirectory(path);
-  return OpenRegularFile(path).status();
+  if (S_ISDIR(st.st_mode)) return io::CheckDirectory(path);
+  return io::OpenRegularFile(path).status();
 }
 
 // A recording's camera config, read within bounds (cli/input_file.h).
 absl::StatusOr<lane::Config> LoadRecordingConfig(const std::string& path) {
-  absl::StatusOr<std::string> text = ReadRegularFile(path, kMaxBackfillConfigBytes);
+  absl::StatusOr<std::string> text = io::ReadRegularFile(path, kMaxBackfillConfigBytes);
   if (!text.ok()) {
     return absl::Status(text.status().code(),
                         absl::StrCat("cannot read config ", text.status().message()));
@@ -290,7 +290,7 @@ RecordingResult ProcessRecording(const BackfillRecording& r, BackfillContext& ct
   absl::StatusOr<lane::Detector> detector =
       lane::Detector::Create(config->camera, config->ipm, config->detector);
   if (!detector.ok()) return fail(detector.status().message());
-  const std::vector<InputEntry> entries = ExpandInputs({r.recording});
+  const std::vector<io::InputEntry> entries = io::ExpandInputs({r.recording});
   absl::StatusOr<std::unique_ptr<PartialOutput>> out = PartialOutput::Create(ctx.out_dir, r.output);
   if (!out.ok()) return fail(out.status().message());
   RecordingRun run(*config, *detector, *ctx.workers, **out, ctx.max_image_bytes);
@@ -303,7 +303,7 @@ RecordingResult ProcessRecording(const BackfillRecording& r, BackfillContext& ct
     return fail(
         absl::StrCat("all ", result.frames, " frames failed; the first: ", run.first_error()));
   }
-  if (absl::Status s = (*out)->Finish(result.failed_frames, VersionString()); !s.ok()) {
+  if (absl::Status s = (*out)->Finish(result.failed_frames, io::VersionString()); !s.ok()) {
     return fail(s.message());
   }
   if (redo && ::unlink(final_path.c_str()) != 0 && errno != ENOENT) {
@@ -322,4 +322,4 @@ RecordingResult ProcessRecording(const BackfillRecording& r, BackfillContext& ct
   return result;
 }
 
-}  // namespace lane_tools
+}  // namespace lane::cli

@@ -19,7 +19,7 @@
 #include "backfill_manifest.h"
 #include "cli/inputs.h"
 
-namespace lane_tools {
+namespace lane::cli {
 
 // Frames in flight per recording, and the tracker's prior lag: frame i is
 // detected with the tracker's state after frame i - kWindow (the lanes do not
@@ -94,6 +94,6 @@ struct BackfillContext {
 // no output exists (a torn one is removed first, under the claim).
 RecordingResult ProcessRecording(const BackfillRecording& r, BackfillContext& ctx, bool wait);
 
-}  // namespace lane_tools
+}  // namespace lane::cli
 
 #endif  // LANE_TOOLS_BACKFILL_RECORDING_H_

@@ -24,7 +24,7 @@
 #include "lane/config/config.h"
 #include "lane/detector/detector.h"
 
-namespace lane_tools {
+namespace lane::cli {
 namespace {
 
 constexpr char kCalibrateDescription[] =
@@ -55,7 +55,7 @@ struct CalibrateFlags {
   std::string output;
   std::optional<std::string> overlay;
   bool keep_static = false;
-  ReadFlags read;
+  io::ReadFlags read;
   std::vector<std::string> inputs;
 };
 
@@ -259,17 +259,17 @@ std::string ConfigHeader(const lane::CalibrationResult& r, const lane::LaneGeome
 
 // Runs `use` on every readable input frame (others counted); false when `use` fails.
 bool EachFrame(const CalibrateFlags& flags, int& read_errors,
-               const std::function<absl::Status(const InputFrame&)>& use) {
-  FrameReader reader(flags.inputs, flags.read.Options());
-  InputFrame frame;
+               const std::function<absl::Status(const io::InputFrame&)>& use) {
+  io::FrameReader reader(flags.inputs, flags.read.Options());
+  io::InputFrame frame;
   while (reader.Next(&frame)) {
     if (!frame.error.empty()) {
-      PrintMessage("lane calibrate", frame.name + ": " + frame.error);
+      io::PrintMessage("lane calibrate", frame.name + ": " + frame.error);
       ++read_errors;
       continue;
     }
     if (absl::Status s = use(frame); !s.ok()) {
-      PrintMessage("lane calibrate", frame.name + ": " + std::string(s.message()));
+      io::PrintMessage("lane calibrate", frame.name + ": " + std::string(s.message()));
       return false;
     }
   }
@@ -291,7 +291,7 @@ absl::Status WriteCalibratedConfig(const lane::Config& base, const lane::Calibra
         absl::StrCat("the estimated camera gives no detector: ", d.status().message()));
   }
   std::ofstream out;
-  if (!OpenOutputFile(flags.output, &out)) {
+  if (!io::OpenOutputFile(flags.output, &out)) {
     return absl::InternalError("cannot write " + flags.output);
   }
   out << ConfigHeader(r, check, flags) << lane::ConfigToJson(config) << '\n';
@@ -320,7 +320,7 @@ absl::StatusOr<lane::LaneGeometryReport> SelfCheck(const lane::CalibrationResult
     used[static_cast<size_t>(k)] = true;
   }
   int index = 0, read_errors = 0;
-  if (!EachFrame(flags, read_errors, [&](const InputFrame& f) -> absl::Status {
+  if (!EachFrame(flags, read_errors, [&](const io::InputFrame& f) -> absl::Status {
         const size_t k = static_cast<size_t>(index++);
         return k < used.size() && used[k] ? check->AddFrame(f.bgr) : absl::OkStatus();
       })) {
@@ -396,11 +396,11 @@ int RunMounted(const CalibrateFlags& flags, const lane::CalibrationOptions& opti
   lane::MountedCameraSurvey survey(options, *flags.pitch_deg, *flags.yaw_deg);
   int read_errors = 0;
   BestFrame first;
-  if (!EachFrame(flags, read_errors, [&](const InputFrame& f) {
+  if (!EachFrame(flags, read_errors, [&](const io::InputFrame& f) {
         if (flags.overlay && first.bgr.empty()) first.bgr = f.bgr.clone();
         return survey.AddFrame(f.bgr);
       })) {
-    return kExitFailure;
+    return io::kExitFailure;
   }
   const absl::StatusOr<lane::CalibrationResult> result = survey.Finish();
   if (!result.ok()) return Failure("calibrate", std::string(result.status().message()));
@@ -421,7 +421,7 @@ int RunMounted(const CalibrateFlags& flags, const lane::CalibrationOptions& opti
     return Failure("calibrate", std::string(s.message()));
   }
   PrintCalibration(r, *check, flags);
-  return read_errors > 0 ? kExitFailure : kExitOk;
+  return read_errors > 0 ? io::kExitFailure : io::kExitOk;
 }
 
 int RunCalibrate(const CalibrateFlags& flags) {
@@ -438,15 +438,15 @@ int RunCalibrate(const CalibrateFlags& flags) {
                                       *flags.principal_point + "\"");
     }
   }
-  absl::StatusOr<lane::Config> base = LoadEffectiveConfig(flags.template_config, {});
+  absl::StatusOr<lane::Config> base = io::LoadEffectiveConfig(flags.template_config, {});
   if (!base.ok()) return Failure("calibrate", std::string(base.status().message()));
   if (flags.pitch_deg) return RunMounted(flags, options, *base);
 
   lane::CameraCalibrator calibrator(options);
   int read_errors = 0;
   if (!EachFrame(flags, read_errors,
-                 [&](const InputFrame& f) { return calibrator.AddFirstPass(f.bgr); })) {
-    return kExitFailure;
+                 [&](const io::InputFrame& f) { return calibrator.AddFirstPass(f.bgr); })) {
+    return io::kExitFailure;
   }
   if (absl::Status s = calibrator.FinishFirstPass(); !s.ok()) {
     return Failure("calibrate", std::string(s.message()));
@@ -457,7 +457,7 @@ int RunCalibrate(const CalibrateFlags& flags) {
   const int refusal_frame = flags.overlay ? MostSupportingFrame(calibrator.first_pass()) : -1;
   cv::Mat refusal_bgr;
   int index = 0;
-  if (!EachFrame(flags, read_errors, [&](const InputFrame& f) -> absl::Status {
+  if (!EachFrame(flags, read_errors, [&](const io::InputFrame& f) -> absl::Status {
         if (index++ == refusal_frame) refusal_bgr = f.bgr.clone();
         std::vector<lane::ImageSegment> segments;
         absl::StatusOr<lane::FrameVanishingPoint> p = calibrator.AddSecondPass(f.bgr, &segments);
@@ -468,7 +468,7 @@ int RunCalibrate(const CalibrateFlags& flags) {
         }
         return absl::OkStatus();
       })) {
-    return kExitFailure;
+    return io::kExitFailure;
   }
   const absl::StatusOr<lane::CalibrationResult> result = calibrator.Finish();
   if (!result.ok()) {
@@ -494,26 +494,27 @@ int RunCalibrate(const CalibrateFlags& flags) {
     return Failure("calibrate", std::string(s.message()));
   }
   PrintCalibration(r, *check, flags);
-  return read_errors > 0 ? kExitFailure : kExitOk;
+  return read_errors > 0 ? io::kExitFailure : io::kExitOk;
 }
 
 }  // namespace
 
-Command AddCalibrateCommand(CLI::App& lane) {
+io::Command AddCalibrateCommand(CLI::App& lane) {
   auto flags = std::make_shared<CalibrateFlags>();
-  CLI::App* app =
-      AddCommand(lane, "calibrate", "estimate a camera from driving frames and write its config",
-                 kCalibrateDescription);
+  CLI::App* app = io::AddCommand(lane, "calibrate",
+                                 "estimate a camera from driving frames and write its config",
+                                 kCalibrateDescription);
   app->add_option("--height-m", flags->height_m, "camera height above the road, metres")
       ->type_name("H")
       ->required()
       ->check(CLI::Range(0.2, 10.0));
-  AddOptional(app, "--focal-px", &flags->focal_px,
-              "focal length in pixels (square pixels); assumed 0.61 x image width when not given")
+  io::AddOptional(
+      app, "--focal-px", &flags->focal_px,
+      "focal length in pixels (square pixels); assumed 0.61 x image width when not given")
       ->type_name("F")
       ->check(CLI::Range(10.0, 100000.0));
-  AddOptional(app, "--principal-point", &flags->principal_point,
-              "principal point U,V in pixels (default: the image centre)")
+  io::AddOptional(app, "--principal-point", &flags->principal_point,
+                  "principal point U,V in pixels (default: the image centre)")
       ->type_name("U,V")
       ->check(CLI::Validator(
           [](std::string& text) {
@@ -524,43 +525,45 @@ Command AddCalibrateCommand(CLI::App& lane) {
                   "lane width of the roads, metres: the top view's lateral extent")
       ->type_name("W")
       ->check(CLI::Range(2.0, 6.0));
-  AddOptional(app, "--road-bottom-row", &flags->road_bottom_row,
-              "first image row below the road (where the car's hood starts), when the still "
-              "rows found are not it")
+  io::AddOptional(app, "--road-bottom-row", &flags->road_bottom_row,
+                  "first image row below the road (where the car's hood starts), when the still "
+                  "rows found are not it")
       ->type_name("V")
       ->check(CLI::Range(1, 16384));
-  AddOptional(app, "--template", &flags->template_config,
-              "config whose detector settings the output keeps (default: the built-in ones)")
+  io::AddOptional(app, "--template", &flags->template_config,
+                  "config whose detector settings the output keeps (default: the built-in ones)")
       ->type_name("CONFIG");
   CLI::Option* pitch =
-      AddOptional(app, "--pitch-deg", &flags->pitch_deg,
-                  "a known mounting: the camera's pitch, degrees (positive looking down; with "
-                  "--yaw-deg, and best --focal-px). No vanishing point is estimated: the frames "
-                  "give the hood's outline for the top view, and the self-check")
+      io::AddOptional(
+          app, "--pitch-deg", &flags->pitch_deg,
+          "a known mounting: the camera's pitch, degrees (positive looking down; with "
+          "--yaw-deg, and best --focal-px). No vanishing point is estimated: the frames "
+          "give the hood's outline for the top view, and the self-check")
           ->type_name("DEG")
           ->check(CLI::Range(-89.0, 89.0));
-  CLI::Option* yaw = AddOptional(app, "--yaw-deg", &flags->yaw_deg,
-                                 "a known mounting: the camera's yaw, degrees (positive looking "
-                                 "right of the road; with --pitch-deg)")
-                         ->type_name("DEG")
-                         ->check(CLI::Range(-89.0, 89.0));
+  CLI::Option* yaw =
+      io::AddOptional(app, "--yaw-deg", &flags->yaw_deg,
+                      "a known mounting: the camera's yaw, degrees (positive looking "
+                      "right of the road; with --pitch-deg)")
+          ->type_name("DEG")
+          ->check(CLI::Range(-89.0, 89.0));
   pitch->needs(yaw);
   yaw->needs(pitch);
   app->add_option("--output,-o", flags->output, "the config to write")
       ->type_name("CONFIG.json")
       ->required();
-  AddOptional(app, "--overlay", &flags->overlay,
-              "also draw the best-supported frame's segments, vanishing point, horizon, road "
-              "rows, top view and static structure to this PNG; when the estimate is refused, "
-              "the first pass's point and the segments that voted for it")
+  io::AddOptional(app, "--overlay", &flags->overlay,
+                  "also draw the best-supported frame's segments, vanishing point, horizon, road "
+                  "rows, top view and static structure to this PNG; when the estimate is refused, "
+                  "the first pass's point and the segments that voted for it")
       ->type_name("PNG");
   app->add_flag("--keep-static-structure", flags->keep_static,
                 "let structure fixed to the camera (reflections, stickers, overlays) vote, and "
                 "write no static mask: for comparison");
-  AddReadFlags(app, &flags->read);
+  io::AddReadFlags(app, &flags->read);
   app->add_option("INPUT", flags->inputs, "image files, directories, list files or videos")
       ->required();
   return {app, [flags] { return RunCalibrate(*flags); }};
 }
 
-}  // namespace lane_tools
+}  // namespace lane::cli

@@ -10,22 +10,22 @@
 
 #include "cli/command_line.h"
 
-namespace lane_tools {
+namespace lane::cli {
 
-Command AddDetectCommand(CLI::App& lane);
-Command AddRenderCommand(CLI::App& lane);
-Command AddConfigCommand(CLI::App& lane);
-Command AddCalibrateCommand(CLI::App& lane);
-Command AddBackfillCommand(CLI::App& lane);
+io::Command AddDetectCommand(CLI::App& lane);
+io::Command AddRenderCommand(CLI::App& lane);
+io::Command AddConfigCommand(CLI::App& lane);
+io::Command AddCalibrateCommand(CLI::App& lane);
+io::Command AddBackfillCommand(CLI::App& lane);
 // `args`: the words after "eval", recorded in a --write-baseline file.
-Command AddEvalCommand(CLI::App& lane, const std::vector<std::string>& args);
+io::Command AddEvalCommand(CLI::App& lane, const std::vector<std::string>& args);
 
 // "lane COMMAND: MESSAGE" on stderr; returns kExitFailure.
 inline int Failure(const std::string& command, const std::string& message) {
-  PrintMessage("lane " + command, message);
-  return kExitFailure;
+  io::PrintMessage("lane " + command, message);
+  return io::kExitFailure;
 }
 
-}  // namespace lane_tools
+}  // namespace lane::cli
 
 #endif  // LANE_TOOLS_COMMANDS_H_

@@ -8,7 +8,7 @@
 #include "commands.h"
 #include "lane/config/config.h"
 
-namespace lane_tools {
+namespace lane::cli {
 namespace {
 
 constexpr char kConfigDescription[] =
@@ -22,26 +22,27 @@ struct ConfigFlags {
 };
 
 int RunConfig(const ConfigFlags& flags) {
-  const absl::StatusOr<lane::Config> config = LoadEffectiveConfig(flags.config, flags.mode);
+  const absl::StatusOr<lane::Config> config = io::LoadEffectiveConfig(flags.config, flags.mode);
   if (!config.ok()) return Failure("config", std::string(config.status().message()));
   std::fputs(lane::ConfigToJson(*config).c_str(), stdout);
-  return kExitOk;
+  return io::kExitOk;
 }
 
 }  // namespace
 
-Command AddConfigCommand(CLI::App& lane) {
+io::Command AddConfigCommand(CLI::App& lane) {
   auto flags = std::make_shared<ConfigFlags>();
-  CLI::App* app = AddCommand(lane, "config", "print the effective configuration (every key)",
-                             kConfigDescription);
-  AddOptional(app, "--config", &flags->config, "JSON config file")
+  CLI::App* app = io::AddCommand(lane, "config", "print the effective configuration (every key)",
+                                 kConfigDescription);
+  io::AddOptional(app, "--config", &flags->config, "JSON config file")
       ->type_name("CONFIG")
       ->default_str("the built-in defaults");
-  OneOf(AddOptional(app, "--mode", &flags->mode,
-                    "use this detector mode: the mode's defaults, then CONFIG's other detector "
-                    "keys"),
-        {"all", "two"});
+  io::OneOf(
+      io::AddOptional(app, "--mode", &flags->mode,
+                      "use this detector mode: the mode's defaults, then CONFIG's other detector "
+                      "keys"),
+      {"all", "two"});
   return {app, [flags] { return RunConfig(*flags); }};
 }
 
-}  // namespace lane_tools
+}  // namespace lane::cli

@@ -27,7 +27,7 @@
 #include "lane/detector/detector.h"
 #include "lane/track/frame_tracker.h"
 
-namespace lane_tools {
+namespace lane::cli {
 namespace {
 
 constexpr char kDetectDescription[] =
@@ -55,7 +55,7 @@ struct DetectFlags {
   bool track = false;
   bool quiet = false;
   bool no_progress = false;
-  ReadFlags read;
+  io::ReadFlags read;
   std::vector<std::string> inputs;
 };
 
@@ -77,7 +77,7 @@ struct ConfiguredDetector {
 // The detector of the effective config; prints the top view's scale, which
 // users need to read the IPM coordinates.
 absl::StatusOr<ConfiguredDetector> MakeDetector(const DetectFlags& flags) {
-  absl::StatusOr<lane::Config> config = LoadEffectiveConfig(flags.config, flags.mode);
+  absl::StatusOr<lane::Config> config = io::LoadEffectiveConfig(flags.config, flags.mode);
   if (!config.ok()) return config.status();
   if (flags.seed) config->detector.seed = *flags.seed;
   absl::StatusOr<lane::Detector> detector =
@@ -133,7 +133,7 @@ class DetectRun {
     tracker_.emplace(camera, options);
   }
 
-  void Process(const InputFrame& frame) {
+  void Process(const io::InputFrame& frame) {
     ++frames_;
     std::string error = frame.error;
     if (error.empty() &&
@@ -166,12 +166,12 @@ class DetectRun {
     if (!frame.bgr.empty()) {  // the video keeps its timing: the frame, captioned
       cv::Mat canvas = frame.bgr.channels() == 3 ? frame.bgr.clone() : cv::Mat();
       if (!canvas.empty()) {
-        DrawCaption(canvas, frame.name, 4, 4);
-        DrawCaption(canvas, "error: " + error, 4, 4 + canvas.rows / 20, {0, 0, 255});
+        io::DrawCaption(canvas, frame.name, 4, 4);
+        io::DrawCaption(canvas, "error: " + error, 4, 4 + canvas.rows / 20, {0, 0, 255});
         AddToVideo(frame, canvas);
       }
     }
-    out_ << JsonLine(ErrorJson(ResultsOf(frame), error)) << '\n';
+    out_ << io::JsonLine(io::ErrorJson(ResultsOf(frame), error)) << '\n';
     out_.flush();
   }
 
@@ -212,19 +212,19 @@ class DetectRun {
       }
     }
     if (frames_ == 0) return Failure("detect", "the inputs contain no frames");
-    return failures_ > 0 || overlay_failed_ ? kExitFailure : kExitOk;
+    return failures_ > 0 || overlay_failed_ ? io::kExitFailure : io::kExitOk;
   }
 
  private:
-  ResultsFrame ResultsOf(const InputFrame& frame) const {
+  io::ResultsFrame ResultsOf(const io::InputFrame& frame) const {
     return {frame.name, frame.bgr.cols, frame.bgr.rows, mode_};
   }
 
   // A processed frame's record, counts and overlays: `result` is the
   // detection, or the tracked frame with `detection` its own.
   template <typename Result>
-  void Report(const InputFrame& frame, const Result& result, const lane::Detection& detection) {
-    out_ << JsonLine(DetectionJson(ResultsOf(frame), result, frame.decode_ms)) << '\n';
+  void Report(const io::InputFrame& frame, const Result& result, const lane::Detection& detection) {
+    out_ << io::JsonLine(io::DetectionJson(ResultsOf(frame), result, frame.decode_ms)) << '\n';
     out_.flush();
     total_lanes_ += static_cast<long>(LaneCount(result));
     const lane::LanePathCounts paths = lane::CountLanePaths(detection);
@@ -235,11 +235,12 @@ class DetectRun {
     const std::string details = absl::StrFormat("detect %.2f ms, decode %.2f ms",
                                                 detection.timings.total_ms, frame.decode_ms);
     if (overlay_video_path_) {
-      AddToVideo(frame, DrawLanesOnImage(frame.bgr, result, detector_, frame.name, details));
+      AddToVideo(frame, io::DrawLanesOnImage(frame.bgr, result, detector_, frame.name, details));
     }
     if (!overlay_dir_.empty()) {
-      const std::string message = WriteOverlays(overlay_dir_, UniqueStem(frame.stem, used_stems_),
-                                                frame.bgr, result, detector_, frame.name, details);
+      const std::string message =
+          io::WriteOverlays(overlay_dir_, io::UniqueStem(frame.stem, used_stems_), frame.bgr,
+                            result, detector_, frame.name, details);
       if (!message.empty()) {
         overlay_failed_ = true;
         if (on_message_) on_message_();
@@ -250,12 +251,12 @@ class DetectRun {
   static size_t LaneCount(const lane::Detection& detection) { return detection.lanes.size(); }
   static size_t LaneCount(const lane::TrackedFrame& tracked) { return tracked.lanes.size(); }
 
-  void AddToVideo(const InputFrame& frame, const cv::Mat& drawn) {
+  void AddToVideo(const io::InputFrame& frame, const cv::Mat& drawn) {
     if (!overlay_video_path_ || video_failed_) return;
     if (!video_) {
       // --fps, else the video's own rate, else 10 frames/s.
       const double fps = video_fps_ > 0 ? video_fps_ : frame.source_fps > 0 ? frame.source_fps : 10;
-      video_ = std::make_unique<OverlayVideo>(*overlay_video_path_, fps);
+      video_ = std::make_unique<io::OverlayVideo>(*overlay_video_path_, fps);
     }
     const std::string error = video_->Add(drawn);
     if (!error.empty()) {
@@ -268,7 +269,7 @@ class DetectRun {
   const bool quiet_;
   const std::optional<std::string> overlay_video_path_;
   const double video_fps_;
-  std::unique_ptr<OverlayVideo> video_;
+  std::unique_ptr<io::OverlayVideo> video_;
   bool video_failed_ = false;
   std::function<void()> on_message_;
   const lane::Detector& detector_;
@@ -296,7 +297,7 @@ int RunDetect(const DetectFlags& flags) {
   const lane::Detector& detector = made->detector;
 
   std::ofstream file;
-  if (flags.output && !OpenOutputFile(*flags.output, &file)) {
+  if (flags.output && !io::OpenOutputFile(*flags.output, &file)) {
     return Failure("detect", absl::StrCat("cannot write ", *flags.output));
   }
   std::ostream& out = file.is_open() ? static_cast<std::ostream&>(file) : std::cout;
@@ -307,14 +308,14 @@ int RunDetect(const DetectFlags& flags) {
   }
 
   if (flags.overlay_video) {
-    if (const std::string e = OverlayVideo::CheckPath(*flags.overlay_video); !e.empty()) {
+    if (const std::string e = io::OverlayVideo::CheckPath(*flags.overlay_video); !e.empty()) {
       return Failure("detect", e);
     }
   }
   DetectRun run(detector, config, out, flags.overlay.value_or(""), flags.overlay_video,
                 flags.read.fps, flags.quiet);
   if (flags.track) run.EnableTracking(config.camera, flags.read.fps);
-  FrameReader reader(flags.inputs, flags.read.Options());
+  io::FrameReader reader(flags.inputs, flags.read.Options());
   // JPEG frames are decoded only in the rows and channel the detector
   // reads (the same lanes), unless asked not to; overlays draw on the whole
   // frame.
@@ -323,11 +324,11 @@ int RunDetect(const DetectFlags& flags) {
   }
   // A bar when the frame count is known (files), else a counter; only on a
   // terminal, never with --quiet or --no-progress.
-  ProgressBar progress(!flags.quiet && !flags.no_progress);
+  io::ProgressBar progress(!flags.quiet && !flags.no_progress);
   run.OnMessage([&progress] { progress.Clear(); });
   const int total = static_cast<int>(std::min<long long>(reader.KnownFrameCount(), 1 << 30));
   int done = 0;
-  InputFrame frame;
+  io::InputFrame frame;
   while (reader.Next(&frame)) {
     run.Process(frame);
     progress.Update(++done, total, frame.name);
@@ -339,39 +340,40 @@ int RunDetect(const DetectFlags& flags) {
                                           : std::string("error writing the results to stdout"));
   }
   const int status = run.Finish();
-  return video_ok ? status : kExitFailure;
+  return video_ok ? status : io::kExitFailure;
 }
 
 }  // namespace
 
-Command AddDetectCommand(CLI::App& lane) {
+io::Command AddDetectCommand(CLI::App& lane) {
   auto flags = std::make_shared<DetectFlags>();
   CLI::App* app =
-      AddCommand(lane, "detect", "detect lanes in images, directories, list files or videos",
-                 kDetectDescription, kDetectFooter);
+      io::AddCommand(lane, "detect", "detect lanes in images, directories, list files or videos",
+                     kDetectDescription, kDetectFooter);
   app->add_option("--config", flags->config, "JSON config file (docs/config.md)")
       ->type_name("CONFIG")
       ->required();
-  OneOf(AddOptional(app, "--mode", &flags->mode,
-                    "detector mode instead of the config's: the mode's defaults, then the "
-                    "config's other detector keys"),
-        {"all", "two"});
-  AddOptional(app, "--seed", &flags->seed, "RANSAC seed instead of the config's detector.seed")
+  io::OneOf(io::AddOptional(app, "--mode", &flags->mode,
+                            "detector mode instead of the config's: the mode's defaults, then the "
+                            "config's other detector keys"),
+            {"all", "two"});
+  io::AddOptional(app, "--seed", &flags->seed, "RANSAC seed instead of the config's detector.seed")
       ->type_name("N");
-  AddOptional(app, "--output", &flags->output, "write the results to FILE instead of stdout")
+  io::AddOptional(app, "--output", &flags->output, "write the results to FILE instead of stdout")
       ->type_name("FILE");
-  AddOptional(app, "--overlay", &flags->overlay,
-              "also write DIR/STEM.png (lanes on the frame) and DIR/STEM_ipm.png (lanes in the "
-              "top view)")
+  io::AddOptional(app, "--overlay", &flags->overlay,
+                  "also write DIR/STEM.png (lanes on the frame) and DIR/STEM_ipm.png (lanes in the "
+                  "top view)")
       ->type_name("DIR");
-  AddOptional(app, "--overlay-video", &flags->overlay_video,
-              "also write the frames with their lanes and a caption as one video (.mp4, .mov, "
-              ".mkv: MPEG-4; .avi: Motion JPEG), at --fps or the input video's rate (else 10/s)")
+  io::AddOptional(
+      app, "--overlay-video", &flags->overlay_video,
+      "also write the frames with their lanes and a caption as one video (.mp4, .mov, "
+      ".mkv: MPEG-4; .avi: Motion JPEG), at --fps or the input video's rate (else 10/s)")
       ->type_name("FILE");
   app->add_flag("--full-decode", flags->full_decode,
                 "decode whole frames with OpenCV (by default JPEG frames are decoded only in "
                 "the rows and channel the detector reads, which gives the same lanes)");
-  AddReadFlags(app, &flags->read);
+  io::AddReadFlags(app, &flags->read);
   app->add_flag("--track", flags->track,
                 "the frames, in the given order, are one camera's: lanes get a stable id, "
                 "confirmed and colour, frames the ego lane (docs/tracking.md)");
@@ -386,4 +388,4 @@ Command AddDetectCommand(CLI::App& lane) {
   return {app, [flags] { return RunDetect(*flags); }};
 }
 
-}  // namespace lane_tools
+}  // namespace lane::cli

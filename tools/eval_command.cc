@@ -32,7 +32,7 @@
 #include "lane/eval/seeds.h"
 #include "lane/geometry/ipm.h"
 
-namespace lane_tools {
+namespace lane::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -217,7 +217,7 @@ struct LoadedConfig {
 absl::StatusOr<std::optional<LoadedConfig>> LoadConfig(const EvalFlags& flags) {
   const auto& config_path = flags.config;
   if (!config_path) return std::nullopt;
-  absl::StatusOr<lane::Config> config = LoadEffectiveConfig(config_path, flags.mode);
+  absl::StatusOr<lane::Config> config = io::LoadEffectiveConfig(config_path, flags.mode);
   if (!config.ok()) return config.status();
   if (flags.seed) config->detector.seed = *flags.seed;
   const absl::StatusOr<lane::IpmMapping> ipm =
@@ -354,11 +354,12 @@ class EvalOutputs {
       ReportProblem(absl::StrCat(o.frame->name, ": ", o.error));
     }
     if (jsonl_.is_open()) {
-      jsonl_ << JsonLine(o.detection != nullptr
-                             ? DetectionJson({o.frame->name, o.width, o.height, options.mode},
-                                             *o.detection, o.decode_ms)
-                             : ErrorJson({o.frame->name, o.image.cols, o.image.rows, options.mode},
-                                         o.error))
+      jsonl_ << io::JsonLine(
+                    o.detection != nullptr
+                        ? io::DetectionJson({o.frame->name, o.width, o.height, options.mode},
+                                            *o.detection, o.decode_ms)
+                        : io::ErrorJson({o.frame->name, o.image.cols, o.image.rows, options.mode},
+                                        o.error))
              << '\n';
     }
     if (txt_.is_open()) txt_ << lane::eval::ResultsTxtFrame(o.index, o.lanes);
@@ -425,7 +426,7 @@ class EvalOutputs {
     }
   }
 
-  ProgressBar progress_;
+  io::ProgressBar progress_;
   std::ofstream jsonl_, txt_, frames_;
   fs::path out_dir_;
   fs::path overlay_dir_;
@@ -510,7 +511,7 @@ void PrintTotals(const lane::eval::EvalReport& report,
 }
 
 int RunEval(const CLI::App& app, const EvalFlags& flags, const std::vector<std::string>& argv) {
-  if (const std::string e = FlagsError(flags); !e.empty()) return UsageError(app, e);
+  if (const std::string e = FlagsError(flags); !e.empty()) return io::UsageError(app, e);
   if (flags.drive) return RunDriveFlags(flags);
 
   const absl::StatusOr<lane::eval::Dataset> dataset = LoadSelectedDataset(flags);
@@ -546,63 +547,68 @@ int RunEval(const CLI::App& app, const EvalFlags& flags, const std::vector<std::
     outputs.set_output_failed();
   }
   PrintTotals(*report, summary);
-  return outputs.run_failures() > 0 || outputs.output_failed() ? kExitFailure : kExitOk;
+  return outputs.run_failures() > 0 || outputs.output_failed() ? io::kExitFailure : io::kExitOk;
 }
 
 }  // namespace
 
-Command AddEvalCommand(CLI::App& lane, const std::vector<std::string>& args) {
+io::Command AddEvalCommand(CLI::App& lane, const std::vector<std::string>& args) {
   auto flags = std::make_shared<EvalFlags>();
-  CLI::App* app = AddCommand(lane, "eval",
-                             "score detections against a labelled data set (paper rule, CULane F1)",
-                             kEvalDescription, kEvalFooter);
-  AddOptional(app, "--config", &flags->config,
-              "detector config (docs/config.md). With --results it only gives the frame size "
-              "and the ROI (2-lanes scoring)")
+  CLI::App* app = io::AddCommand(
+      lane, "eval", "score detections against a labelled data set (paper rule, CULane F1)",
+      kEvalDescription, kEvalFooter);
+  io::AddOptional(app, "--config", &flags->config,
+                  "detector config (docs/config.md). With --results it only gives the frame size "
+                  "and the ROI (2-lanes scoring)")
       ->type_name("CONFIG");
-  OneOf(AddOptional(app, "--mode", &flags->mode,
-                    "detector mode and what is scored: two = only the ego lane's two labelled "
-                    "boundaries. Default: the config's mode, or with --results the results' mode"),
-        {"all", "two"});
-  AddOptional(app, "--seed", &flags->seed, "RANSAC seed instead of the config's detector.seed")
+  io::OneOf(io::AddOptional(
+                app, "--mode", &flags->mode,
+                "detector mode and what is scored: two = only the ego lane's two labelled "
+                "boundaries. Default: the config's mode, or with --results the results' mode"),
+            {"all", "two"});
+  io::AddOptional(app, "--seed", &flags->seed, "RANSAC seed instead of the config's detector.seed")
       ->type_name("N");
-  AddOptional(app, "--seeds", &flags->seeds,
-              "run the detector with K seeds (N, N+1, ..., N+K-1, N the --seed or the config's) "
-              "and report the mean, standard deviation and range of every figure; results, "
-              "overlays and the full tables are those of the first seed, the baseline "
-              "(--write-baseline) holds the means")
+  io::AddOptional(
+      app, "--seeds", &flags->seeds,
+      "run the detector with K seeds (N, N+1, ..., N+K-1, N the --seed or the config's) "
+      "and report the mean, standard deviation and range of every figure; results, "
+      "overlays and the full tables are those of the first seed, the baseline "
+      "(--write-baseline) holds the means")
       ->type_name("K");
-  AddOptional(app, "--results", &flags->results,
-              "score FILE instead of running the detector: lane detect JSON Lines, or the "
-              "original tool's results (.txt)")
+  io::AddOptional(app, "--results", &flags->results,
+                  "score FILE instead of running the detector: lane detect JSON Lines, or the "
+                  "original tool's results (.txt)")
       ->type_name("FILE");
-  AddOptional(
+  io::AddOptional(
       app, "--output,--out", &flags->out,
       "write DIR/table.md, DIR/table.json, DIR/results.txt (original format), DIR/frames.jsonl "
       "(per frame: the label each detection matched, -1 = false positive) and, when "
       "the detector ran, DIR/results.jsonl")
       ->type_name("DIR");
-  AddOptional(app, "--overlay,--overlays", &flags->overlays,
-              "write DIR/STEM.png per frame like the paper's Fig. 12: labels green, correct "
-              "detections green, false positives red, misses blue (paper rule)")
+  io::AddOptional(app, "--overlay,--overlays", &flags->overlays,
+                  "write DIR/STEM.png per frame like the paper's Fig. 12: labels green, correct "
+                  "detections green, false positives red, misses blue (paper rule)")
       ->type_name("DIR");
-  OneOf(
-      AddOptional(app, "--format", &flags->format, "the data set's format instead of detecting it"),
-      {"caltech", "culane", "tusimple", "render"});
-  AddOptional(app, "--clip", &flags->clip, "score only this clip of the data set")
+  io::OneOf(io::AddOptional(app, "--format", &flags->format,
+                            "the data set's format instead of detecting it"),
+            {"caltech", "culane", "tusimple", "render"});
+  io::AddOptional(app, "--clip", &flags->clip, "score only this clip of the data set")
       ->type_name("NAME");
-  OneOf(AddOptional(app, "--rule", &flags->rule,
-                    "paper rule: d^ and/or d- within bounds (or = the released Matlab code)"),
-        {"and", "or"})
+  io::OneOf(
+      io::AddOptional(app, "--rule", &flags->rule,
+                      "paper rule: d^ and/or d- within bounds (or = the released Matlab code)"),
+      {"and", "or"})
       ->default_str("and, the paper's");
-  OneOf(AddOptional(app, "--count", &flags->count,
-                    "paper rule: each label matches at most one detection, best pairs first, or "
-                    "the released code's many-to-one counting"),
-        {"one-to-one", "many-to-one"})
+  io::OneOf(
+      io::AddOptional(app, "--count", &flags->count,
+                      "paper rule: each label matches at most one detection, best pairs first, or "
+                      "the released code's many-to-one counting"),
+      {"one-to-one", "many-to-one"})
       ->default_str("one-to-one");
-  AddOptional(app, "--write-baseline", &flags->write_baseline,
-              "also write the regression baseline (CULane F1 and paper figures of the total) to "
-              "FILE")
+  io::AddOptional(
+      app, "--write-baseline", &flags->write_baseline,
+      "also write the regression baseline (CULane F1 and paper figures of the total) to "
+      "FILE")
       ->type_name("FILE");
   app->add_flag("--drive", flags->drive,
                 "DATASET is one drive (lane render --sequence): score it as one camera's "
@@ -618,4 +624,4 @@ Command AddEvalCommand(CLI::App& lane, const std::vector<std::string>& args) {
   return {app, [app, flags, args] { return RunEval(*app, *flags, args); }};
 }
 
-}  // namespace lane_tools
+}  // namespace lane::cli

@@ -14,7 +14,7 @@
 #include "lane/eval/drive.h"
 #include "lane/eval/drive_io.h"
 
-namespace lane_tools {
+namespace lane::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -96,7 +96,7 @@ std::string Report(const std::string& source, const std::vector<Column>& columns
 absl::Status RunDetector(const DriveEvalArgs& args, const lane::eval::DriveLabels& labels,
                          std::vector<lane::eval::DriveOutput>* untracked,
                          std::vector<lane::eval::DriveOutput>* tracked, std::string* source) {
-  absl::StatusOr<lane::Config> config = LoadEffectiveConfig(args.config, args.mode);
+  absl::StatusOr<lane::Config> config = io::LoadEffectiveConfig(args.config, args.mode);
   if (!config.ok()) return config.status();
   if (args.seed) config->detector.seed = *args.seed;
   absl::StatusOr<lane::Detector> detector =
@@ -184,7 +184,7 @@ int RunDriveEval(const DriveEvalArgs& args) {
                last.frames, columns.back().name.c_str(), last.Recall(),
                last.FalsePositivesPerFrame(), last.IdSwitchesPer100BoundaryFrames(),
                last.heading_rms_deg);
-  return kExitOk;
+  return io::kExitOk;
 }
 
-}  // namespace lane_tools
+}  // namespace lane::cli

@@ -9,7 +9,7 @@
 
 #include "lane/eval/paper_rule.h"
 
-namespace lane_tools {
+namespace lane::cli {
 
 struct DriveEvalArgs {
   std::string dataset;                 // the folder lane render --sequence wrote
@@ -23,6 +23,6 @@ struct DriveEvalArgs {
 // Prints the Markdown report on stdout; returns the exit status.
 int RunDriveEval(const DriveEvalArgs& args);
 
-}  // namespace lane_tools
+}  // namespace lane::cli
 
 #endif  // LANE_TOOLS_EVAL_DRIVE_H_

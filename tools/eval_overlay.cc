@@ -8,7 +8,7 @@
 
 #include "absl/strings/str_cat.h"
 
-namespace lane_tools {
+namespace lane::cli {
 namespace {
 
 using lane::eval::Curve;
@@ -183,4 +183,4 @@ cv::Mat DrawEvaluation(const cv::Mat& frame, const lane::eval::FrameOutcome& out
   return canvas;
 }
 
-}  // namespace lane_tools
+}  // namespace lane::cli

@@ -10,7 +10,7 @@
 #include "lane/eval/evaluate.h"
 #include "lane/geometry/ipm.h"
 
-namespace lane_tools {
+namespace lane::cli {
 
 // A BGR copy of `frame` with, under the paper's rule:
 //  * scored labels as thin green lines (matched) or thick blue lines
@@ -26,6 +26,6 @@ namespace lane_tools {
 cv::Mat DrawEvaluation(const cv::Mat& frame, const lane::eval::FrameOutcome& outcome,
                        const lane::eval::EvalOptions& options, const std::optional<lane::Roi>& roi);
 
-}  // namespace lane_tools
+}  // namespace lane::cli
 
 #endif  // LANE_TOOLS_EVAL_OVERLAY_H_

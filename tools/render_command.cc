@@ -14,7 +14,7 @@
 #include "lane/eval/render_labels.h"
 #include "lane/synthetic.h"
 
-namespace lane_tools {
+namespace lane::cli {
 namespace {
 
 constexpr char kRenderDescription[] =
@@ -68,7 +68,7 @@ std::string OpenOutputs(const std::filesystem::path& dir, std::ofstream* labels,
 }
 
 int RunRender(const RenderFlags& flags) {
-  const absl::StatusOr<lane::Config> config = LoadEffectiveConfig(flags.config, {});
+  const absl::StatusOr<lane::Config> config = io::LoadEffectiveConfig(flags.config, {});
   if (!config.ok()) return Failure("render", std::string(config.status().message()));
 
   lane::SyntheticOptions options;
@@ -139,14 +139,14 @@ int RunRender(const RenderFlags& flags) {
   }
   std::fprintf(stderr, "lane render: %lld %s in %s\n", static_cast<long long>(flags.count),
                flags.sequence ? "frames of one drive" : "frames", dir.string().c_str());
-  return kExitOk;
+  return io::kExitOk;
 }
 
 }  // namespace
 
-Command AddRenderCommand(CLI::App& lane) {
+io::Command AddRenderCommand(CLI::App& lane) {
   auto flags = std::make_shared<RenderFlags>();
-  CLI::App* app = AddCommand(
+  CLI::App* app = io::AddCommand(
       lane, "render", "render synthetic road frames with ground-truth labels", kRenderDescription);
   app->add_option("--config", flags->config, "JSON config file whose camera is used")
       ->type_name("CONFIG")
@@ -154,22 +154,22 @@ Command AddRenderCommand(CLI::App& lane) {
   app->add_option("--count", flags->count, "number of frames")
       ->type_name("N")
       ->required()
-      ->check(Between(1, 1000000));
+      ->check(io::Between(1, 1000000));
   app->add_option("--output,--out", flags->output, "output folder, created when missing")
       ->type_name("DIR")
       ->required();
   app->add_option("--seed", flags->seed, "seed of the first frame")
       ->type_name("S")
-      ->check(NonNegativeInteger());
+      ->check(io::NonNegativeInteger());
   app->add_option("--num-lanes", flags->num_lanes, "lanes on the road, 0 = random 1..5 per frame")
       ->type_name("K")
-      ->check(Between(0, 20));
+      ->check(io::Between(0, 20));
   app->add_option("--jpeg-quality", flags->jpeg_quality,
                   "simulated JPEG artefacts: quality, 0 = none. With --format jpg the "
                   "file itself is written at quality Q (95 when Q is 0) instead.")
       ->type_name("Q")
-      ->check(Between(0, 100));
-  OneOf(app->add_option("--format", flags->format, "image file format"), {"png", "jpg"});
+      ->check(io::Between(0, 100));
+  io::OneOf(app->add_option("--format", flags->format, "image file format"), {"png", "jpg"});
   CLI::Option* sequence =
       app->add_flag("--sequence", flags->sequence,
                     "one continuous drive (lane change, bends, traffic, a dashed line turning "
@@ -234,4 +234,4 @@ Command AddRenderCommand(CLI::App& lane) {
   return {app, [flags] { return RunRender(*flags); }};
 }
 
-}  // namespace lane_tools
+}  // namespace lane::cli

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "lane/detector/road_model.h"
-#include "lane/eval/match.h"
+#include "lane/eval/curve_distances.h"
 #include "lane/synthetic.h"
 #include "test_cameras.h"
 
@@ -51,8 +51,8 @@ void Score(const std::vector<Bezier>& dets, const std::vector<bool>& inferred,
     int best = -1;
     double best_mean = 1e9;
     for (size_t i = 0; i < dets.size(); ++i) {
-      if (used[i] || !PaperMatch(dets[i], t, width)) continue;
-      const double m = CurveMatchDistances(dets[i].Sample(101), t.Sample(101)).mean;
+      if (used[i] || !eval::PaperMatch(dets[i], t, width)) continue;
+      const double m = eval::CurveMatchDistances(dets[i].Sample(101), t.Sample(101)).mean;
       if (m < best_mean) best_mean = m, best = static_cast<int>(i);
     }
     if (best >= 0) used[best] = true, ++matched;
@@ -69,7 +69,7 @@ void Score(const std::vector<Bezier>& dets, const std::vector<bool>& inferred,
     // other unmatched detection is.
     bool on_some_truth = false;
     for (const auto& t : all_truths) {
-      on_some_truth = on_some_truth || PaperMatch(dets[i], t, width);
+      on_some_truth = on_some_truth || eval::PaperMatch(dets[i], t, width);
     }
     tally.false_positives += on_some_truth ? 0 : 1;
   }

@@ -1,10 +1,10 @@
-#include "lane/eval/match.h"
+#include "lane/eval/curve_distances.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-namespace lane {
+namespace lane::eval {
 namespace {
 
 // Median and mean over the points of `from` of the distance to the nearest
@@ -40,4 +40,4 @@ bool PaperMatch(const Bezier& detected, const Bezier& label, int image_width) {
   return d.median <= 20.0 * scale && d.mean <= 15.0 * scale;
 }
 
-}  // namespace lane
+}  // namespace lane::eval

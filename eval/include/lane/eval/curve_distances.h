@@ -1,14 +1,15 @@
-// The paper's rule for deciding that a detected boundary and a labelled one
-// are the same (Aly 2008, section III-A).
-#ifndef LANE_EVAL_MATCH_H_
-#define LANE_EVAL_MATCH_H_
+// The distances between two curves that the paper's rule compares, and the
+// rule itself on one pair of splines (Aly 2008, section III-A). Matching a
+// frame's detections to its labels is in paper_rule.h.
+#ifndef LANE_EVAL_CURVE_DISTANCES_H_
+#define LANE_EVAL_CURVE_DISTANCES_H_
 
 #include <Eigen/Core>
 #include <vector>
 
 #include "lane/geometry/bezier.h"
 
-namespace lane {
+namespace lane::eval {
 
 struct MatchDistances {
   double median = 0;  // d^ = min of the two directed median distances, pixels
@@ -23,6 +24,6 @@ MatchDistances CurveMatchDistances(const std::vector<Eigen::Vector2d>& a,
 // d^ <= 20 px AND d- <= 15 px, thresholds scaled by image_width / 640.
 bool PaperMatch(const Bezier& detected, const Bezier& label, int image_width);
 
-}  // namespace lane
+}  // namespace lane::eval
 
-#endif  // LANE_EVAL_MATCH_H_
+#endif  // LANE_EVAL_CURVE_DISTANCES_H_
