@@ -18,7 +18,7 @@
 #include "absl/strings/strip.h"
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
-#include "cli/command_line.h"
+#include "io/command_line.h"
 #include "wire/frame_decoder.h"
 
 namespace lane::client {

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/command_line.h"
+#include "io/command_line.h"
 
 namespace lane::client {
 

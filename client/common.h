@@ -13,7 +13,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
-#include "cli/command_line.h"
+#include "io/command_line.h"
 
 namespace lane::client {
 
@@ -22,7 +22,7 @@ namespace lane::client {
 // one camera (its streams and its session calls).
 inline constexpr char kCameraIdHeader[] = "x-camera-id";
 
-// Exit codes (cli/command_line.h has 0, 1 and 2).
+// Exit codes (io/command_line.h has 0, 1 and 2).
 inline constexpr int kExitOk = io::kExitOk;
 inline constexpr int kExitFailure = io::kExitFailure;  // run-time error
 inline constexpr int kExitUsage = io::kExitUsage;      // bad command line

@@ -13,8 +13,8 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "cli/input_file.h"
-#include "cli/inputs.h"
+#include "io/input_file.h"
+#include "io/inputs.h"
 
 namespace lane::client {
 namespace {
@@ -41,7 +41,7 @@ FrameSource::~FrameSource() = default;
 
 void FrameSource::ReadImage(const io::InputEntry& entry, ClientFrame* frame) const {
   // Bounded and never blocking: a FIFO, a device or a /proc file is this
-  // frame's error, and so is a file over the image cap (cli/input_file.h).
+  // frame's error, and so is a file over the image cap (io/input_file.h).
   absl::StatusOr<std::string> read = io::ReadRegularFile(entry.path, io::kDefaultMaxImageBytes);
   if (!read.ok()) {
     frame->error = absl::StrCat("cannot read file", Where(entry.path, entry.name), ": ",

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/inputs.h"
+#include "io/inputs.h"
 #include "lane/v1/lane_service.pb.h"
 
 namespace lane::client {
@@ -40,7 +40,7 @@ class FrameSource {
   //    blank lines and '#' comments skipped; entries may be any input;
   //  * .mp4/.avi/.mkv/.mov: a video, read frame by frame;
   //  * a URL, /dev/videoN or a GStreamer pipeline: a live source
-  //    (cli/video_input.h);
+  //    (io/video_input.h);
   //  * anything else: an image file.
   // `raw`: decode image files here and send pixels. `options`: a frame limit
   // and pacing (--max-frames, --fps, --realtime).

@@ -4,7 +4,7 @@
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
-#include "cli/results_json.h"
+#include "io/results_json.h"
 #include "wire/config_proto.h"
 #include "wire/detection_proto.h"
 

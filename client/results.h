@@ -1,6 +1,6 @@
 // `lane-client stream` results: JSON Lines, one object per frame, schema 1
 // (docs/client.md): the record `lane detect` writes for the frame
-// (cli/results_json.h, from the response decoded by wire/detection_proto.h)
+// (io/results_json.h, from the response decoded by wire/detection_proto.h)
 // and the client's own fields.
 #ifndef LANE_CLIENT_RESULTS_H_
 #define LANE_CLIENT_RESULTS_H_

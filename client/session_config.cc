@@ -2,7 +2,7 @@
 
 #include <string>
 
-#include "cli/cli_config.h"
+#include "io/cli_config.h"
 #include "lane/config/config.h"
 #include "wire/config_proto.h"
 

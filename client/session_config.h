@@ -9,7 +9,7 @@
 #include <string>
 
 #include "absl/status/statusor.h"
-#include "cli/command_line.h"
+#include "io/command_line.h"
 #include "lane/v1/lane_service.pb.h"
 
 namespace lane::client {

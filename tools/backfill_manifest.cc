@@ -13,8 +13,8 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
-#include "cli/input_file.h"
-#include "cli/inputs.h"
+#include "io/input_file.h"
+#include "io/inputs.h"
 
 namespace lane::cli {
 namespace {

@@ -38,7 +38,7 @@ struct BackfillRecording {
 // deeper than kMaxManifestDepth (both found before the line is parsed), a
 // line that is not a JSON object with the three keys, a bad or repeated
 // output name, or no recording. `with_sizes`: each recording is expanded
-// (cli/inputs.h, nothing is opened) to sum its files' sizes.
+// (io/inputs.h, nothing is opened) to sum its files' sizes.
 absl::StatusOr<std::vector<BackfillRecording>> ReadBackfillManifest(const std::string& path,
                                                                     bool with_sizes);
 

@@ -24,7 +24,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
-#include "cli/input_file.h"
+#include "io/input_file.h"
 
 namespace lane::cli {
 

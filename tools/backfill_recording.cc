@@ -15,10 +15,10 @@
 
 #include "absl/strings/str_cat.h"
 #include "backfill_output.h"
-#include "cli/input_file.h"
-#include "cli/results_json.h"
-#include "cli/video_input.h"
 #include "commands.h"
+#include "io/input_file.h"
+#include "io/results_json.h"
+#include "io/video_input.h"
 #include "lane/config/config.h"
 #include "lane/detector/detector.h"
 #include "lane/track/frame_tracker.h"
@@ -221,7 +221,7 @@ absl::Status CheckRecordingPath(const std::string& path) {
   return io::OpenRegularFile(path).status();
 }
 
-// A recording's camera config, read within bounds (cli/input_file.h).
+// A recording's camera config, read within bounds (io/input_file.h).
 absl::StatusOr<lane::Config> LoadRecordingConfig(const std::string& path) {
   absl::StatusOr<std::string> text = io::ReadRegularFile(path, kMaxBackfillConfigBytes);
   if (!text.ok()) {

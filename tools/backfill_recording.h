@@ -17,7 +17,7 @@
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
 #include "backfill_manifest.h"
-#include "cli/inputs.h"
+#include "io/inputs.h"
 
 namespace lane::cli {
 

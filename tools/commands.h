@@ -1,14 +1,14 @@
 // The `lane` subcommands. Each Add*Command registers its subcommand, with
 // its options, on the program's CLI11 app and returns it with the function
 // that runs it once the command line is parsed; that function returns the
-// exit status (cli/command_line.h: 0 ok, 1 failure, 2 bad command line).
+// exit status (io/command_line.h: 0 ok, 1 failure, 2 bad command line).
 #ifndef LANE_TOOLS_COMMANDS_H_
 #define LANE_TOOLS_COMMANDS_H_
 
 #include <string>
 #include <vector>
 
-#include "cli/command_line.h"
+#include "io/command_line.h"
 
 namespace lane::cli {
 

@@ -4,8 +4,8 @@
 #include <optional>
 #include <string>
 
-#include "cli/cli_config.h"
 #include "commands.h"
+#include "io/cli_config.h"
 #include "lane/config/config.h"
 
 namespace lane::cli {

@@ -8,8 +8,8 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "cli/cli_config.h"
 #include "commands.h"
+#include "io/cli_config.h"
 #include "lane/detector/detector.h"
 #include "lane/eval/drive.h"
 #include "lane/eval/drive_io.h"

@@ -2,8 +2,8 @@
 #include <string>
 #include <vector>
 
-#include "cli/command_line.h"
 #include "commands.h"
+#include "io/command_line.h"
 
 int main(int argc, char** argv) {
   namespace cli = lane::cli;

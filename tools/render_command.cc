@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
-#include "cli/cli_config.h"
 #include "commands.h"
+#include "io/cli_config.h"
 #include "lane/config/config.h"
 #include "lane/eval/render_labels.h"
 #include "lane/synthetic.h"

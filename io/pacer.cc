@@ -1,4 +1,4 @@
-#include "cli/pacer.h"
+#include "io/pacer.h"
 
 #include <thread>
 

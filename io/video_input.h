@@ -12,8 +12,8 @@
 //
 // A live source is read until it ends (the server closes it, the pipeline
 // reaches end-of-stream) or --max-frames.
-#ifndef LANE_CLI_VIDEO_INPUT_H_
-#define LANE_CLI_VIDEO_INPUT_H_
+#ifndef LANE_IO_VIDEO_INPUT_H_
+#define LANE_IO_VIDEO_INPUT_H_
 
 #include <memory>
 #include <opencv2/core.hpp>
@@ -55,4 +55,4 @@ class VideoInput {
 
 }  // namespace lane::io
 
-#endif  // LANE_CLI_VIDEO_INPUT_H_
+#endif  // LANE_IO_VIDEO_INPUT_H_

@@ -4,8 +4,8 @@
 // sources are not paced: they come at their own rate. A reader that falls
 // behind is not made to drop frames: it catches up, at most one second's
 // worth at once.
-#ifndef LANE_CLI_PACER_H_
-#define LANE_CLI_PACER_H_
+#ifndef LANE_IO_PACER_H_
+#define LANE_IO_PACER_H_
 
 #include <chrono>
 
@@ -35,4 +35,4 @@ class Pacer {
 
 }  // namespace lane::io
 
-#endif  // LANE_CLI_PACER_H_
+#endif  // LANE_IO_PACER_H_

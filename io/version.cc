@@ -1,8 +1,8 @@
 // The version --version prints. LANE_VERSION and LANE_GIT_REVISION come from
-// cli/CMakeLists.txt (the project version, `git describe` at configure time).
+// io/CMakeLists.txt (the project version, `git describe` at configure time).
 #include <string>
 
-#include "cli/command_line.h"
+#include "io/command_line.h"
 
 #ifndef LANE_VERSION
 #define LANE_VERSION "unknown"

@@ -1,4 +1,4 @@
-#include "cli/video_input.h"
+#include "io/video_input.h"
 
 #include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgproc.hpp>

@@ -1,4 +1,4 @@
-#include "cli/command_line.h"
+#include "io/command_line.h"
 
 #include <cmath>
 #include <cstdio>

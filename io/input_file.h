@@ -3,8 +3,8 @@
 // a socket, a FIFO, nor a /proc or /sys file whose size and reads are not a
 // file's), and never more bytes than a cap, checked with fstat before
 // anything is read. Errors are absl::Status values, never exceptions.
-#ifndef LANE_CLI_INPUT_FILE_H_
-#define LANE_CLI_INPUT_FILE_H_
+#ifndef LANE_IO_INPUT_FILE_H_
+#define LANE_IO_INPUT_FILE_H_
 
 #include <cstddef>
 #include <cstdint>
@@ -108,4 +108,4 @@ class BoundedLineReader {
 
 }  // namespace lane::io
 
-#endif  // LANE_CLI_INPUT_FILE_H_
+#endif  // LANE_IO_INPUT_FILE_H_

@@ -2,8 +2,8 @@
 // object per frame, one a line: the one writer of `lane detect` (with and
 // without --track), `lane backfill`, `lane eval --output` and `lane-client
 // stream` (which adds its own fields, client/results.h).
-#ifndef LANE_CLI_RESULTS_JSON_H_
-#define LANE_CLI_RESULTS_JSON_H_
+#ifndef LANE_IO_RESULTS_JSON_H_
+#define LANE_IO_RESULTS_JSON_H_
 
 #include <nlohmann/json.hpp>
 #include <string>
@@ -51,4 +51,4 @@ double RoundTo(double value, int decimals);
 
 }  // namespace lane::io
 
-#endif  // LANE_CLI_RESULTS_JSON_H_
+#endif  // LANE_IO_RESULTS_JSON_H_

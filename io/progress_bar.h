@@ -1,7 +1,7 @@
 // A one-line progress bar on stderr, drawn only when stderr is a terminal,
 // so logs and pipes never see it.
-#ifndef LANE_CLI_PROGRESS_BAR_H_
-#define LANE_CLI_PROGRESS_BAR_H_
+#ifndef LANE_IO_PROGRESS_BAR_H_
+#define LANE_IO_PROGRESS_BAR_H_
 
 #include <chrono>
 #include <string>
@@ -30,4 +30,4 @@ class ProgressBar {
 
 }  // namespace lane::io
 
-#endif  // LANE_CLI_PROGRESS_BAR_H_
+#endif  // LANE_IO_PROGRESS_BAR_H_

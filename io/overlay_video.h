@@ -1,8 +1,8 @@
 // --overlay-video FILE of `lane detect` and `lane-client stream`: the frames
 // with their lanes drawn (DrawLanesOnImage) written as one video through
 // OpenCV's VideoWriter (FFmpeg).
-#ifndef LANE_CLI_OVERLAY_VIDEO_H_
-#define LANE_CLI_OVERLAY_VIDEO_H_
+#ifndef LANE_IO_OVERLAY_VIDEO_H_
+#define LANE_IO_OVERLAY_VIDEO_H_
 
 #include <memory>
 #include <opencv2/core.hpp>
@@ -40,4 +40,4 @@ class OverlayVideo {
 
 }  // namespace lane::io
 
-#endif  // LANE_CLI_OVERLAY_VIDEO_H_
+#endif  // LANE_IO_OVERLAY_VIDEO_H_

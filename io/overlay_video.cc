@@ -1,10 +1,10 @@
-#include "cli/overlay_video.h"
+#include "io/overlay_video.h"
 
 #include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "absl/strings/str_cat.h"
-#include "cli/inputs.h"
+#include "io/inputs.h"
 
 namespace lane::io {
 namespace {

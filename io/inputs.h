@@ -1,7 +1,7 @@
 // Frames from the command line's INPUT arguments: image files, directories of
 // images, list files and videos.
-#ifndef LANE_CLI_INPUTS_H_
-#define LANE_CLI_INPUTS_H_
+#ifndef LANE_IO_INPUTS_H_
+#define LANE_IO_INPUTS_H_
 
 #include <cstdint>
 #include <fstream>
@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "cli/input_file.h"
-#include "cli/pacer.h"
-#include "cli/video_input.h"
+#include "io/input_file.h"
+#include "io/pacer.h"
+#include "io/video_input.h"
 #include "lane/detector/detector.h"
 
 namespace lane::io {
@@ -42,11 +42,11 @@ struct ReadOptions {
   // Frames handed out at most (errors included); 0 = all. Live sources run
   // until they end, so this is how a run on one stops.
   long long max_frames = 0;
-  // --fps / --realtime (cli/pacer.h).
+  // --fps / --realtime (io/pacer.h).
   Pacer pacer;
   // An image file larger than this fails before it is read, and one whose
   // header declares a frame of more than this many bytes as BGR (width x
-  // height x 3) before it is decoded (cli/input_file.h).
+  // height x 3) before it is decoded (io/input_file.h).
   int64_t max_image_bytes = kDefaultMaxImageBytes;
 };
 
@@ -57,7 +57,7 @@ struct InputEntry {
   std::string name;   // to report (see InputFrame::name)
   std::string error;  // kError: why
   // kVideo: the VideoCapture backend, and whether it is a live source
-  // (cli/video_input.h), which is not paced.
+  // (io/video_input.h), which is not paced.
   int api = cv::CAP_ANY;
   bool live = false;
 };
@@ -107,14 +107,14 @@ std::string UniqueStem(const std::string& stem, std::set<std::string>& used);
 //    skipped; entries may themselves be images, videos, directories or lists;
 //  * .mp4/.avi/.mkv/.mov: a video, read frame by frame with cv::VideoCapture;
 //  * a URL, /dev/videoN or a GStreamer pipeline: a live source
-//    (cli/video_input.h), never looked up as a file;
+//    (io/video_input.h), never looked up as a file;
 //  * anything else: an image file decoded with cv::imread.
 // A missing path, an unreadable list or video, or an undecodable image
 // becomes an InputFrame with `error` set, so the caller reports it and goes
 // on. Frames are decoded one at a time.
 //
 // Image files, list files and video files must be regular files
-// (cli/input_file.h): a FIFO, a socket, a device or a /proc file is that
+// (io/input_file.h): a FIFO, a socket, a device or a /proc file is that
 // frame's error, found without blocking and without reading it. An image
 // file over ReadOptions::max_image_bytes fails before it is read, an empty
 // one fails without decoding; a list file may hold at most
@@ -170,4 +170,4 @@ bool IsVideoExtension(const std::string& ext);
 
 }  // namespace lane::io
 
-#endif  // LANE_CLI_INPUTS_H_
+#endif  // LANE_IO_INPUTS_H_

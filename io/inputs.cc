@@ -1,4 +1,4 @@
-#include "cli/inputs.h"
+#include "io/inputs.h"
 
 #include <algorithm>
 #include <cctype>
@@ -16,7 +16,7 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/time/time.h"
-#include "cli/input_file.h"
+#include "io/input_file.h"
 #include "lane/decode/detector_region.h"
 
 namespace lane::io {
@@ -222,7 +222,7 @@ void FrameReader::ReadImage(const InputEntry& entry, InputFrame* frame) const {
   const auto start = std::chrono::steady_clock::now();
   // Every image is read here, within bounds, and decoded from memory: a
   // FIFO, a device or a /proc file fails without blocking, a file over the
-  // cap before it is read (cli/input_file.h).
+  // cap before it is read (io/input_file.h).
   absl::StatusOr<std::string> read = ReadRegularFile(entry.path, max_image_bytes_);
   if (!read.ok()) {
     frame->error = absl::StrCat("cannot read image ", read.status().message());

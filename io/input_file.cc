@@ -1,4 +1,4 @@
-#include "cli/input_file.h"
+#include "io/input_file.h"
 
 #include <fcntl.h>
 #include <linux/magic.h>

@@ -1,4 +1,4 @@
-#include "cli/overlay.h"
+#include "io/overlay.h"
 
 #include <algorithm>
 #include <array>

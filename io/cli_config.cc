@@ -1,4 +1,4 @@
-#include "cli/cli_config.h"
+#include "io/cli_config.h"
 
 #include <fstream>
 #include <nlohmann/json.hpp>

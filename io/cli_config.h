@@ -1,7 +1,7 @@
 // The effective configuration of a `lane` subcommand: a config file (or the
 // defaults) and the --mode override.
-#ifndef LANE_CLI_CLI_CONFIG_H_
-#define LANE_CLI_CLI_CONFIG_H_
+#ifndef LANE_IO_CLI_CONFIG_H_
+#define LANE_IO_CLI_CONFIG_H_
 
 #include <optional>
 #include <string>
@@ -20,4 +20,4 @@ absl::StatusOr<lane::Config> LoadEffectiveConfig(const std::optional<std::string
 
 }  // namespace lane::io
 
-#endif  // LANE_CLI_CLI_CONFIG_H_
+#endif  // LANE_IO_CLI_CONFIG_H_

@@ -1,7 +1,7 @@
 // Pictures of a detection for people: the frame with the lanes drawn on it,
 // and the detector's top view with the lanes drawn in it.
-#ifndef LANE_CLI_OVERLAY_H_
-#define LANE_CLI_OVERLAY_H_
+#ifndef LANE_IO_OVERLAY_H_
+#define LANE_IO_OVERLAY_H_
 
 #include <filesystem>
 #include <opencv2/core.hpp>
@@ -58,4 +58,4 @@ std::string WriteOverlays(const std::filesystem::path& dir, const std::string& s
 
 }  // namespace lane::io
 
-#endif  // LANE_CLI_OVERLAY_H_
+#endif  // LANE_IO_OVERLAY_H_

@@ -1,4 +1,4 @@
-#include "cli/results_json.h"
+#include "io/results_json.h"
 
 #include <array>
 #include <cmath>

@@ -7,8 +7,8 @@
 //  * --version: the project's version and git revision;
 //  * errors: "PROGRAM COMMAND: MESSAGE", the command's usage line and a
 //    pointer to its --help, on stderr.
-#ifndef LANE_CLI_COMMAND_LINE_H_
-#define LANE_CLI_COMMAND_LINE_H_
+#ifndef LANE_IO_COMMAND_LINE_H_
+#define LANE_IO_COMMAND_LINE_H_
 
 #include <CLI/CLI.hpp>
 #include <cstdint>
@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "absl/time/time.h"
-#include "cli/inputs.h"
+#include "io/inputs.h"
 
 namespace lane::io {
 
@@ -106,13 +106,13 @@ CLI::Validator Between(int64_t min, int64_t max);
 CLI::Validator NonNegativeNumber();
 
 // --fps R, --realtime and --max-frames N of `lane detect` and `lane-client
-// stream` (cli/pacer.h, cli/video_input.h).
+// stream` (io/pacer.h, io/video_input.h).
 struct ReadFlags {
   double fps = 0;
   bool realtime = false;
   long long max_frames = 0;
 
-  // What the readers take (cli/inputs.h).
+  // What the readers take (io/inputs.h).
   ReadOptions Options() const {
     ReadOptions options;
     options.max_frames = max_frames;
@@ -124,4 +124,4 @@ void AddReadFlags(CLI::App* app, ReadFlags* flags);
 
 }  // namespace lane::io
 
-#endif  // LANE_CLI_COMMAND_LINE_H_
+#endif  // LANE_IO_COMMAND_LINE_H_
