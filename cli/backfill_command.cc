@@ -6,17 +6,17 @@
 // The manifest is JSON Lines, one recording a line:
 //   {"recording": "drives/cam7-0412.mp4", "config": "configs/cam7.json",
 //    "output": "cam7-0412"}
-// (relative paths against the manifest's folder; tools/backfill_manifest.h).
+// (relative paths against the manifest's folder; cli/backfill_manifest.h).
 // Shard I of N takes a deterministic share, balanced by the recordings'
 // sizes on disk. Each recording is one camera's frames, tracked in order:
 // its results go to OUT/OUTPUT.jsonl, ended with a trailer that checks the
 // whole file, written under a name of this process's own and published only
-// where no output exists, under an exclusive claim (tools/backfill_output.h):
+// where no output exists, under an exclusive claim (cli/backfill_output.h):
 // two processes running the same shard at once share its work and never
 // tear an output. A recording whose output checks is skipped, so a killed
 // shard resumes where it stopped; one whose output does not check is redone.
 // OUT/summary-shard-I-of-N.json says what was done. One recording's work:
-// tools/backfill_recording.h.
+// cli/backfill_recording.h.
 #include <malloc.h>
 #include <sys/stat.h>
 #include <unistd.h>
