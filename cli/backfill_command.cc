@@ -102,7 +102,7 @@ struct BackfillFlags {
   int jobs = 0;
   bool quiet = false;
   bool verify = false;
-  int64_t max_image_bytes = kDefaultMaxImageBytes;
+  int64_t max_image_bytes = io::kDefaultMaxImageBytes;
 };
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();

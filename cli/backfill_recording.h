@@ -82,7 +82,7 @@ struct RecordingResult {
 struct BackfillContext {
   std::string out_dir;
   BackfillWorkers* workers = nullptr;
-  int64_t max_image_bytes = kDefaultMaxImageBytes;
+  int64_t max_image_bytes = io::kDefaultMaxImageBytes;
   // Partial outputs found in out_dir at the start, by output name; removed
   // once the output's claim is held.
   std::map<std::string, std::vector<std::string>> partials;
