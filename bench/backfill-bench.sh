@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 build=${1:-build}
 rounds=${2:-5}
 frames=${3:-300}
-lane=$build/tools/lane
+lane=$build/cli/lane
 jobs=$(nproc)
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT

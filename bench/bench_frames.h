@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace lane_bench {
+namespace lane::bench {
 
 // ../shared/data/<name>, looked for from the usual working directories, or
 // $LANE_DATA_DIR/<name>; "" if absent.
@@ -34,6 +34,6 @@ inline std::vector<std::string> FilesWithExtension(const std::string& dir, const
   return files;
 }
 
-}  // namespace lane_bench
+}  // namespace lane::bench
 
 #endif  // LANE_BENCH_BENCH_FRAMES_H_

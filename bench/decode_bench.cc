@@ -24,15 +24,15 @@
 #include "lane/config/config.h"
 #include "lane/decode/detector_region.h"
 #include "lane/decode/image_decoder.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/synthetic.h"
 
 namespace {
 
 using lane::CameraModel;
 using lane::Detector;
-using lane_bench::FilesWithExtension;
-using lane_bench::SharedDataDir;
+using lane::bench::FilesWithExtension;
+using lane::bench::SharedDataDir;
 
 struct DecodeSet {
   std::string name;

@@ -22,7 +22,7 @@
 
 #include "lane/config/config.h"
 #include "lane/decode/image_decoder.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 
 int main(int argc, char** argv) {
   if (argc < 4) {

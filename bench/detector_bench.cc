@@ -30,7 +30,7 @@
 #include "lane/config/config.h"
 #include "lane/decode/detector_region.h"
 #include "lane/decode/image_decoder.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/synthetic.h"
 #include "lane/track/frame_tracker.h"
 
@@ -38,8 +38,8 @@ namespace {
 
 using lane::CameraModel;
 using lane::Detector;
-using lane_bench::FilesWithExtension;
-using lane_bench::SharedDataDir;
+using lane::bench::FilesWithExtension;
+using lane::bench::SharedDataDir;
 
 struct FrameSet {
   CameraModel camera;

@@ -20,7 +20,7 @@
 #include "common.h"
 #include "lane/v1/lane_service.grpc.pb.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 namespace v1 = lane::v1;
@@ -358,4 +358,4 @@ void DeleteSessions(const LoadSpec& spec, int cameras) {
   }
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

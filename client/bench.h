@@ -27,7 +27,7 @@
 #include "lane/v1/lane_service.pb.h"
 #include "reconnect_backoff.h"
 
-namespace lane_client {
+namespace lane::client {
 
 // One frame of the benchmark, prepared once.
 struct BenchFrame {
@@ -211,6 +211,6 @@ absl::StatusOr<InprocessResult> RunInprocess(const std::vector<BenchFrame>& fram
                                              absl::Duration warmup, absl::Duration duration,
                                              const ProgressFn& progress);
 
-}  // namespace lane_client
+}  // namespace lane::client
 
 #endif  // LANE_CLIENT_BENCH_H_

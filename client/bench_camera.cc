@@ -7,7 +7,7 @@
 #include "results.h"
 #include "wire/status_map.h"
 
-namespace lane_client::load {
+namespace lane::client::load {
 
 void CameraStream::Pump() {
   absl::MutexLock lock(&mu_);
@@ -149,4 +149,4 @@ void CameraStream::OnDone(const grpc::Status& status) {
   camera_->StreamDone(this);
 }
 
-}  // namespace lane_client::load
+}  // namespace lane::client::load

@@ -23,7 +23,7 @@
 #include "lane/v1/lane_service.pb.h"
 #include "reconnect_backoff.h"
 
-namespace lane_client::load {
+namespace lane::client::load {
 
 namespace v1 = lane::v1;
 using Clock = std::chrono::steady_clock;
@@ -363,6 +363,6 @@ class Camera {
   CameraStats stats_ ABSL_GUARDED_BY(stats_mu_);
 };
 
-}  // namespace lane_client::load
+}  // namespace lane::client::load
 
 #endif  // LANE_CLIENT_BENCH_CAMERA_H_

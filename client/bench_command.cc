@@ -22,7 +22,7 @@
 #include "wire/camera_id.h"
 #include "wire/config_proto.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 namespace v1 = lane::v1;
@@ -250,11 +250,11 @@ int WriteReport(const BenchFlags& flags, const Report& report) {
 }
 
 int RunBench(const CLI::App& app, const BenchFlags& flags) {
-  if (const std::string e = FlagsError(flags); !e.empty()) return lane_tools::UsageError(app, e);
+  if (const std::string e = FlagsError(flags); !e.empty()) return io::UsageError(app, e);
   const std::vector<int> sweep =
       flags.sweep.empty() ? std::vector<int>{flags.cameras} : flags.sweep;
   const absl::StatusOr<std::vector<std::string>> targets = SplitTargets(flags.target);
-  if (!targets.ok()) return lane_tools::UsageError(app, std::string(targets.status().message()));
+  if (!targets.ok()) return io::UsageError(app, std::string(targets.status().message()));
   absl::StatusOr<std::optional<v1::SessionConfig>> session =
       SessionConfigFromFlags(flags.session, true);
   if (!session.ok()) return Failure("bench", std::string(session.status().message()));
@@ -314,32 +314,31 @@ void AddLoadOptions(CLI::App* app, BenchFlags* flags) {
   const std::string group = "Load";
   CLI::Option* cameras = app->add_option("--cameras", flags->cameras, "concurrent camera streams")
                              ->type_name("N")
-                             ->check(lane_tools::Between(1, 4096))
+                             ->check(io::Between(1, 4096))
                              ->group(group);
   app->add_option("--sweep", flags->sweep, "one run per camera count, e.g. 1,2,4,8,16")
       ->type_name("LIST")
       ->delimiter(',')
-      ->check(lane_tools::Between(1, 4096))
+      ->check(io::Between(1, 4096))
       ->excludes(cameras)
       ->group(group);
   CLI::Option* window =
       app->add_option("--window,--inflight", flags->window,
                       "closed loop: at most K frames in flight per camera (the client's window)")
           ->type_name("K")
-          ->check(lane_tools::Between(1, 4096))
+          ->check(io::Between(1, 4096))
           ->group(group);
-  lane_tools::AddOptional(app, "--fps", &flags->fps,
-                          "open loop instead: R frames/s per camera on an absolute schedule; "
-                          "latency counts from the scheduled time")
+  io::AddOptional(app, "--fps", &flags->fps,
+                  "open loop instead: R frames/s per camera on an absolute schedule; "
+                  "latency counts from the scheduled time")
       ->type_name("R")
-      ->check(lane_tools::NonNegativeNumber())
+      ->check(io::NonNegativeNumber())
       ->excludes(window)
       ->group(group);
-  lane_tools::AddDuration(app, "--warmup", &flags->warmup, "discarded warm-up", "2s")->group(group);
-  lane_tools::AddDuration(app, "--duration", &flags->duration, "measured time", "10s")
-      ->group(group);
-  lane_tools::AddDuration(app, "--drain-timeout", &flags->drain_timeout,
-                          "wait for the last answers this long", "10s")
+  io::AddDuration(app, "--warmup", &flags->warmup, "discarded warm-up", "2s")->group(group);
+  io::AddDuration(app, "--duration", &flags->duration, "measured time", "10s")->group(group);
+  io::AddDuration(app, "--drain-timeout", &flags->drain_timeout,
+                  "wait for the last answers this long", "10s")
       ->group(group);
   app->add_option("--max-reconnects", flags->max_reconnects,
                   "a camera stops reconnecting when the same status code comes back after N "
@@ -347,11 +346,11 @@ void AddLoadOptions(CLI::App* app, BenchFlags* flags) {
                   "`stream`; the run ends early when every camera has stopped, and the exit "
                   "status is 1")
       ->type_name("N")
-      ->check(lane_tools::Between(0, 1000000))
+      ->check(io::Between(0, 1000000))
       ->group(group);
-  lane_tools::AddDuration(app, "--timeline", &flags->timeline,
-                          "also report each interval D of the measured time: answers, errors and "
-                          "latency percentiles (for soaks)")
+  io::AddDuration(app, "--timeline", &flags->timeline,
+                  "also report each interval D of the measured time: answers, errors and "
+                  "latency percentiles (for soaks)")
       ->group(group);
 }
 
@@ -360,17 +359,17 @@ void AddFrameOptions(CLI::App* app, BenchFlags* flags) {
   CLI::Option* synthetic =
       app->add_option("--synthetic", flags->synthetic, "render N synthetic frames (without INPUT)")
           ->type_name("N")
-          ->check(lane_tools::Between(1, 100000))
+          ->check(io::Between(1, 100000))
           ->group(group);
   app->add_option("--jpeg-quality", flags->jpeg_quality, "JPEG quality of the synthetic frames")
       ->type_name("Q")
-      ->check(lane_tools::Between(1, 100))
+      ->check(io::Between(1, 100))
       ->group(group);
   app->add_flag("--raw", flags->raw, "send decoded BGR pixels instead of JPEG/PNG bytes")
       ->group(group);
   app->add_option("--max-frames", flags->max_frames, "frames read from INPUT at most")
       ->type_name("N")
-      ->check(lane_tools::Between(1, 1000000))
+      ->check(io::Between(1, 1000000))
       ->group(group);
   app->add_option("INPUT", flags->inputs, "image files, directories, list files or videos")
       ->excludes(synthetic);
@@ -382,10 +381,10 @@ void AddTargetOptions(CLI::App* app, BenchFlags* flags) {
                   "host:port, a comma list a:1,b:2 (cameras spread over them in turn) or "
                   "dns:///name (round_robin over its addresses)")
       ->group(group);
-  lane_tools::AddOptional(app, "--connections", &flags->connections,
-                          "gRPC channels (TCP connections) per target, shared by its cameras")
+  io::AddOptional(app, "--connections", &flags->connections,
+                  "gRPC channels (TCP connections) per target, shared by its cameras")
       ->type_name("C")
-      ->check(lane_tools::Between(1, 64))
+      ->check(io::Between(1, 64))
       ->default_str("one per camera")
       ->group(group);
   app->add_option("--camera-prefix", flags->camera_prefix, "camera id prefix")
@@ -406,27 +405,26 @@ void AddReportOptions(CLI::App* app, BenchFlags* flags) {
                 "duration before the service runs and half after, and report service / "
                 "in-process throughput")
       ->group(group);
-  lane_tools::AddOptional(app, "--workers", &flags->workers, "worker threads of the in-process run")
+  io::AddOptional(app, "--workers", &flags->workers, "worker threads of the in-process run")
       ->type_name("W")
-      ->check(lane_tools::Between(1, 1024))
+      ->check(io::Between(1, 1024))
       ->default_str("the server's, from GetServerInfo")
       ->group(group);
   CLI::Option* json =
       app->add_flag("--json", flags->json, "report as JSON instead of text")->group(group);
   app->add_flag("--csv", flags->csv, "report as CSV instead of text")->excludes(json)->group(group);
-  lane_tools::AddOptional(app, "--output", &flags->output,
-                          "write the report to FILE instead of stdout")
+  io::AddOptional(app, "--output", &flags->output, "write the report to FILE instead of stdout")
       ->type_name("FILE")
       ->group(group);
-  lane_tools::AddOptional(app, "--html", &flags->html,
-                          "also write the report as one self-contained HTML page (latency over "
-                          "time and histogram as inline SVG)")
+  io::AddOptional(app, "--html", &flags->html,
+                  "also write the report as one self-contained HTML page (latency over "
+                  "time and histogram as inline SVG)")
       ->type_name("FILE")
       ->group(group);
-  lane_tools::AddOptional(app, "--slo-p99-ms", &flags->slo_p99_ms,
-                          "exit status 3 when a run's p99 latency exceeds X ms")
+  io::AddOptional(app, "--slo-p99-ms", &flags->slo_p99_ms,
+                  "exit status 3 when a run's p99 latency exceeds X ms")
       ->type_name("X")
-      ->check(lane_tools::NonNegativeNumber())
+      ->check(io::NonNegativeNumber())
       ->group(group);
 }
 
@@ -434,8 +432,8 @@ void AddReportOptions(CLI::App* app, BenchFlags* flags) {
 
 Command AddBenchCommand(CLI::App& client) {
   auto flags = std::make_shared<BenchFlags>();
-  CLI::App* app = lane_tools::AddCommand(client, "bench", "load test with per-frame latency",
-                                         kBenchDescription, kBenchFooter);
+  CLI::App* app = io::AddCommand(client, "bench", "load test with per-frame latency",
+                                 kBenchDescription, kBenchFooter);
   AddLoadOptions(app, flags.get());
   AddFrameOptions(app, flags.get());
   AddTargetOptions(app, flags.get());
@@ -443,4 +441,4 @@ Command AddBenchCommand(CLI::App& client) {
   return {app, [app, flags] { return RunBench(*app, *flags); }};
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

@@ -10,7 +10,7 @@
 #include "frames.h"
 #include "lane/synthetic.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 namespace v1 = lane::v1;
@@ -65,4 +65,4 @@ absl::StatusOr<std::vector<BenchFrame>> LoadBenchFrames(const std::vector<std::s
   return frames;
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

@@ -13,7 +13,7 @@
 #include "absl/strings/str_join.h"
 #include "bench_report.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 std::string Escape(const std::string& text) {
@@ -284,4 +284,4 @@ std::string HtmlReport(const Report& r) {
   return html.str();
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

@@ -14,12 +14,12 @@
 #include "absl/strings/str_cat.h"
 #include "absl/synchronization/mutex.h"
 #include "bench.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/track/frame_tracker.h"
 #include "wire/config_proto.h"
 #include "wire/frame_decoder.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 namespace v1 = lane::v1;
@@ -189,4 +189,4 @@ InprocessResult CombineInprocess(InprocessResult a, InprocessResult b, absl::Dur
   return out;
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

@@ -18,10 +18,10 @@
 #include "absl/strings/strip.h"
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
-#include "cli/command_line.h"
+#include "io/command_line.h"
 #include "wire/frame_decoder.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 using Json = nlohmann::ordered_json;
@@ -84,7 +84,7 @@ std::string ReadSmallFile(const char* path) {
 RunMetadata LocalMetadata() {
   RunMetadata m;
   m.date_utc = absl::FormatTime("%Y-%m-%dT%H:%M:%SZ", absl::Now(), absl::UTCTimeZone());
-  m.client_version = lane_tools::VersionString();
+  m.client_version = io::VersionString();
   std::string cmdline = ReadSmallFile("/proc/self/cmdline");
   for (char& c : cmdline) {
     if (c == '\0') c = ' ';
@@ -430,4 +430,4 @@ std::string TextReport(const Report& r) {
   return out.str();
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

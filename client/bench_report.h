@@ -10,7 +10,7 @@
 
 #include "bench.h"
 
-namespace lane_client {
+namespace lane::client {
 
 inline constexpr int kBenchReportSchema = 1;
 
@@ -90,6 +90,6 @@ std::string TextReport(const Report& r);
 // histogram as inline SVG (bench_html.cc).
 std::string HtmlReport(const Report& r);
 
-}  // namespace lane_client
+}  // namespace lane::client
 
 #endif  // LANE_CLIENT_BENCH_REPORT_H_

@@ -5,7 +5,7 @@
 
 #include "bench.h"
 
-namespace lane_client {
+namespace lane::client {
 
 LatencySummary Summarize(std::vector<double>& values) {
   LatencySummary s;
@@ -81,4 +81,4 @@ std::vector<TimelinePoint> Timeline(const std::vector<double>& latency_ms,
   return points;
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

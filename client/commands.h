@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
-#include "cli/command_line.h"
+#include "io/command_line.h"
 
-namespace lane_client {
+namespace lane::client {
 
-using lane_tools::Command;
+using io::Command;
 
 // session create|get|list|delete.
 std::vector<Command> AddSessionCommands(CLI::App& client);
@@ -26,6 +26,6 @@ Command AddViewCommand(CLI::App& client);
 // Parses the arguments after the program name and runs the command.
 int RunCommand(const std::vector<std::string>& args);
 
-}  // namespace lane_client
+}  // namespace lane::client
 
 #endif  // LANE_CLIENT_COMMANDS_H_

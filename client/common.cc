@@ -18,7 +18,7 @@
 #include "absl/strings/strip.h"
 #include "wire/status_map.h"
 
-namespace lane_client {
+namespace lane::client {
 
 int Failure(const std::string& command, const std::string& message) {
   Note(command, message);
@@ -26,7 +26,7 @@ int Failure(const std::string& command, const std::string& message) {
 }
 
 void Note(const std::string& command, const std::string& message) {
-  lane_tools::PrintMessage("lane-client " + command, message);
+  io::PrintMessage("lane-client " + command, message);
 }
 
 CLI::Option* AddTargetOption(CLI::App* app, std::string* target, const std::string& description) {
@@ -36,8 +36,7 @@ CLI::Option* AddTargetOption(CLI::App* app, std::string* target, const std::stri
 
 void AddCallOptions(CLI::App* app, CallFlags* flags, const std::string& default_timeout) {
   AddTargetOption(app, &flags->target, "server address, or a comma list: every target is asked");
-  lane_tools::AddDuration(app, "--timeout", &flags->timeout, "deadline of each call",
-                          default_timeout);
+  io::AddDuration(app, "--timeout", &flags->timeout, "deadline of each call", default_timeout);
 }
 
 absl::StatusOr<CallSetup> ParseCallSetup(const CallFlags& flags, absl::Duration default_timeout) {
@@ -227,4 +226,4 @@ std::string StatusText(const grpc::Status& status) {
   return absl::StrCat(name, ": ", status.error_message());
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

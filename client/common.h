@@ -13,20 +13,20 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
-#include "cli/command_line.h"
+#include "io/command_line.h"
 
-namespace lane_client {
+namespace lane::client {
 
 // The metadata header that names a call's camera: a proxy hashes it to keep
 // each camera on one replica (deploy/nginx). Set on every call that concerns
 // one camera (its streams and its session calls).
 inline constexpr char kCameraIdHeader[] = "x-camera-id";
 
-// Exit codes (cli/command_line.h has 0, 1 and 2).
-inline constexpr int kExitOk = lane_tools::kExitOk;
-inline constexpr int kExitFailure = lane_tools::kExitFailure;  // run-time error
-inline constexpr int kExitUsage = lane_tools::kExitUsage;      // bad command line
-inline constexpr int kExitSlo = 3;                             // bench: --slo-p99-ms breached
+// Exit codes (io/command_line.h has 0, 1 and 2).
+inline constexpr int kExitOk = io::kExitOk;
+inline constexpr int kExitFailure = io::kExitFailure;  // run-time error
+inline constexpr int kExitUsage = io::kExitUsage;      // bad command line
+inline constexpr int kExitSlo = 3;                     // bench: --slo-p99-ms breached
 
 inline constexpr char kDefaultTarget[] = "127.0.0.1:50051";
 
@@ -106,6 +106,6 @@ void SetDeadline(grpc::ClientContext* context, absl::Duration timeout);
 // "UNAVAILABLE: the server is draining" (or "OK").
 std::string StatusText(const grpc::Status& status);
 
-}  // namespace lane_client
+}  // namespace lane::client
 
 #endif  // LANE_CLIENT_COMMON_H_

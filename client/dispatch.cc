@@ -6,11 +6,11 @@
 #include "commands.h"
 #include "common.h"
 
-namespace lane_client {
+namespace lane::client {
 
 int RunCommand(const std::vector<std::string>& args) {
   CLI::App app("The bundled client of lane-server (docs/client.md).", "lane-client");
-  lane_tools::SetUpProgram(app);
+  io::SetUpProgram(app);
   app.footer("Run 'lane-client COMMAND --help' for the options of a command.");
   SecurityFlags security_flags;
   AddSecurityOptions(app, &security_flags);
@@ -19,20 +19,20 @@ int RunCommand(const std::vector<std::string>& args) {
                           AddInfoCommand(app), AddViewCommand(app)}) {
     commands.push_back(std::move(command));
   }
-  if (const std::optional<int> exit_code = lane_tools::ParseCommandLine(app, args)) {
+  if (const std::optional<int> exit_code = io::ParseCommandLine(app, args)) {
     return *exit_code;
   }
   absl::StatusOr<Security> security = LoadSecurity(security_flags);
   if (!security.ok()) {
     for (const Command& command : commands) {
       if (command.app->parsed()) {
-        return lane_tools::UsageError(*command.app, std::string(security.status().message()));
+        return io::UsageError(*command.app, std::string(security.status().message()));
       }
     }
-    return lane_tools::UsageError(app, std::string(security.status().message()));
+    return io::UsageError(app, std::string(security.status().message()));
   }
   SetSecurity(*std::move(security));
-  return lane_tools::RunChosen(commands);
+  return io::RunChosen(commands);
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

@@ -13,10 +13,10 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "cli/input_file.h"
-#include "cli/inputs.h"
+#include "io/input_file.h"
+#include "io/inputs.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 namespace fs = std::filesystem;
@@ -34,17 +34,15 @@ bool IsJpegOrPng(const std::string& bytes) {
   return bytes.size() >= 8 && std::equal(kPng, kPng + 8, p);
 }
 
-FrameSource::FrameSource(const std::vector<std::string>& inputs, bool raw,
-                         lane_tools::ReadOptions options)
-    : raw_(raw), entries_(lane_tools::ExpandInputs(inputs)), gate_(options) {}
+FrameSource::FrameSource(const std::vector<std::string>& inputs, bool raw, io::ReadOptions options)
+    : raw_(raw), entries_(io::ExpandInputs(inputs)), gate_(options) {}
 
 FrameSource::~FrameSource() = default;
 
-void FrameSource::ReadImage(const lane_tools::InputEntry& entry, ClientFrame* frame) const {
+void FrameSource::ReadImage(const io::InputEntry& entry, ClientFrame* frame) const {
   // Bounded and never blocking: a FIFO, a device or a /proc file is this
-  // frame's error, and so is a file over the image cap (cli/input_file.h).
-  absl::StatusOr<std::string> read =
-      lane_tools::ReadRegularFile(entry.path, lane_tools::kDefaultMaxImageBytes);
+  // frame's error, and so is a file over the image cap (io/input_file.h).
+  absl::StatusOr<std::string> read = io::ReadRegularFile(entry.path, io::kDefaultMaxImageBytes);
   if (!read.ok()) {
     frame->error = absl::StrCat("cannot read file", Where(entry.path, entry.name), ": ",
                                 read.status().message());
@@ -80,23 +78,23 @@ bool FrameSource::Next(ClientFrame* frame) {
 
 bool FrameSource::NextUnpaced(ClientFrame* frame, double* source_fps) {
   while (next_ < entries_.size()) {
-    const lane_tools::InputEntry& entry = entries_[next_];
+    const io::InputEntry& entry = entries_[next_];
     *frame = ClientFrame();
     frame->name = entry.name;
     frame->stem = MakeStem(entry.name);
     switch (entry.kind) {
-      case lane_tools::InputEntry::kError:
+      case io::InputEntry::kError:
         frame->error = entry.error;
         ++next_;
         return true;
-      case lane_tools::InputEntry::kImage:
+      case io::InputEntry::kImage:
         ReadImage(entry, frame);
         ++next_;
         return true;
-      case lane_tools::InputEntry::kVideo: {
+      case io::InputEntry::kVideo: {
         const char* what = entry.live ? "live source" : "video";
         if (!video_) {
-          video_ = lane_tools::VideoInput::Open(entry.path, entry.api);
+          video_ = io::VideoInput::Open(entry.path, entry.api);
           if (!video_) {
             frame->error = absl::StrCat("cannot open ", what, Where(entry.path, entry.name));
             ++next_;
@@ -105,7 +103,7 @@ bool FrameSource::NextUnpaced(ClientFrame* frame, double* source_fps) {
         }
         const int index = video_->frames_read();
         if (video_->Read(&frame->bgr)) {
-          frame->name = lane_tools::VideoFrameName(entry.name, index);
+          frame->name = io::VideoFrameName(entry.name, index);
           frame->stem = MakeStem(frame->name);
           *source_fps = entry.live ? 0 : video_->fps();
           return true;
@@ -179,4 +177,4 @@ cv::Mat DecodeRequestImage(const lane::v1::FrameRequest& request) {
   }
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

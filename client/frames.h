@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "cli/inputs.h"
+#include "io/inputs.h"
 #include "lane/v1/lane_service.pb.h"
 
-namespace lane_client {
+namespace lane::client {
 
 struct ClientFrame {
   // As in `lane detect` results (docs/results-format.md): the file name for a
@@ -34,18 +34,17 @@ struct ClientFrame {
 
 class FrameSource {
  public:
-  // Expands the inputs as `lane detect` does (lane_tools::ExpandInputs):
+  // Expands the inputs as `lane detect` does (io::ExpandInputs):
   //  * a directory: its .jpg/.jpeg/.png files (not recursive), sorted by name;
   //  * a .txt file: a list, one path a line, relative to the list's folder;
   //    blank lines and '#' comments skipped; entries may be any input;
   //  * .mp4/.avi/.mkv/.mov: a video, read frame by frame;
   //  * a URL, /dev/videoN or a GStreamer pipeline: a live source
-  //    (cli/video_input.h);
+  //    (io/video_input.h);
   //  * anything else: an image file.
   // `raw`: decode image files here and send pixels. `options`: a frame limit
   // and pacing (--max-frames, --fps, --realtime).
-  FrameSource(const std::vector<std::string>& inputs, bool raw,
-              lane_tools::ReadOptions options = {});
+  FrameSource(const std::vector<std::string>& inputs, bool raw, io::ReadOptions options = {});
   ~FrameSource();
   FrameSource(const FrameSource&) = delete;
   FrameSource& operator=(const FrameSource&) = delete;
@@ -58,18 +57,18 @@ class FrameSource {
   long long KnownFrameCount() const { return gate_.KnownFrameCount(entries_); }
 
  private:
-  void ReadImage(const lane_tools::InputEntry& entry, ClientFrame* frame) const;
+  void ReadImage(const io::InputEntry& entry, ClientFrame* frame) const;
   bool NextUnpaced(ClientFrame* frame, double* source_fps);
 
   const bool raw_;
-  std::vector<lane_tools::InputEntry> entries_;
-  lane_tools::ReadGate gate_;
+  std::vector<io::InputEntry> entries_;
+  io::ReadGate gate_;
   size_t next_ = 0;
-  std::unique_ptr<lane_tools::VideoInput> video_;
+  std::unique_ptr<io::VideoInput> video_;
 };
 
 // "drive.mp4#000012" -> "drive_000012", "a/b.jpg" -> "a_b".
-using lane_tools::MakeStem;
+using io::MakeStem;
 
 // True for the bytes of a JPEG or PNG file.
 bool IsJpegOrPng(const std::string& bytes);
@@ -83,6 +82,6 @@ void SetRawBgr(const cv::Mat& bgr, lane::v1::FrameRequest* request);
 // cannot be decoded.
 cv::Mat DecodeRequestImage(const lane::v1::FrameRequest& request);
 
-}  // namespace lane_client
+}  // namespace lane::client
 
 #endif  // LANE_CLIENT_FRAMES_H_

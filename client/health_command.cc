@@ -9,7 +9,7 @@
 #include "commands.h"
 #include "common.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 constexpr char kHealthDescription[] =
@@ -133,7 +133,7 @@ int CheckOne(const std::string& target, const std::string& request_bytes, absl::
 
 int RunHealth(const CLI::App& app, const HealthFlags& flags) {
   const absl::StatusOr<CallSetup> setup = ParseCallSetup(flags.call, absl::Seconds(5));
-  if (!setup.ok()) return lane_tools::UsageError(app, std::string(setup.status().message()));
+  if (!setup.ok()) return io::UsageError(app, std::string(setup.status().message()));
   const std::string request_bytes = EncodeHealthRequest(flags.service);
   int exit_code = kExitOk;
   for (const std::string& target : setup->targets) {
@@ -155,12 +155,11 @@ int RunHealth(const CLI::App& app, const HealthFlags& flags) {
 
 Command AddHealthCommand(CLI::App& client) {
   auto flags = std::make_shared<HealthFlags>();
-  CLI::App* app =
-      lane_tools::AddCommand(client, "health", "gRPC health check (exit 0 when SERVING)",
-                             kHealthDescription, kHealthFooter);
+  CLI::App* app = io::AddCommand(client, "health", "gRPC health check (exit 0 when SERVING)",
+                                 kHealthDescription, kHealthFooter);
   AddCallOptions(app, &flags->call, "5s");
   app->add_option("--service", flags->service, "the service to ask about")->type_name("NAME");
   return {app, [app, flags] { return RunHealth(*app, *flags); }};
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

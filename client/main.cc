@@ -10,5 +10,5 @@
 #include "commands.h"
 
 int main(int argc, char** argv) {
-  return lane_client::RunCommand(std::vector<std::string>(argv + 1, argv + argc));
+  return lane::client::RunCommand(std::vector<std::string>(argv + 1, argv + argc));
 }

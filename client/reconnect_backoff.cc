@@ -6,7 +6,7 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 
-namespace lane_client {
+namespace lane::client {
 
 ReconnectBackoff::ReconnectBackoff(ReconnectSchedule schedule, uint64_t seed)
     : schedule_(schedule), nominal_(schedule.initial), rng_(seed) {}
@@ -89,4 +89,4 @@ std::string FailureText(const absl::Status& status) {
   return absl::StrCat(absl::StatusCodeToString(status.code()), ": ", status.message());
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

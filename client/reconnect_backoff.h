@@ -21,7 +21,7 @@
 #include "absl/status/status.h"
 #include "absl/time/time.h"
 
-namespace lane_client {
+namespace lane::client {
 
 struct ReconnectSchedule {
   absl::Duration initial = absl::Milliseconds(100);
@@ -114,6 +114,6 @@ absl::Time MonotonicNow();
 // "UNAVAILABLE: Socket closed" (gRPC's names of the codes).
 std::string FailureText(const absl::Status& status);
 
-}  // namespace lane_client
+}  // namespace lane::client
 
 #endif  // LANE_CLIENT_RECONNECT_BACKOFF_H_

@@ -4,11 +4,11 @@
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
-#include "cli/results_json.h"
+#include "io/results_json.h"
 #include "wire/config_proto.h"
 #include "wire/detection_proto.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 using Json = nlohmann::ordered_json;
@@ -19,13 +19,13 @@ Json DetectRecord(const std::string& frame_name, const v1::FrameResponse& respon
                   const StreamSession& session) {
   const bool ok = response.status().code() == v1::FRAME_CODE_OK;
   // A failed frame's size is not known here (it may be the wrong one).
-  const lane_tools::ResultsFrame frame{frame_name, ok ? session.width : 0, ok ? session.height : 0,
-                                       session.mode};
+  const io::ResultsFrame frame{frame_name, ok ? session.width : 0, ok ? session.height : 0,
+                               session.mode};
   const double decode_ms = response.timings().decode_ms();
   if (ok && session.tracked) {
-    return lane_tools::DetectionJson(frame, lane::wire::TrackedFrameFromProto(response), decode_ms);
+    return io::DetectionJson(frame, lane::wire::TrackedFrameFromProto(response), decode_ms);
   }
-  return lane_tools::DetectionJson(frame, lane::wire::DetectionFromProto(response), decode_ms);
+  return io::DetectionJson(frame, lane::wire::DetectionFromProto(response), decode_ms);
 }
 
 }  // namespace
@@ -56,7 +56,7 @@ std::string ResponseJsonLine(const std::string& frame_name, const v1::FrameRespo
   // The server's timings: its queue wait first, and the detector's total
   // also under the name this file has always used for it.
   Json timing = Json::object();
-  timing["queue_wait"] = lane_tools::RoundTo(response.timings().queue_wait_ms(), 3);
+  timing["queue_wait"] = io::RoundTo(response.timings().queue_wait_ms(), 3);
   for (const auto& item : out["timing_ms"].items()) timing[item.key()] = item.value();
   timing["detect"] = timing["total"];
   out["timing_ms"] = std::move(timing);
@@ -68,10 +68,10 @@ std::string ResponseJsonLine(const std::string& frame_name, const v1::FrameRespo
   out["status"] = FrameCodeName(response.status().code());
   if (response.status().code() != v1::FRAME_CODE_OK) out["error"] = response.status().message();
   out["calibration_version"] = response.calibration_version();
-  out["latency_ms"] = lane_tools::RoundTo(latency_ms, 3);
+  out["latency_ms"] = io::RoundTo(latency_ms, 3);
   out["attempts"] = attempts;
   if (connection > 0) out["connection"] = connection;
-  return lane_tools::JsonLine(out);
+  return io::JsonLine(out);
 }
 
 std::string ClientErrorJsonLine(const std::string& frame_name, const std::string& camera_id,
@@ -84,7 +84,7 @@ std::string ClientErrorJsonLine(const std::string& frame_name, const std::string
   out["status"] = "CLIENT_ERROR";
   out["error"] = error;
   out["attempts"] = 0;
-  return lane_tools::JsonLine(out);
+  return io::JsonLine(out);
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

@@ -1,6 +1,6 @@
 // `lane-client stream` results: JSON Lines, one object per frame, schema 1
 // (docs/client.md): the record `lane detect` writes for the frame
-// (cli/results_json.h, from the response decoded by wire/detection_proto.h)
+// (io/results_json.h, from the response decoded by wire/detection_proto.h)
 // and the client's own fields.
 #ifndef LANE_CLIENT_RESULTS_H_
 #define LANE_CLIENT_RESULTS_H_
@@ -9,10 +9,10 @@
 #include <string>
 
 #include "absl/status/statusor.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/v1/lane_service.pb.h"
 
-namespace lane_client {
+namespace lane::client {
 
 inline constexpr int kStreamResultsSchema = 1;
 
@@ -48,6 +48,6 @@ std::string ResponseJsonLine(const std::string& frame_name, const lane::v1::Fram
 std::string ClientErrorJsonLine(const std::string& frame_name, const std::string& camera_id,
                                 uint64_t frame_id, const std::string& error);
 
-}  // namespace lane_client
+}  // namespace lane::client
 
 #endif  // LANE_CLIENT_RESULTS_H_

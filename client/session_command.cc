@@ -13,7 +13,7 @@
 #include "session_config.h"
 #include "wire/camera_id.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 namespace v1 = lane::v1;
@@ -86,12 +86,12 @@ grpc::Status CallSession(const SessionFlags& flags, const v1::SessionConfig* con
 int RunSession(const CLI::App& app, const SessionFlags& flags) {
   const std::string command = "session " + app.get_name();
   const absl::StatusOr<CallSetup> setup = ParseCallSetup(flags.call, absl::Seconds(10));
-  if (!setup.ok()) return lane_tools::UsageError(app, std::string(setup.status().message()));
+  if (!setup.ok()) return io::UsageError(app, std::string(setup.status().message()));
   if (flags.action != Action::kList) {
     // The server's rule, checked before the id goes out (and into the
     // x-camera-id header a proxy reads).
     if (const absl::Status id = lane::wire::ValidateCameraId(flags.camera); !id.ok()) {
-      return lane_tools::UsageError(app, absl::StrCat("--camera: ", id.message()));
+      return io::UsageError(app, absl::StrCat("--camera: ", id.message()));
     }
   }
   std::optional<v1::SessionConfig> config;
@@ -126,7 +126,7 @@ int RunSession(const CLI::App& app, const SessionFlags& flags) {
 
 int RunInfo(const CLI::App& app, const CallFlags& flags) {
   const absl::StatusOr<CallSetup> setup = ParseCallSetup(flags, absl::Seconds(10));
-  if (!setup.ok()) return lane_tools::UsageError(app, std::string(setup.status().message()));
+  if (!setup.ok()) return io::UsageError(app, std::string(setup.status().message()));
   int exit_code = kExitOk;
   for (const std::string& target : setup->targets) {
     const auto stub = v1::LaneService::NewStub(MakeChannel(target));
@@ -148,8 +148,8 @@ int RunInfo(const CLI::App& app, const CallFlags& flags) {
 }  // namespace
 
 std::vector<Command> AddSessionCommands(CLI::App& client) {
-  CLI::App* session = lane_tools::AddCommand(client, "session", "manage camera sessions",
-                                             kSessionDescription, kSessionFooter);
+  CLI::App* session = io::AddCommand(client, "session", "manage camera sessions",
+                                     kSessionDescription, kSessionFooter);
   session->require_subcommand(1);
   struct ActionInfo {
     Action action;
@@ -165,8 +165,8 @@ std::vector<Command> AddSessionCommands(CLI::App& client) {
   for (const ActionInfo& info : actions) {
     auto flags = std::make_shared<SessionFlags>();
     flags->action = info.action;
-    CLI::App* app = lane_tools::AddCommand(*session, info.name, info.summary, kSessionDescription,
-                                           kSessionFooter);
+    CLI::App* app =
+        io::AddCommand(*session, info.name, info.summary, kSessionDescription, kSessionFooter);
     AddCallOptions(app, &flags->call, "10s");
     if (info.action != Action::kList) {
       app->add_option("--camera", flags->camera, "the camera id")->type_name("ID")->required();
@@ -183,11 +183,11 @@ std::vector<Command> AddSessionCommands(CLI::App& client) {
 Command AddInfoCommand(CLI::App& client) {
   auto flags = std::make_shared<CallFlags>();
   CLI::App* app =
-      lane_tools::AddCommand(client, "info", "the server's version, limits and defaults",
-                             "Prints the server's version, formats, limits and detector defaults\n"
-                             "(GetServerInfo) as JSON.");
+      io::AddCommand(client, "info", "the server's version, limits and defaults",
+                     "Prints the server's version, formats, limits and detector defaults\n"
+                     "(GetServerInfo) as JSON.");
   AddCallOptions(app, flags.get(), "10s");
   return {app, [app, flags] { return RunInfo(*app, *flags); }};
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

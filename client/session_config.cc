@@ -2,31 +2,29 @@
 
 #include <string>
 
-#include "cli/cli_config.h"
+#include "io/cli_config.h"
 #include "lane/config/config.h"
 #include "wire/config_proto.h"
 
-namespace lane_client {
+namespace lane::client {
 
 void AddSessionConfigOptions(CLI::App* app, SessionConfigFlags* flags) {
   const std::string group = "Session";
-  lane_tools::AddOptional(app, "--config", &flags->config,
-                          "session config: the JSON format of `lane` (docs/config.md)")
+  io::AddOptional(app, "--config", &flags->config,
+                  "session config: the JSON format of `lane` (docs/config.md)")
       ->type_name("FILE")
       ->group(group);
-  lane_tools::OneOf(
-      lane_tools::AddOptional(app, "--mode", &flags->mode, "detector mode instead of the config's"),
-      {"all", "two"})
+  io::OneOf(io::AddOptional(app, "--mode", &flags->mode, "detector mode instead of the config's"),
+            {"all", "two"})
       ->group(group);
-  lane_tools::OneOf(lane_tools::AddOptional(app, "--backpressure", &flags->backpressure,
-                                            "what the server does at the stream's in-flight bound"),
-                    {"block", "drop_oldest"})
+  io::OneOf(io::AddOptional(app, "--backpressure", &flags->backpressure,
+                            "what the server does at the stream's in-flight bound"),
+            {"block", "drop_oldest"})
       ->group(group);
-  lane_tools::AddOptional(app, "--max-inflight-frames,--session-inflight",
-                          &flags->max_inflight_frames,
-                          "the session's bound on a stream's frames in flight in the server")
+  io::AddOptional(app, "--max-inflight-frames,--session-inflight", &flags->max_inflight_frames,
+                  "the session's bound on a stream's frames in flight in the server")
       ->type_name("N")
-      ->check(lane_tools::Between(1, 1 << 20))
+      ->check(io::Between(1, 1 << 20))
       ->default_str("the server's --max_inflight_frames")
       ->group(group);
   app->add_flag("--full-decode", flags->full_decode,
@@ -50,7 +48,7 @@ absl::StatusOr<std::optional<lane::v1::SessionConfig>> SessionConfigFromFlags(
     }
     return std::optional<lane::v1::SessionConfig>();
   }
-  absl::StatusOr<lane::Config> config = lane_tools::LoadEffectiveConfig(flags.config, flags.mode);
+  absl::StatusOr<lane::Config> config = io::LoadEffectiveConfig(flags.config, flags.mode);
   if (!config.ok()) return config.status();
   lane::v1::SessionConfig proto;
   lane::wire::ConfigToProto(*config, &proto);
@@ -66,4 +64,4 @@ absl::StatusOr<std::optional<lane::v1::SessionConfig>> SessionConfigFromFlags(
   return std::optional<lane::v1::SessionConfig>(std::move(proto));
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

@@ -9,10 +9,10 @@
 #include <string>
 
 #include "absl/status/statusor.h"
-#include "cli/command_line.h"
+#include "io/command_line.h"
 #include "lane/v1/lane_service.pb.h"
 
-namespace lane_client {
+namespace lane::client {
 
 struct SessionConfigFlags {
   std::optional<std::string> config;
@@ -35,6 +35,6 @@ void AddSessionConfigOptions(CLI::App* app, SessionConfigFlags* flags);
 absl::StatusOr<std::optional<lane::v1::SessionConfig>> SessionConfigFromFlags(
     const SessionConfigFlags& flags, bool required);
 
-}  // namespace lane_client
+}  // namespace lane::client
 
 #endif  // LANE_CLIENT_SESSION_CONFIG_H_

@@ -18,14 +18,14 @@
 #include "absl/strings/str_format.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/clock.h"
-#include "cli/inputs.h"
-#include "cli/overlay.h"
-#include "cli/overlay_video.h"
-#include "cli/progress_bar.h"
 #include "commands.h"
 #include "common.h"
 #include "frames.h"
-#include "lane/detector.h"
+#include "io/inputs.h"
+#include "io/overlay.h"
+#include "io/overlay_video.h"
+#include "io/progress_bar.h"
+#include "lane/detector/detector.h"
 #include "results.h"
 #include "session_config.h"
 #include "streamer.h"
@@ -33,7 +33,7 @@
 #include "wire/config_proto.h"
 #include "wire/detection_proto.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 namespace v1 = lane::v1;
@@ -71,7 +71,7 @@ struct StreamFlags {
   std::optional<absl::Duration> retry_timeout;
   int max_reconnects = kDefaultMaxReconnects;
   std::optional<absl::Duration> stall_timeout;
-  lane_tools::ReadFlags read;
+  io::ReadFlags read;
   bool quiet = false;
   bool no_progress = false;
   std::vector<std::string> inputs;
@@ -82,7 +82,7 @@ struct StreamFlags {
 // `dir` (when not empty) and frames of `video` (when not null).
 class OverlayWriter {
  public:
-  OverlayWriter(std::filesystem::path dir, lane_tools::OverlayVideo* video)
+  OverlayWriter(std::filesystem::path dir, io::OverlayVideo* video)
       : dir_(std::move(dir)), video_(video) {}
 
   // An error message or "".
@@ -121,16 +121,16 @@ class OverlayWriter {
                    const std::string& details) {
     if (video_ != nullptr) {
       const std::string error =
-          video_->Add(lane_tools::DrawLanesOnImage(frame, drawn, *detector_, item.name, details));
+          video_->Add(io::DrawLanesOnImage(frame, drawn, *detector_, item.name, details));
       if (!error.empty()) return error;
     }
     if (dir_.empty()) return "";
-    return lane_tools::WriteOverlays(dir_, lane_tools::UniqueStem(item.stem, used_), frame, drawn,
-                                     *detector_, item.name, details);
+    return io::WriteOverlays(dir_, io::UniqueStem(item.stem, used_), frame, drawn, *detector_,
+                             item.name, details);
   }
 
   const std::filesystem::path dir_;
-  lane_tools::OverlayVideo* const video_;
+  io::OverlayVideo* const video_;
   std::optional<lane::Detector> detector_;
   uint64_t version_ = 0;
   std::set<std::string> used_;
@@ -241,7 +241,7 @@ class OverlayDrawer {
 class StreamSink {
  public:
   StreamSink(std::ostream& out, const std::string& camera_id, OverlayDrawer* overlays,
-             const Streamer& streamer, lane_tools::ProgressBar& progress, int total)
+             const Streamer& streamer, io::ProgressBar& progress, int total)
       : out_(out),
         camera_id_(camera_id),
         overlays_(overlays),
@@ -304,7 +304,7 @@ class StreamSink {
   const std::string camera_id_;
   OverlayDrawer* const overlays_;
   const Streamer& streamer_;
-  lane_tools::ProgressBar& progress_;
+  io::ProgressBar& progress_;
   const int total_;
   int answered_ = 0;
   std::optional<StreamSession> session_;
@@ -329,7 +329,7 @@ StreamerOptions StreamerOptionsFrom(const StreamFlags& flags,
 
 // --overlay and --overlay-video: video, writer and drawer (destroyed drawer first).
 struct StreamOverlays {
-  std::unique_ptr<lane_tools::OverlayVideo> video;
+  std::unique_ptr<io::OverlayVideo> video;
   std::unique_ptr<OverlayWriter> writer;
   std::unique_ptr<OverlayDrawer> drawer;
 };
@@ -344,12 +344,11 @@ struct OpenedOverlays {
 OpenedOverlays OpenOverlays(const CLI::App& app, const StreamFlags& flags) {
   OpenedOverlays opened;
   if (flags.overlay_video) {
-    if (const std::string e = lane_tools::OverlayVideo::CheckPath(*flags.overlay_video);
-        !e.empty()) {
-      opened.exit = lane_tools::UsageError(app, e);
+    if (const std::string e = io::OverlayVideo::CheckPath(*flags.overlay_video); !e.empty()) {
+      opened.exit = io::UsageError(app, e);
       return opened;
     }
-    opened.overlays.video = std::make_unique<lane_tools::OverlayVideo>(
+    opened.overlays.video = std::make_unique<io::OverlayVideo>(
         *flags.overlay_video, flags.read.fps > 0 ? flags.read.fps : 10.0);
   }
   std::string overlay_dir;
@@ -385,16 +384,16 @@ bool FinishOverlays(const StreamFlags& flags, StreamOverlays& overlays) {
 }
 
 int RunStream(const CLI::App& app, const StreamFlags& flags) {
-  if (flags.inputs.empty()) return lane_tools::UsageError(app, "no INPUT given");
+  if (flags.inputs.empty()) return io::UsageError(app, "no INPUT given");
   const auto targets = SplitTargets(flags.target);
-  if (!targets.ok()) return lane_tools::UsageError(app, std::string(targets.status().message()));
+  if (!targets.ok()) return io::UsageError(app, std::string(targets.status().message()));
   if (targets->size() != 1) {
-    return lane_tools::UsageError(app, "stream takes one --target (use a dns:/// name to balance)");
+    return io::UsageError(app, "stream takes one --target (use a dns:/// name to balance)");
   }
   // Checked here, not by the server: an id it refuses, or a header a proxy
   // refuses (UNAVAILABLE), must not become a retry loop.
   if (const absl::Status id = lane::wire::ValidateCameraId(flags.camera); !id.ok()) {
-    return lane_tools::UsageError(app, absl::StrCat("--camera: ", id.message()));
+    return io::UsageError(app, absl::StrCat("--camera: ", id.message()));
   }
   absl::StatusOr<std::optional<v1::SessionConfig>> session =
       SessionConfigFromFlags(flags.session, false);
@@ -402,7 +401,7 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
   const StreamerOptions options = StreamerOptionsFrom(flags, *session);
 
   std::ofstream file;
-  if (flags.output && !lane_tools::OpenOutputFile(*flags.output, &file)) {
+  if (flags.output && !io::OpenOutputFile(*flags.output, &file)) {
     return Failure("stream", absl::StrCat("cannot write ", *flags.output));
   }
   std::ostream& out = file.is_open() ? static_cast<std::ostream&>(file) : std::cout;
@@ -415,7 +414,7 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
                     [](const std::string& message) { Note("stream", message); });
   // A bar when the frame count is known (files), else a counter; only on a
   // terminal, never with --quiet or --no-progress.
-  lane_tools::ProgressBar progress(!flags.quiet && !flags.no_progress);
+  io::ProgressBar progress(!flags.quiet && !flags.no_progress);
   const int total = static_cast<int>(std::min<long long>(frames.KnownFrameCount(), 1 << 30));
   StreamSink sink(out, options.camera_id, overlays.drawer.get(), streamer, progress, total);
   const absl::Status status =
@@ -447,33 +446,31 @@ int RunStream(const CLI::App& app, const StreamFlags& flags) {
 
 Command AddStreamCommand(CLI::App& client) {
   auto flags = std::make_shared<StreamFlags>();
-  CLI::App* app =
-      lane_tools::AddCommand(client, "stream", "frames of files or videos in, JSON Lines out",
-                             kStreamDescription, kStreamFooter);
+  CLI::App* app = io::AddCommand(client, "stream", "frames of files or videos in, JSON Lines out",
+                                 kStreamDescription, kStreamFooter);
   AddTargetOption(app, &flags->target, "server address");
   app->add_option("--camera", flags->camera, "camera id of the session")->type_name("ID");
   AddSessionConfigOptions(app, &flags->session);
   app->add_flag("--replace", flags->replace,
                 "replace a session of the camera with a different config");
   app->add_flag("--raw", flags->raw, "decode image files here and send raw BGR pixels");
-  lane_tools::AddOptional(app, "--output", &flags->output,
-                          "write the results to FILE instead of stdout")
+  io::AddOptional(app, "--output", &flags->output, "write the results to FILE instead of stdout")
       ->type_name("FILE");
-  lane_tools::AddOptional(app, "--overlay", &flags->overlay,
-                          "also write DIR/STEM.png and DIR/STEM_ipm.png per frame")
+  io::AddOptional(app, "--overlay", &flags->overlay,
+                  "also write DIR/STEM.png and DIR/STEM_ipm.png per frame")
       ->type_name("DIR");
-  lane_tools::AddOptional(app, "--overlay-video", &flags->overlay_video,
-                          "also write the answered frames with their lanes and a caption (round "
-                          "trip and server time) as one video (.mp4/.mov/.mkv/.avi), at --fps "
-                          "(else 10/s)")
+  io::AddOptional(app, "--overlay-video", &flags->overlay_video,
+                  "also write the answered frames with their lanes and a caption (round "
+                  "trip and server time) as one video (.mp4/.mov/.mkv/.avi), at --fps "
+                  "(else 10/s)")
       ->type_name("FILE");
   app->add_option("--window,--inflight", flags->window,
                   "frames sent and not answered, at most (the client's window; the server's "
                   "bound is --max-inflight-frames)")
       ->type_name("K")
-      ->check(lane_tools::Between(1, 4096));
-  lane_tools::AddDuration(app, "--retry-timeout", &flags->retry_timeout,
-                          "give up when no frame is answered for D", "60s");
+      ->check(io::Between(1, 4096));
+  io::AddDuration(app, "--retry-timeout", &flags->retry_timeout,
+                  "give up when no frame is answered for D", "60s");
   app->add_option("--max-reconnects", flags->max_reconnects,
                   "give up when the same status code comes back after N reconnections in a row "
                   "with no frame answered (the server's own 'starting' and 'draining' never "
@@ -481,11 +478,10 @@ Command AddStreamCommand(CLI::App& client) {
                   "restart of lane-server or a proxy's failover, much shorter than "
                   "--retry-timeout for a failure that repeats (a proxy refusing the call)")
       ->type_name("N")
-      ->check(lane_tools::Between(0, 1000000));
-  lane_tools::AddDuration(app, "--stall-timeout", &flags->stall_timeout,
-                          "reconnect when frames are in flight and nothing comes back for D",
-                          "30s");
-  lane_tools::AddReadFlags(app, &flags->read);
+      ->check(io::Between(0, 1000000));
+  io::AddDuration(app, "--stall-timeout", &flags->stall_timeout,
+                  "reconnect when frames are in flight and nothing comes back for D", "30s");
+  io::AddReadFlags(app, &flags->read);
   app->add_flag("--quiet,-q", flags->quiet, "print only errors on stderr: no progress or summary");
   app->add_flag("--no-progress", flags->no_progress,
                 "no progress bar (it is drawn only when stderr is a terminal)");
@@ -495,4 +491,4 @@ Command AddStreamCommand(CLI::App& client) {
   return {app, [app, flags] { return RunStream(*app, *flags); }};
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

@@ -9,7 +9,7 @@
 #include "common.h"
 #include "wire/camera_id.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 namespace v1 = lane::v1;
@@ -350,4 +350,4 @@ void Streamer::WatchdogLoop(grpc::ClientContext* context) {
   mu_.Unlock();
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

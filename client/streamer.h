@@ -40,7 +40,7 @@
 #include "lane/v1/lane_service.grpc.pb.h"
 #include "reconnect_backoff.h"
 
-namespace lane_client {
+namespace lane::client {
 
 struct StreamItem {
   uint64_t frame_id = 0;  // set by the streamer
@@ -179,6 +179,6 @@ class Streamer {
 // Whether a failed call is worth retrying after a reconnection.
 bool IsTransient(grpc::StatusCode code);
 
-}  // namespace lane_client
+}  // namespace lane::client
 
 #endif  // LANE_CLIENT_STREAMER_H_

@@ -21,7 +21,7 @@
 
 extern char** environ;
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 namespace v1 = lane::v1;
@@ -107,7 +107,7 @@ bool OpenUrl(const std::string& url) {
 
 int RunView(const CLI::App& app, const ViewFlags& flags) {
   const absl::StatusOr<CallSetup> setup = ParseCallSetup(flags.call, absl::Seconds(10));
-  if (!setup.ok()) return lane_tools::UsageError(app, std::string(setup.status().message()));
+  if (!setup.ok()) return io::UsageError(app, std::string(setup.status().message()));
   const std::string& target = setup->targets.front();
   std::string base = flags.view_url;
   bool tokens = false;
@@ -141,8 +141,8 @@ int RunView(const CLI::App& app, const ViewFlags& flags) {
 
 Command AddViewCommand(CLI::App& client) {
   auto flags = std::make_shared<ViewFlags>();
-  CLI::App* app = lane_tools::AddCommand(client, "view", "the live view's URL (and open it)",
-                                         kViewDescription, kViewFooter);
+  CLI::App* app = io::AddCommand(client, "view", "the live view's URL (and open it)",
+                                 kViewDescription, kViewFooter);
   AddCallOptions(app, &flags->call, "10s");
   app->add_option("--camera", flags->camera, "the camera to show (default: every session)")
       ->type_name("ID");
@@ -154,4 +154,4 @@ Command AddViewCommand(CLI::App& client) {
   return {app, [app, flags] { return RunView(*app, *flags); }};
 }
 
-}  // namespace lane_client
+}  // namespace lane::client

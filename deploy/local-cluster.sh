@@ -10,7 +10,7 @@
 # usage: deploy/local-cluster.sh [--short] [--duration S] [--streams N] [--out DIR] ...
 #        (--help lists every option; the logic is deploy/local_cluster.py)
 # environment: BUILD_DIR (build) holds server/lane-server, client/lane-client
-#              and tools/lane; LANE_SERVER, LANE_CLIENT, LANE_CLI override one;
+#              and cli/lane; LANE_SERVER, LANE_CLIENT, LANE_CLI override one;
 #              BASE_PORT=P uses ports P..P+5 instead of free ones; OUT.
 #
 # Traffic stays on 127.0.0.1. The full run takes about a minute, --short

@@ -75,7 +75,7 @@ def binaries():
     paths = {
         "server": os.environ.get("LANE_SERVER", os.path.join(build, "server", "lane-server")),
         "client": os.environ.get("LANE_CLIENT", os.path.join(build, "client", "lane-client")),
-        "lane": os.environ.get("LANE_CLI", os.path.join(build, "tools", "lane")),
+        "lane": os.environ.get("LANE_CLI", os.path.join(build, "cli", "lane")),
     }
     missing = [p for p in paths.values() if not os.access(p, os.X_OK)]
     if missing:

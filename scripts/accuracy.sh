@@ -10,7 +10,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${1:-build}
-LANE=$BUILD/tools/lane
+LANE=$BUILD/cli/lane
 DATA=${LANE_DATA_DIR:-../shared/data}
 SEEDS=${SEEDS:-5}
 CALTECH=${CALTECH:-configs/caltech.json}

@@ -6,7 +6,7 @@
 #
 #   scripts/backfill-local.sh MANIFEST OUTPUT_DIR [SHARDS] [LANE]
 #
-# SHARDS defaults to the number of cores; LANE to build/tools/lane. Exit 0
+# SHARDS defaults to the number of cores; LANE to build/cli/lane. Exit 0
 # when every shard succeeded, 1 when one reported a failed recording or
 # frame (see OUTPUT_DIR/summary-shard-*.json), 2 for a usage error.
 set -euo pipefail
@@ -18,7 +18,7 @@ manifest=$1
 out=$2
 cores=$(nproc)
 shards=${3:-$cores}
-lane=${4:-$(dirname "$0")/../build/tools/lane}
+lane=${4:-$(dirname "$0")/../build/cli/lane}
 [ -x "$lane" ] || { echo "backfill-local: $lane is not built (scripts/build.sh)" >&2; exit 2; }
 jobs=$(( cores / shards ))
 [ "$jobs" -ge 1 ] || jobs=1

@@ -9,7 +9,7 @@ for the last two), and checks what they name:
 
 * include paths, `lane/geometry/camera.h`, against every include root
   (core/*/include, decode/include, eval/include, synthetic/include, and the
-  repository root for `wire/...` and `cli/...`); `lane/v1/*.pb.h` against
+  repository root for `wire/...` and `io/...`); `lane/v1/*.pb.h` against
   proto/lane/v1/*.proto;
 * repository paths, `server/frame_stream.cc`, `docs/`, `wire/x.{h,cc}`,
   `client/bench*.cc`: relative to the repository root or to the naming
@@ -89,7 +89,7 @@ for _d in list(DIR_SET):
 BASENAMES = {os.path.basename(f) for f in FILES}
 TOP = {f.split("/")[0] for f in FILES if "/" in f}
 # Every folder named include, at any depth, and the repository's root (for
-# wire/... and cli/...).
+# wire/... and io/...).
 INCLUDE_ROOTS = sorted({("/" + d)[1:("/" + d + "/").index("/include/") + len("/include")]
                         for d in DIR_SET if "/include/" in "/" + d + "/"} | {""})
 
@@ -297,7 +297,7 @@ def check_path_token(token, folder, written):
     parts = token.strip("/").split("/")
     if any(re.match(r"[A-Z][A-Z0-9_-]+(\.\w+)?$", c) and c not in BASENAMES for c in parts) or any(
             c.startswith(("my_", "my-", "<")) for c in parts):
-        return None  # placeholders: DIR/x.json, cli/NAME.h, configs/my-camera.json
+        return None  # placeholders: DIR/x.json, io/NAME.h, configs/my-camera.json
     if GENERATED.search(token):
         return None
     first = token.split("/")[0]

@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 OUT=out/demo
 PORT=${LANE_DEMO_PORT:-50551}
 rm -rf "$OUT" && mkdir -p "$OUT"
-build/tools/lane render --config configs/synthetic.json --count 20 --seed 1 --output "$OUT/frames" --format jpg
+build/cli/lane render --config configs/synthetic.json --count 20 --seed 1 --output "$OUT/frames" --format jpg
 
 build/server/lane-server --address="127.0.0.1:$PORT" --metrics_address= \
   --default_config=configs/synthetic.json > "$OUT/server.log" 2>&1 &
@@ -23,7 +23,7 @@ for _ in $(seq 1 100); do
 done
 build/client/lane-client stream --target "127.0.0.1:$PORT" --camera default \
   --output "$OUT/service-results.jsonl" --overlay "$OUT/service-overlays" "$OUT/frames"
-build/tools/lane detect --config configs/synthetic.json --output "$OUT/results.jsonl" \
+build/cli/lane detect --config configs/synthetic.json --output "$OUT/results.jsonl" \
   --overlay "$OUT/overlays" "$OUT/frames"
 echo "demo: service results in $OUT/service-results.jsonl (overlays $OUT/service-overlays/)," \
      "direct results in $OUT/results.jsonl (overlays $OUT/overlays/)"

@@ -12,7 +12,7 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 median() {  # config dataset
   for pass in 1 2 3; do
-    "$BUILD/tools/lane" detect --config "$1" --output "$tmp/r$pass.jsonl" "$DATA/$2" 2>/dev/null
+    "$BUILD/cli/lane" detect --config "$1" --output "$tmp/r$pass.jsonl" "$DATA/$2" 2>/dev/null
   done
   cat "$tmp"/r*.jsonl | python3 -c '
 import json, statistics, sys

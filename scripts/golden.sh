@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 BUILD=${1:-build}
 OUT=${2:-out/golden}
 DATA=${LANE_DATA_DIR:-../shared/data}
-LANE="$BUILD/tools/lane"
+LANE="$BUILD/cli/lane"
 mkdir -p "$OUT"
 strip() { python3 -c '
 import json, sys

@@ -41,7 +41,7 @@ echo "package-test: built $(basename "$deb") ($(du -k "$deb" | cut -f1) kB)"
 dpkg-deb -c "$deb" >"$build/deb-contents.txt"
 for f in ./usr/bin/lane ./usr/bin/lane-server ./usr/bin/lane-client \
   ./lib/systemd/system/lane-server.service ./etc/default/lane-server \
-  ./usr/lib/liblanedet_core.a ./usr/include/lane/detector.h ./usr/lib/pkgconfig/lanedet.pc \
+  ./usr/lib/liblanedet_core.a ./usr/include/lane/detector/detector.h ./usr/lib/pkgconfig/lanedet.pc \
   ./usr/share/lanedet/configs/synthetic.json ./usr/share/doc/lanedet/copyright; do
   grep -q " $f\$" "$build/deb-contents.txt" || fail "$f is not in the package"
 done

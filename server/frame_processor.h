@@ -12,7 +12,7 @@
 
 #include "absl/status/status.h"
 #include "absl/time/time.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/track/tracked_frame.h"
 #include "lane/v1/lane_service.pb.h"
 #include "live_feed.h"

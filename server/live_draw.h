@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/v1/lane_service.pb.h"
 #include "live_feed.h"
 

@@ -20,7 +20,7 @@
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
 #include "grpc_metrics.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "wire/status_map.h"
 
 namespace lane::server {

@@ -21,7 +21,7 @@
 #include "absl/time/time.h"
 #include "lane/calibrate/calibration.h"
 #include "lane/config/config.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/track/frame_tracker.h"
 #include "live_feed.h"
 #include "resume_seal.h"

@@ -10,7 +10,7 @@
 #include <optional>
 #include <vector>
 
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/track/tracked_frame.h"
 #include "lane/v1/lane_service.pb.h"
 

@@ -9,7 +9,7 @@
 
 #include "absl/status/statusor.h"
 #include "lane/decode/image_decoder.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/v1/lane_service.pb.h"
 
 namespace lane::wire {

@@ -5,7 +5,7 @@
 #include <tuple>
 
 #include "absl/strings/str_cat.h"
-#include "lane/eval/match.h"
+#include "lane/eval/curve_distances.h"
 
 namespace lane::eval {
 

@@ -19,7 +19,7 @@
 #include "common.h"
 #include "wire/config_proto.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 // The bench writes a small header and the frame's pre-serialized bytes one
@@ -432,4 +432,4 @@ TEST(ClientUnitTest, TimelineBucketsByArrival) {
 }
 
 }  // namespace
-}  // namespace lane_client
+}  // namespace lane::client

@@ -1,5 +1,5 @@
 // lane-client against a real lane-server on a loopback port, with real JPEG
-// frames: the commands run in-process (lane_client::RunCommand) as the
+// frames: the commands run in-process (lane::client::RunCommand) as the
 // executable would run them. stream (results, raw and video frames,
 // restarts), sessions, health, security and the command line; bench is in
 // client_bench_test.cc.
@@ -23,7 +23,7 @@
 #include "server.h"
 #include "test_ca.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 TEST(ClientUnitTest, SplitsTargets) {
@@ -404,4 +404,4 @@ TEST_F(ClientTest, OldFlagSpellingsAreAliases) {
 }
 
 }  // namespace
-}  // namespace lane_client
+}  // namespace lane::client

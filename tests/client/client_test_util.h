@@ -23,7 +23,7 @@
 #include "lane/synthetic.h"
 #include "server.h"
 
-namespace lane_client {
+namespace lane::client {
 
 namespace fs = std::filesystem;
 namespace v1 = lane::v1;
@@ -156,6 +156,6 @@ inline void ExpectConsistentRun(const Json& run) {
   EXPECT_GT(run["achieved_fps"].get<double>(), 0);
 }
 
-}  // namespace lane_client
+}  // namespace lane::client
 
 #endif  // LANE_TESTS_CLIENT_CLIENT_TEST_UTIL_H_

@@ -14,7 +14,7 @@
 
 #include "frames.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 namespace fs = std::filesystem;
@@ -61,4 +61,4 @@ TEST(FrameSourceTest, HostileFilesAreTheirFramesErrorsAndTheNextFrameIsRead) {
 }
 
 }  // namespace
-}  // namespace lane_client
+}  // namespace lane::client

@@ -5,7 +5,7 @@
 
 #include <vector>
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 TEST(ReconnectBackoffTest, DoublesUpToTheMaximum) {
@@ -52,4 +52,4 @@ TEST(ReconnectBackoffTest, JitterStaysWithinItsBoundsAndFollowsTheSeed) {
 }
 
 }  // namespace
-}  // namespace lane_client
+}  // namespace lane::client

@@ -29,7 +29,7 @@
 #include "streamer.h"
 #include "wire/status_map.h"
 
-namespace lane_client {
+namespace lane::client {
 namespace {
 
 namespace v1 = lane::v1;
@@ -447,4 +447,4 @@ TEST(RetryBudgetCommandTest, BenchEndsEarlyWhenEveryCameraGaveUp) {
 }
 
 }  // namespace
-}  // namespace lane_client
+}  // namespace lane::client

@@ -16,7 +16,7 @@
 
 #include "lane/calibrate/vanishing_point.h"
 #include "lane/config/config.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/synthetic.h"
 #include "shared_data.h"
 #include "test_cameras.h"

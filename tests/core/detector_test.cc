@@ -1,6 +1,6 @@
 // End-to-end tests of the detector on synthetic frames with exact truth, and
 // its handling of bad input.
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 
 #include <gtest/gtest.h>
 
@@ -13,8 +13,8 @@
 #include <optional>
 #include <vector>
 
-#include "lane/eval/match.h"
-#include "lane/road_model.h"
+#include "lane/detector/road_model.h"
+#include "lane/eval/curve_distances.h"
 #include "lane/synthetic.h"
 #include "test_cameras.h"
 
@@ -51,8 +51,8 @@ void Score(const std::vector<Bezier>& dets, const std::vector<bool>& inferred,
     int best = -1;
     double best_mean = 1e9;
     for (size_t i = 0; i < dets.size(); ++i) {
-      if (used[i] || !PaperMatch(dets[i], t, width)) continue;
-      const double m = CurveMatchDistances(dets[i].Sample(101), t.Sample(101)).mean;
+      if (used[i] || !eval::PaperMatch(dets[i], t, width)) continue;
+      const double m = eval::CurveMatchDistances(dets[i].Sample(101), t.Sample(101)).mean;
       if (m < best_mean) best_mean = m, best = static_cast<int>(i);
     }
     if (best >= 0) used[best] = true, ++matched;
@@ -69,7 +69,7 @@ void Score(const std::vector<Bezier>& dets, const std::vector<bool>& inferred,
     // other unmatched detection is.
     bool on_some_truth = false;
     for (const auto& t : all_truths) {
-      on_some_truth = on_some_truth || PaperMatch(dets[i], t, width);
+      on_some_truth = on_some_truth || eval::PaperMatch(dets[i], t, width);
     }
     tally.false_positives += on_some_truth ? 0 : 1;
   }
@@ -219,7 +219,7 @@ TEST(DetectorEndToEnd, ReportsADoubleLineOnceAlongItsCentre) {
   EXPECT_LE(median, 0.08);
 }
 
-// The road model (lane/road_model.h) on rendered roads of 3 lanes whose
+// The road model (lane/detector/road_model.h) on rendered roads of 3 lanes whose
 // paint is worn to 0-30 % or gone on about half the boundaries: an inner
 // boundary without paint lies half-way between its painted neighbours, and
 // is reported there with `inferred` set. Inference only adds lanes: the

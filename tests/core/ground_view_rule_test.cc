@@ -17,8 +17,8 @@
 #include "lane/calibrate/calibration.h"
 #include "lane/calibrate/mounted_camera.h"
 #include "lane/config/config.h"
-#include "lane/detector.h"
-#include "lane/eval/match.h"
+#include "lane/detector/detector.h"
+#include "lane/eval/curve_distances.h"
 #include "lane/synthetic.h"
 
 namespace lane {
@@ -245,7 +245,7 @@ int FoundOf(const Detection& detection, const std::vector<Bezier>& truths, int w
   int found = 0;
   for (const Bezier& t : truths) {
     bool hit = false;
-    for (const Lane& l : detection.lanes) hit = hit || PaperMatch(Bezier{l.image}, t, width);
+    for (const Lane& l : detection.lanes) hit = hit || eval::PaperMatch(Bezier{l.image}, t, width);
     found += hit ? 1 : 0;
   }
   return found;

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <random>
 
-#include "lane/eval/match.h"
+#include "lane/eval/curve_distances.h"
 #include "lane/geometry/bezier.h"
 #include "lane/stages/line_detection.h"
 #include "lane/stages/line_fit.h"
@@ -210,11 +210,13 @@ TEST(SplineFitTest, RansacFollowsACurvedMarkingAwayFromItsLine) {
   const IpmLine& line = scene.line;
   std::mt19937_64 rng(3);
   const double seed_mean =
-      CurveMatchDistances(Bezier::Line(line.top, line.bottom).Sample(101), truth.Sample(101)).mean;
+      eval::CurveMatchDistances(Bezier::Line(line.top, line.bottom).Sample(101), truth.Sample(101))
+          .mean;
   ASSERT_GE(seed_mean, 3.0);
   const auto fit = FitSplineAroundLine(img, line, 10, SplineRansacOptions{}, rng);
   ASSERT_TRUE(fit.has_value());
-  const MatchDistances d = CurveMatchDistances(fit->spline.Sample(101), truth.Sample(101));
+  const eval::MatchDistances d =
+      eval::CurveMatchDistances(fit->spline.Sample(101), truth.Sample(101));
   EXPECT_LT(d.mean, 1.0);
   EXPECT_LT(d.mean, seed_mean / 3);
 }
@@ -244,8 +246,8 @@ TEST(SplineFitTest, AdaptiveStopEndsEarlyOnACleanMarkingOnly) {
     fast_trials += fast->trials;
     // Both within 1.5 px of the curve on average (the marking is one
     // rounded pixel wide; 40 trials also land 1.2 px off for some seeds).
-    EXPECT_LT(CurveMatchDistances(full->spline.Sample(101), truth.Sample(101)).mean, 1.5);
-    EXPECT_LT(CurveMatchDistances(fast->spline.Sample(101), truth.Sample(101)).mean, 1.5)
+    EXPECT_LT(eval::CurveMatchDistances(full->spline.Sample(101), truth.Sample(101)).mean, 1.5);
+    EXPECT_LT(eval::CurveMatchDistances(fast->spline.Sample(101), truth.Sample(101)).mean, 1.5)
         << "seed " << seed;
   }
   EXPECT_LE(fast_trials, 10 * 15);
@@ -262,10 +264,10 @@ TEST(SplineFitTest, AdaptiveStopEndsEarlyOnACleanMarkingOnly) {
 
 TEST(MatchTest, PaperRuleAndWidthScaling) {
   const Bezier a = Bezier::Line({100, 300}, {50, 479});
-  EXPECT_TRUE(PaperMatch(a, a, 640));
+  EXPECT_TRUE(eval::PaperMatch(a, a, 640));
   const Bezier shifted = Bezier::Line({130, 300}, {80, 479});  // 30 px to the right
-  EXPECT_FALSE(PaperMatch(shifted, a, 640));
-  EXPECT_TRUE(PaperMatch(shifted, a, 1640));  // thresholds scale with width
+  EXPECT_FALSE(eval::PaperMatch(shifted, a, 640));
+  EXPECT_TRUE(eval::PaperMatch(shifted, a, 1640));  // thresholds scale with width
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
-// The road model (lane/road_model.h): a boundary hidden between two found
+// The road model (lane/detector/road_model.h): a boundary hidden between two found
 // ones that run parallel two lane widths apart is inferred half-way; nothing
 // else is.
-#include "lane/road_model.h"
+#include "lane/detector/road_model.h"
 
 #include <gtest/gtest.h>
 

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "lane/config/config.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/synthetic.h"
 #include "lane/track/ego_lane.h"
 #include "lane/track/frame_tracker.h"

@@ -4,7 +4,7 @@
 
 #include <Eigen/Core>
 
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 
 namespace lane {
 

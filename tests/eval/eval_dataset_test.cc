@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/eval/dataset.h"
 #include "lane/eval/evaluate.h"
 #include "lane/eval/render_labels.h"

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "lane/eval/curve.h"
-#include "lane/eval/match.h"
+#include "lane/eval/curve_distances.h"
 #include "lane/eval/paper_rule.h"
 
 namespace lane::eval {

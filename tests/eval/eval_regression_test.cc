@@ -13,7 +13,7 @@
 #include <string>
 
 #include "lane/config/config.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/eval/dataset.h"
 #include "lane/eval/evaluate.h"
 #include "lane/eval/report.h"

@@ -29,7 +29,7 @@ libdir=$(sed -n 's/^libdir=\${prefix}\///p' "$(find "$prefix" -name lanedet.pc -
 [ -n "$libdir" ] || fail "no lanedet.pc installed"
 for f in bin/lane "$libdir/liblanedet_core.a" "$libdir/liblanedet_decode.a" \
   "$libdir/cmake/lanedet/lanedetConfig.cmake" "$libdir/cmake/lanedet/lanedetConfigVersion.cmake" \
-  "$libdir/pkgconfig/lanedet.pc" include/lane/detector.h include/lane/decode/image_decoder.h \
+  "$libdir/pkgconfig/lanedet.pc" include/lane/detector/detector.h include/lane/decode/image_decoder.h \
   include/lane/config/config.h share/lanedet/configs/synthetic.json; do
   [ -e "$prefix/$f" ] || fail "not installed: $f"
 done

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/track/lane_tracker.h"
 #include "wire/tracker_state_proto.h"
 

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "lane/config/config.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/synthetic.h"
 #include "road_frames.h"
 #include "shared_data.h"

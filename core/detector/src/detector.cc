@@ -1,4 +1,4 @@
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 
 #include <algorithm>
 #include <chrono>

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "absl/types/span.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 
 namespace lane::pipeline {
 
@@ -144,7 +144,7 @@ void JoinRefitted(const Refitted& refitted, std::vector<Lane>& lanes);
 // post-processing and fits the road is added.
 void SearchRoadModelWindows(const StageEnv& env, FrameContext& f, const PostprocessFrame& images,
                             std::vector<Lane>& lanes);
-// The road model's hidden boundaries (lane/road_model.h), added to `lanes`
+// The road model's hidden boundaries (lane/detector/road_model.h), added to `lanes`
 // (sorted left to right) with `inferred` set.
 void AddInferredLanes(const StageEnv& env, std::vector<Lane>& lanes);
 

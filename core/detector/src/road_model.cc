@@ -1,4 +1,4 @@
-#include "lane/road_model.h"
+#include "lane/detector/road_model.h"
 
 #include <algorithm>
 #include <cmath>

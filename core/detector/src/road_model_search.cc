@@ -3,7 +3,7 @@
 // two-lane gap, one lane width outside the outermost), the stage
 // "postprocess" searches again inside a window around it; boundaries the
 // road model infers as hidden are added, marked `inferred`
-// (lane/road_model.h).
+// (lane/detector/road_model.h).
 #include <algorithm>
 #include <cmath>
 #include <utility>

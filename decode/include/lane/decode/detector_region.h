@@ -1,12 +1,11 @@
 // The part of a frame a detector reads (lane::Detector::Needs) as a region
-// for DecodeImageRegion. Header-only: lane_decode itself does not depend on
-// the detector; the front ends that have both (wire/ for the service, cli/
-// for `lane detect`) include this.
+// for DecodeImageRegion. Header-only; the one part of lane_decode that needs
+// the detector, which is why lane_decode links lane_core (decode/CMakeLists.txt).
 #ifndef LANE_DECODE_DETECTOR_REGION_H_
 #define LANE_DECODE_DETECTOR_REGION_H_
 
 #include "lane/decode/image_decoder.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 
 namespace lane::decode {
 

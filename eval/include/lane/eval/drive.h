@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "absl/status/status.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/eval/curve.h"
 #include "lane/eval/paper_rule.h"
 #include "lane/synthetic.h"

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/eval/counts.h"
 #include "lane/eval/culane_metric.h"
 #include "lane/eval/dataset.h"

@@ -6,7 +6,7 @@
 #include <optional>
 #include <string>
 
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 
 namespace lane::eval {
 

@@ -41,7 +41,7 @@ struct PaperRuleOptions {
 const char* RuleName(PaperRuleOptions::Rule rule);                    // "and", "or"
 const char* AssignmentName(PaperRuleOptions::Assignment assignment);  // "one-to-one", ...
 
-// True when d^ and d- (from lane::CurveMatchDistances) pass the rule at this
+// True when d^ and d- (from lane::eval::CurveMatchDistances) pass the rule at this
 // image width.
 bool PassesPaperRule(double median, double mean, int image_width, const PaperRuleOptions& options);
 

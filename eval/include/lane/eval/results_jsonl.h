@@ -1,5 +1,5 @@
 // Reader of `lane detect` results: JSON Lines, schema 1
-// (docs/results-format.md). The writer is cli/results_json.h.
+// (docs/results-format.md). The writer is io/results_json.h.
 #ifndef LANE_EVAL_RESULTS_JSONL_H_
 #define LANE_EVAL_RESULTS_JSONL_H_
 

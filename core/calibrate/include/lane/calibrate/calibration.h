@@ -26,7 +26,7 @@
 #include "lane/calibrate/self_check.h"
 #include "lane/calibrate/static_structure.h"
 #include "lane/calibrate/vanishing_point.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/geometry/camera.h"
 #include "lane/geometry/ground_view_rule.h"
 #include "lane/geometry/ipm.h"

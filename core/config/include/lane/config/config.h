@@ -8,7 +8,7 @@
 #include <string>
 
 #include "absl/status/statusor.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/geometry/camera.h"
 #include "lane/geometry/ipm.h"
 

@@ -1,7 +1,7 @@
 // A lane on the ground as a curve: x(y) = offset + heading y + curvature
 // y^2 / 2 (metres; x right, y ahead of the camera's foot point) over its
 // extent in y. The tracker holds its lanes so (lane/track/ground_curve.h),
-// and the detector refits a tracked lane in this form (lane/detector.h,
+// and the detector refits a tracked lane in this form (lane/detector/detector.h,
 // DetectionPrior).
 #ifndef LANE_GEOMETRY_GROUND_CURVE_H_
 #define LANE_GEOMETRY_GROUND_CURVE_H_

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/geometry/camera.h"
 #include "lane/track/ground_curve.h"
 

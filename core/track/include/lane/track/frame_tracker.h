@@ -21,7 +21,7 @@
 #include "absl/base/thread_annotations.h"
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/geometry/camera.h"
 #include "lane/track/sequence_tracker.h"
 #include "lane/track/tracked_frame.h"

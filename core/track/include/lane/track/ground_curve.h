@@ -6,7 +6,7 @@
 #include <Eigen/Core>
 #include <optional>
 
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/geometry/ground_curve.h"
 
 namespace lane {

@@ -20,7 +20,7 @@
 #include <optional>
 #include <vector>
 
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/track/ground_curve.h"
 #include "lane/track/marking.h"
 #include "lane/track/tracker_state.h"

@@ -6,7 +6,7 @@
 #include <optional>
 #include <vector>
 
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/geometry/camera.h"
 #include "lane/geometry/ipm.h"
 #include "lane/track/ego_lane.h"

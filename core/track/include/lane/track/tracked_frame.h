@@ -1,14 +1,14 @@
 // What tracking reports of a frame (docs/tracking.md): each lane with its
 // track's identity, colour and type, the predicted lanes of confirmed
 // tracks missed for a few frames, and the ego lane. The detection it wraps
-// knows only what the detector found (lane/detector.h).
+// knows only what the detector found (lane/detector/detector.h).
 #ifndef LANE_TRACK_TRACKED_FRAME_H_
 #define LANE_TRACK_TRACKED_FRAME_H_
 
 #include <optional>
 #include <vector>
 
-#include "lane/detector.h"
+#include "lane/detector/detector.h"
 #include "lane/track/ego_lane.h"
 #include "lane/track/marking.h"
 
