@@ -268,6 +268,11 @@ bool FitTruth(const CameraModel& cam, const Road& road, double y_near, double y_
 // Paints the hood (SyntheticOptions::hood_top_row, HoodRow) over `img`
 // (8-bit BGR) as in daylight; at night ApplyNight then lights it by the sky.
 void DrawHood(const CameraModel& cam, const SyntheticOptions& options, cv::Mat& img);
+// Relights a day image (8-bit BGR) for the night (night.cc): ground pixels
+// by Night's light there, the sky and the hood by the sky's light, then the
+// glare, the lamps' heads and the oncoming headlights.
+void ApplyNight(const CameraModel& cam, const SyntheticOptions& options, const Night& night,
+                const Look& look, cv::Mat& img);
 
 }  // namespace lane::synthetic_internal
 

@@ -244,7 +244,9 @@ TEST(ConvertTest, Lanes) {
 // lanes' curves, score, inferred and refit flags, ids, confirmed and
 // predicted flags, colours and types, and the ego lane (its boundaries found
 // again by their ids). What the server sends is what lane-client writes.
-TEST(ConvertTest, TrackedFrameRoundTrip) {
+// Three tracked lanes of every kind (confirmed, predicted, inferred, refit;
+// colours and types), an ego lane and timings.
+lane::TrackedFrame SampleTrackedFrame() {
   lane::TrackedFrame frame;
   for (int k = 0; k < 3; ++k) {
     lane::TrackedLane& tracked = frame.lanes.emplace_back();
@@ -283,6 +285,12 @@ TEST(ConvertTest, TrackedFrameRoundTrip) {
   frame.ego = ego;
   frame.detection.timings.stage_ms[0] = 0.5;
   frame.detection.timings.total_ms = 2.5;
+  return frame;
+}
+
+TEST(ConvertTest, TrackedFrameRoundTrip) {
+  lane::TrackedFrame frame = SampleTrackedFrame();
+  const lane::EgoLane ego = *frame.ego;
 
   v1::FrameResponse response = LanesToProto(frame);
   *response.mutable_timings() = TimingsToProto(frame.detection.timings);
