@@ -41,6 +41,7 @@ std::string EncodeTrackerState(const lane::TrackerState& state) {
   out.set_next_id(ToU32(state.next_id));
   out.set_started(state.started);
   out.set_time_s(state.time_s);
+  if (state.refits_in_row) out.set_refits_in_row(ToU32(*state.refits_in_row));
   for (const lane::TrackSnapshot& t : state.tracks) {
     v1::TrackedLane* lane = out.add_tracks();
     lane->set_id(ToU32(t.id));
@@ -86,6 +87,10 @@ absl::StatusOr<lane::TrackerState> DecodeTrackerState(std::string_view bytes) {
       static_cast<int>(std::min<uint32_t>(in.next_id(), lane::TrackerState::kMaxId + 1u));
   state.started = in.started();
   state.time_s = in.time_s();
+  // Out-of-range counts fail validation rather than wrap.
+  if (in.has_refits_in_row()) {
+    state.refits_in_row = static_cast<int>(std::min<uint32_t>(in.refits_in_row(), 1u << 30));
+  }
   constexpr uint64_t kBig = uint64_t{1} << 62;
   for (int i = 0; i < in.tracks_size(); ++i) {
     const v1::TrackedLane& lane = in.tracks(i);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -251,6 +252,56 @@ TEST(TrackingRefitTest, AFrameTrackerRefitsBetweenFullSearches) {
   }
 }
 
+// A stream handed to another replica: a FrameTracker that resumes from
+// another's state, in the middle of a run of refitted frames, goes on
+// exactly as the original, full searches at the same frames and the same
+// lanes (the refit schedule travels in the state).
+TEST(TrackingRefitTest, AResumedFrameTrackerKeepsTheRefitSchedule) {
+  absl::StatusOr<Config> config = LoadConfigFile(LANE_SOURCE_DIR "/configs/caltech.json");
+  ASSERT_TRUE(config.ok()) << config.status();
+  absl::StatusOr<Detector> detector =
+      Detector::Create(config->camera, config->ipm, config->detector);
+  ASSERT_TRUE(detector.ok()) << detector.status();
+  LaneTrackingOptions options;
+  options.refit_frames = 3;
+  const SyntheticDriveOptions drive;
+  FrameTracker original(config->camera, options);
+  std::optional<FrameTracker> resumed;
+  int compared = 0, handed_mid_run = 0;
+  for (int i = 0; i < 20; ++i) {
+    absl::StatusOr<SyntheticFrame> frame = RenderSyntheticDriveFrame(config->camera, drive, 7, i);
+    ASSERT_TRUE(frame.ok());
+    absl::StatusOr<TrackedFrame> a = original.Process(*detector, frame->bgr, frame->time_s);
+    ASSERT_TRUE(a.ok());
+    if (resumed) {
+      absl::StatusOr<TrackedFrame> b = resumed->Process(*detector, frame->bgr, frame->time_s);
+      ASSERT_TRUE(b.ok());
+      EXPECT_EQ(b->detection.refit_lanes, a->detection.refit_lanes) << "frame " << i;
+      ASSERT_EQ(b->lanes.size(), a->lanes.size()) << "frame " << i;
+      for (size_t k = 0; k < a->lanes.size(); ++k) {
+        EXPECT_EQ(b->lanes[k].id, a->lanes[k].id) << "frame " << i;
+        // The state's curves are floats: the same lanes to a fraction of a
+        // pixel.
+        for (int p = 0; p < 4; ++p) {
+          EXPECT_LT((b->lanes[k].lane.image[p] - a->lanes[k].lane.image[p]).norm(), 0.5)
+              << "frame " << i;
+        }
+      }
+      ++compared;
+      resumed.reset();  // the next handover starts from the original again
+    }
+    // Hand the stream over after every frame once the lanes are confirmed.
+    if (i >= 5) {
+      const TrackerState state = original.Save();
+      handed_mid_run += state.refits_in_row.value_or(0) > 0;
+      resumed.emplace(config->camera, options);
+      ASSERT_TRUE(resumed->Resume(state).ok());
+    }
+  }
+  EXPECT_EQ(compared, 14);
+  EXPECT_GE(handed_mid_run, 5);  // handovers in the middle of a run of refits
+}
+
 // --- Resume state (lane/track/tracker_state.h) ---
 
 // Three parallel lanes of a gentle bend, with noise; the middle one is
@@ -327,6 +378,8 @@ TEST(TrackerStateTest, ResumeKeepsItsOwnContinuationAndRefusesBadStates) {
       spoil([](TrackerState& s) { s.tracks[0].covariance(0, 1) = 5; }),
       spoil([](TrackerState& s) { s.tracks[0].white_votes = -1; }),
       spoil([](TrackerState& s) { s.started = false; }),
+      spoil([](TrackerState& s) { s.refits_in_row = -1; }),
+      spoil([](TrackerState& s) { s.refits_in_row = 5000; }),
       spoil([](TrackerState& s) { s.tracks.resize(TrackerState::kMaxTracks + 1, s.tracks[0]); }),
   };
   for (size_t i = 0; i < bad.size(); ++i) {

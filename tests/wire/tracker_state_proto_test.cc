@@ -19,6 +19,7 @@ lane::TrackerState StateWith(int tracks) {
   state.next_id = 1000000;
   state.started = true;
   state.time_s = 1.7e9 + 0.033;
+  if (tracks % 2 == 1) state.refits_in_row = 2;  // unset on the others
   for (int i = 0; i < tracks; ++i) {
     lane::TrackSnapshot t;
     t.id = 999000 + i;
@@ -52,6 +53,7 @@ TEST(TrackerStateProtoTest, RoundTripsAtEverySizeUnderTheBound) {
     EXPECT_EQ(back->frames, state.frames);
     EXPECT_EQ(back->next_id, state.next_id);
     EXPECT_DOUBLE_EQ(back->time_s, state.time_s);
+    EXPECT_EQ(back->refits_in_row, state.refits_in_row);
     ASSERT_EQ(back->tracks.size(), state.tracks.size());
     for (size_t i = 0; i < state.tracks.size(); ++i) {
       const lane::TrackSnapshot& a = state.tracks[i];

@@ -66,6 +66,7 @@ TrackerState FrameTracker::Save() const {
   TrackerState state = tracker_.Snapshot();
   state.lineage = lineage_;
   state.frames = frames_;
+  if (refits_in_row_ < kSearchNext) state.refits_in_row = refits_in_row_;
   return state;
 }
 
@@ -77,7 +78,7 @@ absl::StatusOr<bool> FrameTracker::Resume(const TrackerState& state) {
   }
   if (state.lineage == lineage_ && state.frames <= frames_) return false;
   tracker_.Restore(state);
-  refits_in_row_ = kSearchNext;
+  refits_in_row_ = state.refits_in_row.value_or(kSearchNext);
   lineage_ = state.lineage;
   frames_ = state.frames;
   return true;

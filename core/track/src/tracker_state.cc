@@ -18,7 +18,10 @@ constexpr double kMaxCurvature = 1.0;      // 1/m: a 1 m radius
 constexpr double kMaxVariance = 1e6;       // any covariance element
 constexpr double kMaxVotes = 1e9;          // colour and type votes
 constexpr int64_t kMaxFrames = 1LL << 40;  // counters and ages
-constexpr double kMaxTimeS = 1e12;         // s: Unix time in 33,000 years
+// A tracker refits at most LaneTrackingOptions::refit_frames frames in a
+// row (a handful); anything far beyond is not a tracker's.
+constexpr int kMaxRefitsInRow = 1000;
+constexpr double kMaxTimeS = 1e12;  // s: Unix time in 33,000 years
 
 absl::Status Bad(const std::string& field, const std::string& why) {
   return absl::InvalidArgumentError(absl::StrCat("resume state: ", field, " ", why));
@@ -75,6 +78,10 @@ absl::Status ValidateTrackerState(const TrackerState& state) {
                absl::StrCat(state.next_id, " is not in [1, ", TrackerState::kMaxId, "]"));
   }
   if (state.frames > static_cast<uint64_t>(kMaxFrames)) return Bad("frames", "is too large");
+  if (state.refits_in_row && (*state.refits_in_row < 0 || *state.refits_in_row > kMaxRefitsInRow)) {
+    return Bad("refits_in_row",
+               absl::StrCat(*state.refits_in_row, " is not in [0, ", kMaxRefitsInRow, "]"));
+  }
   if (!Finite(state.time_s) || std::abs(state.time_s) > kMaxTimeS) {
     return Bad("time_s", "is not a finite time");
   }

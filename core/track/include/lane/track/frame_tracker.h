@@ -96,7 +96,8 @@ class FrameTracker {
   uint64_t frames_ ABSL_GUARDED_BY(mu_) = 0;
   // Frames committed in a row with refitted lanes (LaneTrackingOptions::
   // refit_frames); starts at the limit, so that the first frame after a
-  // reset or a resume is searched in full.
+  // reset is searched in full. A resume takes the state's count (if it has
+  // one), so that the schedule goes on as on the replica that wrote it.
   static constexpr int kSearchNext = 1 << 20;
   int refits_in_row_ ABSL_GUARDED_BY(mu_) = kSearchNext;
 };

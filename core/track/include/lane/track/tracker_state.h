@@ -20,6 +20,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -64,6 +65,12 @@ struct TrackerState {
   bool started = false;  // has seen a frame since its last reset
   double time_s = 0;     // the last frame's time
   std::vector<TrackSnapshot> tracks;
+  // Frames committed in a row with refitted lanes (FrameTracker): the
+  // tracker that takes the state searches in full when the one that wrote
+  // it would have, so a stream handed to another replica sees the lanes it
+  // would have seen on one. Unset (a state from before this field): the
+  // next frame is searched in full.
+  std::optional<int> refits_in_row;
 };
 
 // OK when `state` is one a tracker could have written: the version, the
