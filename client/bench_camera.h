@@ -19,8 +19,8 @@
 
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
-#include "bench.h"
 #include "lane/v1/lane_service.pb.h"
+#include "load_spec.h"
 #include "reconnect_backoff.h"
 
 namespace lane::client::load {

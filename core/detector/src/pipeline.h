@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "absl/types/span.h"
-#include "lane/detector/detector.h"
+#include "lane/detector/detection.h"
 
 namespace lane::pipeline {
 
