@@ -44,6 +44,9 @@ struct RenderFlags {
   double hood_m = 0;
   double truth_far_m = lane::SyntheticOptions().truth_far_m;
   double double_lines = 0;
+  double botts_dots = 0;
+  bool concrete = false;
+  double dashed = lane::SyntheticOptions().dashed_probability;
   double hood_top_row = 0;
   double hood_side_row = 0;
   bool labels_through_hood = false;
@@ -79,6 +82,9 @@ int RunRender(const RenderFlags& flags) {
   options.static_overlay = flags.static_overlay;
   options.truth_far_m = flags.truth_far_m;
   options.double_line_probability = flags.double_lines;
+  options.botts_dots_probability = flags.botts_dots;
+  options.concrete = flags.concrete || flags.botts_dots > 0;
+  options.dashed_probability = flags.dashed;
   options.hood_top_row = flags.hood_top_row;
   options.hood_side_row = flags.hood_side_row;
   options.labels_through_hood = flags.labels_through_hood;
@@ -154,6 +160,32 @@ int RunRender(const RenderFlags& flags) {
   return io::kExitOk;
 }
 
+// The markings' options of independent frames (not a --sequence drive).
+void AddMarkingOptions(CLI::App* app, RenderFlags* flags, CLI::Option* sequence) {
+  app->add_option("--double-lines", flags->double_lines,
+                  "the share of inner boundaries drawn as solid double lines, 0.10-0.20 m "
+                  "apart; each is labelled once, along its centre (independent frames)")
+      ->type_name("P")
+      ->check(CLI::Range(0.0, 1.0))
+      ->excludes(sequence);
+  app->add_option("--botts-dots", flags->botts_dots,
+                  "the share of inner boundaries drawn as raised pavement markers (Botts' "
+                  "dots: 0.09 m, in groups of 4 about 0.95 m apart, a group every 12-13 m), "
+                  "on a concrete road (--concrete); labelled through the dots, type `dots` "
+                  "(independent frames)")
+      ->type_name("P")
+      ->check(CLI::Range(0.0, 1.0))
+      ->excludes(sequence);
+  app->add_flag("--concrete", flags->concrete,
+                "a concrete road (grey 140-160, slab seams, tyre polish) instead of asphalt "
+                "(independent frames)")
+      ->excludes(sequence);
+  app->add_option("--dashed", flags->dashed, "the share of boundaries that are dashed")
+      ->type_name("P")
+      ->check(CLI::Range(0.0, 1.0))
+      ->excludes(sequence);
+}
+
 }  // namespace
 
 io::Command AddRenderCommand(CLI::App& lane) {
@@ -207,12 +239,7 @@ io::Command AddRenderCommand(CLI::App& lane) {
                   "the labels run this far ahead, metres (CULane's night labels: about 72)")
       ->type_name("M")
       ->check(CLI::Range(1.0, 1000.0));
-  app->add_option("--double-lines", flags->double_lines,
-                  "the share of inner boundaries drawn as solid double lines, 0.10-0.20 m "
-                  "apart; each is labelled once, along its centre (independent frames)")
-      ->type_name("P")
-      ->check(CLI::Range(0.0, 1.0))
-      ->excludes(sequence);
+  AddMarkingOptions(app, flags.get(), sequence);
   app->add_flag("--straight", flags->straight,
                 "straight roads only, nearly aligned with the car (independent frames): "
                 "calibration footage")

@@ -56,7 +56,10 @@ absl::StatusOr<std::vector<LabelledFrame>> ParseRenderLabels(absl::string_view t
                                          : std::string("white");
           const bool twin = boundary.contains("double") && boundary["double"].is_boolean() &&
                             boundary["double"].get<bool>();
-          label.type = absl::StrCat(twin ? "double " : (dashed ? "dashed " : "solid "), colour);
+          const bool dots = boundary.contains("dots") && boundary["dots"].is_boolean() &&
+                            boundary["dots"].get<bool>();
+          label.type = absl::StrCat(
+              dots ? "dots " : (twin ? "double " : (dashed ? "dashed " : "solid ")), colour);
           frame.boundaries.push_back(std::move(label));
         }
         frames.push_back(std::move(frame));
@@ -88,6 +91,7 @@ std::string RenderLabelsJson(const std::string& frame_name, const SyntheticFrame
     e["dashed"] = b.dashed;
     e["color"] = b.yellow ? "yellow" : "white";
     if (b.double_line) e["double"] = true;
+    if (b.dots) e["dots"] = true;
     e["ego"] = i == frame.ego_left ? "left" : (i == frame.ego_right ? "right" : "none");
     e["id"] = b.id;
     if (frame.ego) e["type_changes"] = b.type_changes;

@@ -149,6 +149,9 @@ cv::Vec3f AsphaltColour(const Road& road, const Look& look, const GroundPixel& p
                                 std::abs(in_lane - 0.5 * road.lane_width - 0.85));
   const double bump = std::max(0.0, 1.0 - track * track / 0.3);
   grey -= look.track_dark * bump * bump;
+  if (look.seam_every > 0) {
+    grey -= SeamDarkening(road, look, lane_pos, gy, p.ext_x, std::abs(p.juy) + std::abs(p.jvy));
+  }
   return look.asphalt_tint * static_cast<float>(grey);
 }
 
@@ -176,6 +179,10 @@ double MarkingCover(const Road& road, const Boundary& m, const GroundPixel& p) {
   const double d = (p.x - road.X(m.offset, y)) * inv_norm;
   const double nx = inv_norm, ny = -slope * inv_norm;  // unit normal
   const double fd = std::max(1e-4, std::abs(nx * jux + ny * juy) + std::abs(nx * jvx + ny * jvy));
+  if (m.dots) {
+    const double tx = slope * inv_norm, ty = inv_norm;  // unit tangent
+    return DotsCover(m, d, fd, y, std::abs(tx * jux + ty * juy) + std::abs(tx * jvx + ty * jvy));
+  }
   const double half = 0.5 * m.width;
   // A line of the marking centred `c` metres across from its offset.
   auto strip = [&](double c) {
@@ -461,6 +468,7 @@ SyntheticFrame RenderScene(const CameraModel& camera, const SyntheticOptions& op
     out.image = m.truth.p;
     out.dashed = m.dashed;
     out.double_line = m.double_gap > 0;
+    out.dots = m.dots;
     out.yellow = m.yellow;
     out.lateral_offset_m = m.offset;
     out.id = i;
@@ -566,6 +574,10 @@ absl::StatusOr<SyntheticFrame> RenderSyntheticFrame(const CameraModel& camera,
   scene.noise_seed = rng();
   Rng clutter(seed ^ 0x9e3779b97f4a7c15ULL);
   AddClutter(options, y_bottom, clutter, &scene.road, &scene.objects);
+  if (options.concrete || options.botts_dots_probability > 0) {
+    Rng dots(seed ^ 0xb0775d075ULL);
+    AddBottsDots(options, camera.height_m, dots, &scene.road, &scene.look);
+  }
   if (options.night) {
     scene.night = SampleNight(camera, scene.road, clutter);
     scene.shadows.clear();  // no sun

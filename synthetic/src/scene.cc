@@ -165,7 +165,7 @@ absl::Status ValidateOptions(const SyntheticOptions& o) {
     return bad("extra_roadside_objects must be in 0..256");
   }
   for (double p : {o.tree_row_probability, o.sign_probability, o.guardrail_probability,
-                   o.worn_probability, o.double_line_probability}) {
+                   o.worn_probability, o.double_line_probability, o.botts_dots_probability}) {
     if (!(p >= 0.0 && p <= 1.0)) return bad("clutter probabilities must be in [0, 1]");
   }
   if (!(o.min_dash_m > 0 && o.max_dash_m >= o.min_dash_m && o.max_dash_m <= 100 &&

@@ -51,6 +51,14 @@ struct Boundary {
   // > 0: a double line, two lines of `width` this far apart (metres),
   // centred on `offset`.
   double double_gap = 0.0;
+  // Botts' dots (AddBottsDots): discs of diameter `width`, in groups of 4
+  // `dot_spacing` apart; a group every `dash + gap` metres, `dash` being
+  // the group's length centre to centre, the first at `phase`.
+  bool dots = false;
+  double dot_spacing = 0.95;
+  // A dot's height over the camera's: it covers the road this share of its
+  // distance behind it too (DotsCover).
+  double dot_rise = 0;
   cv::Vec3f colour;
   uint64_t salt = 0;
   // A dashed boundary is solid from this far ahead on (metres; a drive's
@@ -98,7 +106,11 @@ struct Look {
   double asphalt = 100;  // mean grey
   cv::Vec3f asphalt_tint{1, 1, 1};
   double patch_amp = 10, mid_amp = 5, grain_amp = 10;
-  double track_dark = 0;         // tyre tracks
+  double track_dark = 0;  // tyre tracks
+  // Concrete (SyntheticOptions::concrete): slab seams this much darker,
+  // across the road every `seam_every` metres (0 = none) and along it
+  // `seam_beside` metres right of each boundary.
+  double seam_every = 0, seam_dark = 0, seam_beside = 0;
   cv::Vec3f verge{70, 120, 95};  // BGR
   double verge_amp = 18;
   cv::Vec3f haze{200, 200, 200};
@@ -169,6 +181,19 @@ Object SampleRoadsideObject(const Road& road, double near, double far, double po
 void AddClutter(const SyntheticOptions& o, double y_min, Rng& rng, Road* road,
                 std::vector<Object>* objects);
 double ShadowFactor(const std::vector<Shadow>& shadows, double x, double y, double foot);
+// SyntheticOptions::concrete and botts_dots_probability (dots.cc), from
+// their own engine, so that the rest of the frame stays as without them.
+void AddBottsDots(const SyntheticOptions& o, double camera_height_m, Rng& rng, Road* road,
+                  Look* look);
+// The share of a pixel covered by a boundary of Botts' dots: `across` the
+// pixel's centre from the boundary (metres), `along` its distance ahead,
+// `fd` and `fa` the footprint's extents across and along.
+double DotsCover(const Boundary& m, double across, double fd, double along, double fa);
+// The darkening of the concrete's slab seams (Look::seam_*) at a pixel:
+// `lane_pos` from the first boundary, `along` ahead, `fx` and `fy` the
+// footprint's extents across and along.
+double SeamDarkening(const Road& road, const Look& look, double lane_pos, double along, double fx,
+                     double fy);
 double PaintedUpTo(const Boundary& m, double s);
 // Night lighting (SyntheticOptions::night), built from grey levels measured
 // on a CULane night clip (1640x590, camera 1.23 m high, pitch 1.8 deg;

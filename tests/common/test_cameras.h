@@ -48,6 +48,21 @@ inline CameraModel TestCamera(double pitch_deg, double yaw_deg, double height_m)
   return c;
 }
 
+// Issue 49's held-out US highway camera: f = 730 px over a 512 px wide
+// image, 1.67 m up, the road starting 6.7 m ahead at the image's bottom.
+inline CameraModel HighwayCamera() {
+  CameraModel c;
+  c.image_width = 512;
+  c.image_height = 288;
+  c.fu = c.fv = 730.0;
+  c.cu = 256.0;
+  c.cv = 144.0;
+  c.pitch_deg = 2.9;
+  c.yaw_deg = 0.0;
+  c.height_m = 1.67;
+  return c;
+}
+
 }  // namespace lane::testing
 
 #endif  // LANE_TESTS_CORE_TEST_CAMERAS_H_

@@ -20,24 +20,12 @@
 #include "lane/detector/detector.h"
 #include "lane/eval/curve_distances.h"
 #include "lane/synthetic.h"
+#include "test_cameras.h"
 
 namespace lane {
 namespace {
 
-// Issue 49's US highway camera: f = 730 px over a 512 px wide image, 1.67 m
-// up, the road starting 6.7 m ahead at the image's bottom.
-CameraModel HighwayCamera() {
-  CameraModel c;
-  c.image_width = 512;
-  c.image_height = 288;
-  c.fu = c.fv = 730.0;
-  c.cu = 256.0;
-  c.cv = 144.0;
-  c.pitch_deg = 2.9;
-  c.yaw_deg = 0.0;
-  c.height_m = 1.67;
-  return c;
-}
+using ::lane::testing::HighwayCamera;
 
 // A wide-angle camera (79 degrees, 0.61 x the width) whose hood rises to
 // row 209 at the image's centre (9 m ahead) from row 266 at its sides

@@ -51,6 +51,18 @@ struct SyntheticOptions {
   // its centre (docs/evaluation.md, "Double lines"). 0 by default: the
   // frame is then exactly as without it.
   double double_line_probability = 0;
+  // Per inner boundary: raised pavement markers (Botts' dots) instead of
+  // paint, as measured on issue 49's US highway frames: round, 0.09 m
+  // across, grey 240-252, in groups of 4 dots 0.85-1.05 m apart, a group
+  // every 12-13 m (about 14 times less marking per metre than dashes). Its
+  // truth runs through the dots; its label's type is `dots`. 0 by default:
+  // the frame is then exactly as without it.
+  double botts_dots_probability = 0;
+  // A concrete road, as under those dots: grey 140-160 (asphalt: 80-120),
+  // little texture, darker tyre-polish stripes in every lane, dark slab
+  // seams across the road every 4.5-6 m and along it 0.1-0.3 m beside each
+  // boundary. Off by default: the frame is then exactly as without it.
+  bool concrete = false;
   // Structure fixed to the camera: a card on the dashboard reflected in the
   // windscreen, a dark blue card with a row of bright digits seen in
   // perspective (its strokes meet about four card heights above it), at
@@ -130,6 +142,7 @@ struct SyntheticBoundary {
   bool dashed = false;
   bool yellow = false;
   bool double_line = false;     // two lines; `image` runs along their centre
+  bool dots = false;            // Botts' dots (SyntheticOptions::botts_dots_probability)
   double lateral_offset_m = 0;  // at y = 0, metres (right +)
   // The boundary's index on the road, from the left: in a drive, the same
   // painted line keeps its id in every frame.
