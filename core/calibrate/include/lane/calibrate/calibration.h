@@ -211,7 +211,6 @@ class CameraCalibrator {
   int road_bottom_ = 0;
   RoadOutline outline_;
   bool first_done_ = false;
-  static constexpr double kStationaryLevels = 1.5;  // mean absolute change, grey levels
   cv::Mat previous_;
   std::vector<bool> stationary_;
   int second_frames_ = 0, stationary_count_ = 0;
